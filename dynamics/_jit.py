@@ -1,0 +1,42 @@
+"""numba set-up shared by every compiled module of :mod:`dynamics`.
+
+Compiled kernels are cached on disk (``njit(cache=True)``), but numba invalidates a cached
+function only when *its own* source file changes: an integrator in one module that calls a
+right-hand side defined in another would keep running stale machine code after the right-hand
+side is edited. We therefore key the cache directory on a hash of every source file of the
+package, so any edit to the dynamics starts a fresh cache. Set ``NUMBA_CACHE_DIR`` yourself to
+override, and ``NUMBA_DISABLE_JIT=1`` to run the same source as plain Python for debugging.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+
+def _source_hash() -> str:
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).parent.rglob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _cache_dir() -> str:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "mechviz", f"numba-{_source_hash()}")
+
+
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = _cache_dir()
+
+import numba  # noqa: E402  (must follow the environment set-up above)
+
+# numba reads NUMBA_CACHE_DIR at import; if it was imported before us, set it directly.
+if not numba.config.CACHE_DIR:
+    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+
+njit = numba.njit
+
+__all__ = ["njit"]

@@ -1,0 +1,260 @@
+"""The integrator interface: a method is data (name, order, structure, what it applies to) plus
+a step. The driver (:mod:`dynamics.simulation`) owns time and counts the work.
+
+Implementers add a :class:`Method` to :data:`METHODS`:
+
+- ``backend="numba"``, ``adaptive=False``: ``kernel`` names the step in
+  :mod:`dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
+  ``run_fixed`` with it.
+- ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``).
+- ``backend="scipy"``: ``scipy_name`` is a ``solve_ivp`` method or ``"odeint"``; the driver calls
+  :func:`dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
+- ``backend="exact"``: the system's closed-form flow.
+
+What the driver gives every method for free: validation of the step size or tolerance, the time
+bookkeeping, evaluation and step counts, and an :class:`IntegrationError` (naming the method, the
+step size and the time) when a state turns non-finite or an implicit step fails to converge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from . import kernels as _k
+
+Structure = Literal["symplectic", "symmetric", "volume-preserving", "norm-preserving"]
+
+
+class IntegrationError(RuntimeError):
+    """A run that cannot go on: non-finite state, failed implicit solve, step-size collapse."""
+
+    def __init__(self, method: str, step: str, t: float, reason: str):
+        self.method, self.step, self.t, self.reason = method, step, t, reason
+        super().__init__(f"{method} with {step}: {reason} at t = {t:.6g} s")
+
+
+@dataclass(frozen=True)
+class Method:
+    """One integration method, described as data."""
+
+    name: str
+    title: str
+    order: int
+    structure: tuple[Structure, ...]
+    adaptive: bool
+    implicit: bool
+    systems: frozenset[str]
+    backend: Literal["numba", "scipy", "exact"]
+    kernel: str | None = None
+    scipy_name: str | None = None
+    stability: str = ""
+
+    def applies_to(self, system: str) -> bool:
+        return system in self.systems
+
+    def describe(self) -> str:
+        kind = "adaptive" if self.adaptive else "fixed step"
+        props = ", ".join(self.structure) or "no geometric structure"
+        imp = ", implicit" if self.implicit else ""
+        return f"{self.title}: order {self.order}, {kind}{imp}, {props}"
+
+
+ALL = frozenset({"cyclotron", "hoop", "free-body"})
+_SCIPY_SYSTEMS = ALL
+
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in [
+        Method(
+            "exact",
+            "Exact flow",
+            0,
+            ("symplectic", "symmetric"),
+            False,
+            False,
+            frozenset({"cyclotron", "driven-disk"}),
+            "exact",
+            kernel="exact",
+            stability="exact for any step",
+        ),
+        Method(
+            "euler",
+            "Explicit Euler",
+            1,
+            (),
+            False,
+            False,
+            ALL,
+            "numba",
+            kernel="euler",
+            stability="on an oscillation |R(i w h)|^2 = 1 + (w h)^2 > 1: unstable at every step",
+        ),
+        Method(
+            "rk4",
+            "Classical Runge-Kutta 4",
+            4,
+            (),
+            False,
+            False,
+            ALL,
+            "numba",
+            kernel="rk4",
+            stability="oscillation bounded (slowly damped) for w h < 2 sqrt(2)",
+        ),
+        Method(
+            "midpoint",
+            "Implicit midpoint",
+            2,
+            ("symplectic", "symmetric"),
+            False,
+            True,
+            ALL,
+            "numba",
+            kernel="midpoint",
+            stability="A-stable; fixed-point solve needs roughly L h < 1",
+        ),
+        Method(
+            "boris",
+            "Boris pusher",
+            2,
+            ("symplectic", "symmetric", "volume-preserving"),
+            False,
+            False,
+            frozenset({"cyclotron"}),
+            "numba",
+            kernel="symmetric2",
+            stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
+        ),
+        Method(
+            "verlet",
+            "Stormer-Verlet (generalised leapfrog)",
+            2,
+            ("symplectic", "symmetric"),
+            False,
+            True,
+            frozenset({"hoop"}),
+            "numba",
+            kernel="symmetric2",
+            stability="linear stability w_max h < 2",
+        ),
+        Method(
+            "splitting",
+            "Rotation splitting (Strang, exact rotations)",
+            2,
+            ("symplectic", "symmetric", "norm-preserving"),
+            False,
+            False,
+            frozenset({"free-body"}),
+            "numba",
+            kernel="symmetric2",
+            stability="keeps |L| to round-off at any step",
+        ),
+        Method(
+            "yoshida4",
+            "Yoshida triple jump of the symmetric 2nd-order step",
+            4,
+            ("symplectic", "symmetric"),
+            False,
+            False,
+            frozenset({"cyclotron", "hoop", "free-body"}),
+            "numba",
+            kernel="yoshida4",
+            stability="composition of Boris / Stormer-Verlet / splitting",
+        ),
+        Method(
+            "dop853",
+            "DOP853 (compiled)",
+            8,
+            (),
+            True,
+            False,
+            ALL,
+            "numba",
+            stability="step size controlled to rtol, atol",
+        ),
+        Method(
+            "scipy-rk45",
+            "scipy solve_ivp RK45",
+            5,
+            (),
+            True,
+            False,
+            _SCIPY_SYSTEMS,
+            "scipy",
+            scipy_name="RK45",
+        ),
+        Method(
+            "scipy-dop853",
+            "scipy solve_ivp DOP853",
+            8,
+            (),
+            True,
+            False,
+            _SCIPY_SYSTEMS,
+            "scipy",
+            scipy_name="DOP853",
+        ),
+        Method(
+            "scipy-radau",
+            "scipy solve_ivp Radau IIA",
+            5,
+            (),
+            True,
+            True,
+            _SCIPY_SYSTEMS,
+            "scipy",
+            scipy_name="Radau",
+        ),
+        Method(
+            "scipy-lsoda",
+            "scipy solve_ivp LSODA",
+            12,
+            (),
+            True,
+            True,
+            _SCIPY_SYSTEMS,
+            "scipy",
+            scipy_name="LSODA",
+        ),
+        Method(
+            "odeint",
+            "scipy odeint (Fortran LSODA)",
+            12,
+            (),
+            True,
+            True,
+            _SCIPY_SYSTEMS,
+            "scipy",
+            scipy_name="odeint",
+        ),
+    ]
+}
+
+
+def step_functions(method: Method, sys_id: int):
+    """``(step, inner)`` for this method on this system; ``inner`` is ``None`` for a direct step
+    (``kernels.run_direct``) and the right-hand side or base step for a composed one."""
+    kind = method.kernel
+    if kind == "rk4":
+        return _k.RK4[sys_id], None
+    if kind == "symmetric2":
+        return _k.SYMMETRIC2[sys_id], None
+    if kind == "exact":
+        return _k.cyclotron.exact_step, None
+    if kind == "yoshida4":
+        return _k.yoshida4_step, _k.SYMMETRIC2[sys_id]
+    step = {"euler": _k.euler_step, "midpoint": _k.midpoint_step}[kind]
+    return step, _k.RHS[sys_id]
+
+
+def get_method(name: str) -> Method:
+    """The method called ``name``; ``ValueError`` listing the choices otherwise."""
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}; got {name!r}") from None
+
+
+def methods_for(system: str) -> list[Method]:
+    return [m for m in METHODS.values() if m.applies_to(system)]

@@ -1,0 +1,292 @@
+"""The simulation driver: advances any system with any method and reports what happened.
+
+The driver owns time, the step size or tolerance, the evaluation and step counters and the
+reference against which the error is measured: the exact solution where the system has one for
+this initial state, otherwise a DOP853 run at ``rtol = atol = 1e-12`` advanced in lock-step.
+The viewer and the recorder stream exactly what :meth:`Simulation.sample` returns.
+
+Fixed-step methods always take steps of exactly ``dt``: :meth:`Simulation.advance_to` takes
+the whole number of steps that fits and carries the remainder, so ``t`` is ``steps * dt``.
+Adaptive methods land exactly on the requested time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import params as _v
+from .integrators import kernels
+from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
+from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
+from .integrators.scipy_ivp import advance_scipy
+from .systems import System
+
+DEFAULT_RTOL = 1e-9
+REFERENCE_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One moment of a run. Arrays have the ensemble on the leading axis."""
+
+    t: float
+    state: np.ndarray  # (N, d)
+    energy: np.ndarray  # (N,)
+    energy_error: np.ndarray  # (N,) relative: (E - E0) / |E0|
+    error: np.ndarray | None  # (N,) against the exact solution or the tight reference
+    reference: np.ndarray | None  # (N, d) the state it was measured against
+    nfev: int
+    steps: int
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Samples of a run stacked in time: ``t`` (K,), ``states`` (K, N, d), ..."""
+
+    t: np.ndarray
+    states: np.ndarray
+    energy_error: np.ndarray
+    error: np.ndarray | None
+    nfev: int
+    steps: int
+
+
+class Simulation:
+    """Advance ``system`` from ``state`` (d,) or (N, d) with ``method``.
+
+    Parameters
+    ----------
+    system : a :mod:`dynamics.systems` adapter.
+    method : a name from :data:`dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
+    dt : step size [s] for fixed-step methods (must be > 0 and finite).
+    rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``).
+    state : initial state(s); default the system's ``default_state()``.
+    reference : measure the error against the exact solution, or a tight DOP853 run when there
+        is none (``"auto"``); ``"exact"`` only where exact; ``None`` never.
+    """
+
+    def __init__(
+        self,
+        system: System,
+        method: str | Method = "rk4",
+        *,
+        dt: float | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        state: np.ndarray | None = None,
+        reference: str | None = "auto",
+    ) -> None:
+        self.system = system
+        self.method = method if isinstance(method, Method) else get_method(method)
+        if not self.method.applies_to(system.name):
+            raise ValueError(
+                f"method {self.method.name!r} does not apply to {system.name}; "
+                f"choose one of {', '.join(m.name for m in methods_for(system.name))}"
+            )
+        self.dt: float | None = None
+        self.rtol = self.atol = None
+        if self.method.adaptive:
+            self.rtol = _tolerance("rtol", DEFAULT_RTOL if rtol is None else rtol)
+            self.atol = _tolerance("atol", self.rtol if atol is None else atol)
+        elif self.method.backend != "exact" or dt is not None:
+            if dt is None:
+                raise ValueError(f"dt is required for the fixed-step method {self.method.name}")
+            self.dt = _v.positive("dt", dt)
+        s0 = system.default_state() if state is None else np.asarray(state, dtype=float)
+        if s0.shape[-1] != len(system.state_names) or s0.ndim not in (1, 2):
+            raise ValueError(
+                f"state must have shape (d,) or (N, d) with d = {len(system.state_names)} "
+                f"({', '.join(system.state_names)}); got {s0.shape}"
+            )
+        if not np.all(np.isfinite(s0)):
+            raise ValueError("state must be finite")
+        self._single = s0.ndim == 1
+        self.state0 = np.atleast_2d(s0).astype(np.float64).copy()
+        self.state = self.state0.copy()
+        self.p = system.kernel_params()
+        self.E0 = np.asarray(system.energy(self.state0), dtype=float)
+        self.t = 0.0
+        self.steps = 0
+        self.nfev = 0
+        self.rejected = 0
+        n = len(self.state)
+        self._H = np.zeros(n)
+        self._F = np.zeros_like(self.state)
+        self._stats = np.zeros((n, 3), dtype=np.int64)
+        self._status = np.zeros(3, dtype=np.int64)
+        self._has_exact = system.exact(self.state0, 0.0) is not None
+        self._reference: Simulation | None = None
+        if reference == "auto" and not self._has_exact:
+            self._reference = Simulation(
+                system,
+                "dop853",
+                rtol=REFERENCE_TOL,
+                atol=REFERENCE_TOL,
+                state=self.state0,
+                reference=None,
+            )
+        self._track_error = reference is not None and (self._has_exact or reference == "auto")
+
+    # ------------------------------------------------------------------ stepping
+    def step_label(self) -> str:
+        if self.method.adaptive:
+            return f"rtol={self.rtol:g}, atol={self.atol:g}"
+        return "exact flow" if self.dt is None else f"dt={self.dt:g} s"
+
+    def advance_to(self, t_target: float) -> None:
+        """Advance to ``t_target`` (fixed step: the last whole step at or before it)."""
+        t_target = _v.finite("t", t_target)
+        if t_target < self.t:
+            raise ValueError(f"t must not go backwards: {t_target} < {self.t}")
+        m = self.method
+        if m.backend == "exact" and self.system.sys_id is None:
+            self.state = self.system.exact(self.state0, t_target)
+            self.t = t_target
+        elif m.backend == "exact" and self.dt is None:
+            self.state = np.atleast_2d(self.system.exact(self.state0, t_target))
+            self.t = t_target
+        elif not m.adaptive:
+            n = int(math.floor((t_target - self.t) / self.dt + 1e-9))
+            if n > 0:
+                self._run_fixed(n)
+        elif t_target > self.t:
+            if m.backend == "scipy":
+                nfev, steps, failure = advance_scipy(
+                    m.scipy_name,
+                    self.system.sys_id,
+                    self.p,
+                    self.state,
+                    self.t,
+                    t_target,
+                    self.rtol,
+                    self.atol,
+                )
+                self.nfev += nfev
+                self.steps += steps
+                if failure:
+                    raise IntegrationError(m.name, self.step_label(), t_target, failure)
+            else:
+                run_dop853(
+                    kernels.RHS[self.system.sys_id],
+                    self.state,
+                    self.p,
+                    self.t,
+                    t_target,
+                    self.rtol,
+                    self.atol,
+                    self._H,
+                    self._F,
+                    self._stats,
+                    self._status,
+                )
+                self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
+                if self._status[0] != kernels.OK:
+                    reason = (
+                        "step size fell below round-off"
+                        if self._status[0] == TOO_SMALL_STEP
+                        else "state became non-finite"
+                    )
+                    raise IntegrationError(m.name, self.step_label(), self.t, reason)
+            self.t = t_target
+        if self._reference is not None:
+            self._reference.advance_to(self.t)
+
+    def advance(self, duration: float) -> None:
+        """Advance by ``duration`` [s] of simulated time."""
+        self.advance_to(self.t + _v.finite("duration", duration))
+
+    def _run_fixed(self, n: int) -> None:
+        step, inner = step_functions(self.method, self.system.sys_id)
+        before = self.state.copy()
+        if inner is None:
+            nfev = kernels.run_direct(step, self.state, self.p, self.dt, n, self._status)
+        else:
+            nfev = kernels.run_composed(step, inner, self.state, self.p, self.dt, n, self._status)
+        self.nfev += int(nfev)
+        code, k = int(self._status[0]), int(self._status[1])
+        if code != kernels.OK:
+            # Leave the run at the last state it reached before this call, not at garbage.
+            self.state[:] = before
+            t_fail = (self.steps + k + 1) * self.dt
+            reason = (
+                "implicit solve did not converge"
+                if code == kernels.NO_CONVERGENCE
+                else "state became non-finite (the method blew up)"
+            )
+            raise IntegrationError(self.method.name, self.step_label(), t_fail, reason)
+        self.steps += n
+        self.t = self.steps * self.dt
+
+    # ------------------------------------------------------------------ measuring
+    @property
+    def reference_kind(self) -> str | None:
+        """``"exact"``, ``"reference"`` (tight DOP853) or ``None``: what ``Sample.error`` is against."""
+        if not self._track_error:
+            return None
+        return "exact" if self._has_exact else "reference"
+
+    def reference_state(self) -> np.ndarray | None:
+        """The exact state at ``t`` if known, else the tight reference run's, else ``None``."""
+        if self._has_exact:
+            return np.atleast_2d(self.system.exact(self.state0, self.t))
+        if self._reference is not None:
+            return self._reference.state
+        return None
+
+    def sample(self) -> Sample:
+        energy = np.asarray(self.system.energy(self.state), dtype=float)
+        scale = np.where(self.E0 != 0.0, np.abs(self.E0), 1.0)
+        ref = self.reference_state() if self._track_error else None
+        err = None if ref is None else self.system.error(self.state, ref)
+        return Sample(
+            self.t,
+            self.state.copy(),
+            energy,
+            (energy - self.E0) / scale,
+            err,
+            None if ref is None else ref.copy(),
+            self.nfev,
+            self.steps,
+        )
+
+    def stream(self, t_end: float, frame_dt: float) -> Iterator[Sample]:
+        """Yield a :class:`Sample` at ``t = 0, frame_dt, 2 frame_dt, ...`` up to ``t_end``."""
+        frame_dt = _v.positive("frame_dt", frame_dt)
+        k = 0
+        yield self.sample()
+        while (k + 1) * frame_dt <= t_end * (1 + 1e-12):
+            k += 1
+            self.advance_to(k * frame_dt)
+            yield self.sample()
+
+    def run(self, t_end: float, n_samples: int = 2) -> Trajectory:
+        """Run to ``t_end`` [s], sampling ``n_samples`` equally spaced times (first and last
+        included; fixed-step samples fall on the last step at or before each time)."""
+        t_end = _v.positive("t_end", t_end)
+        if n_samples < 2:
+            raise ValueError(f"n_samples must be at least 2, got {n_samples}")
+        samples = []
+        for t in np.linspace(0.0, t_end, n_samples):
+            if t > 0:
+                self.advance_to(float(t))
+            samples.append(self.sample())
+        err = None if samples[0].error is None else np.stack([s.error for s in samples])
+        return Trajectory(
+            np.array([s.t for s in samples]),
+            np.stack([s.state for s in samples]),
+            np.stack([s.energy_error for s in samples]),
+            err,
+            self.nfev,
+            self.steps,
+        )
+
+
+def _tolerance(name: str, value: float) -> float:
+    x = _v.positive(name, value)
+    if x >= 1.0:
+        raise ValueError(f"{name} must be below 1, got {x}")
+    return x

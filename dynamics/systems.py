@@ -1,0 +1,153 @@
+"""The three systems as the driver sees them: state layout, compiled id, invariants, exact flow.
+
+Each adapter wraps a parameter dataclass from its physics module and adds nothing physical of its
+own; it only tells :class:`dynamics.simulation.Simulation` how to treat the system.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import cyclotron, disk, hoop
+from .integrators import kernels
+
+
+def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    d = np.linalg.norm(np.asarray(y) - ref, axis=-1)
+    return d / np.maximum(np.linalg.norm(ref, axis=-1), 1e-300)
+
+
+@dataclass(frozen=True)
+class Cyclotron:
+    """Charge in a uniform field (:mod:`dynamics.cyclotron`)."""
+
+    params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
+    name = "cyclotron"
+    sys_id = kernels.CYCLOTRON
+    state_names = cyclotron.STATE_NAMES
+
+    def kernel_params(self) -> np.ndarray:
+        return self.params.kernel_params()
+
+    def default_state(self) -> np.ndarray:
+        return np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.1])
+
+    def energy(self, states: np.ndarray) -> np.ndarray:
+        return cyclotron.energy(self.params, states)
+
+    def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        return {
+            "energy": self.energy(states),
+            "canonical_angular_momentum": cyclotron.canonical_angular_momentum(self.params, states),
+        }
+
+    def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
+        return cyclotron.exact_solution(self.params, state0, t)
+
+    def error(self, y: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        d = np.linalg.norm(np.asarray(y) - ref, axis=-1)
+        return d / np.linalg.norm(ref[..., [0, 1, 3, 4]], axis=-1)
+
+
+@dataclass(frozen=True)
+class Hoop:
+    """Bead on a hanging hoop (:mod:`dynamics.hoop`)."""
+
+    params: hoop.HoopParams = hoop.HoopParams()
+    name = "hoop"
+    sys_id = kernels.HOOP
+    state_names = hoop.STATE_NAMES
+
+    def kernel_params(self) -> np.ndarray:
+        return self.params.kernel_params()
+
+    def default_state(self) -> np.ndarray:
+        return hoop.mode_state(self.params, (0.3, 0.0))
+
+    def energy(self, states: np.ndarray) -> np.ndarray:
+        return hoop.energy(self.params, states)
+
+    def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        return {"energy": self.energy(states)}
+
+    def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
+        """Closed form only on the mode-1 manifold (the whole body a rigid pendulum)."""
+        s0 = np.atleast_2d(state0)
+        if not all(hoop.on_mode1_manifold(s) for s in s0):
+            return None
+        out = np.stack([hoop.mode1_exact_solution(self.params, s, t) for s in s0])
+        return out if np.ndim(state0) == 2 else out[0]
+
+    def error(self, y: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        return _relative(y, ref)
+
+
+@dataclass(frozen=True)
+class ReleasedDisk:
+    """The disk with its bead after the axle is removed: a free rigid body (:mod:`dynamics.disk`)."""
+
+    params: disk.DiskParams = disk.DiskParams()
+    extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name = "free-body"
+    sys_id = kernels.FREE_BODY
+    state_names = disk.FREE_STATE_NAMES
+
+    def kernel_params(self) -> np.ndarray:
+        return disk.free_kernel_params(self.params)
+
+    def default_state(self) -> np.ndarray:
+        return disk.released_initial_state(self.params, self.extra_spin)
+
+    def energy(self, states: np.ndarray) -> np.ndarray:
+        return disk.free_energy(self.kernel_params(), states)
+
+    def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        L = disk.free_angular_momentum_space(self.kernel_params(), states)
+        return {
+            "energy": self.energy(states),
+            "angular_momentum": L,
+            "angular_momentum_norm": np.linalg.norm(L, axis=-1),
+        }
+
+    def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
+        return None
+
+    def error(self, y: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        return _relative(y, ref)
+
+
+@dataclass(frozen=True)
+class DrivenDisk:
+    """The disk turned uniformly about its axle: exact, state ``(angle, omega)``."""
+
+    params: disk.DiskParams = disk.DiskParams()
+    name = "driven-disk"
+    sys_id = None
+    state_names = ("angle", "omega")
+
+    def kernel_params(self) -> np.ndarray:
+        return np.array([self.params.omega])
+
+    def default_state(self) -> np.ndarray:
+        return np.array([0.0, self.params.omega])
+
+    def energy(self, states: np.ndarray) -> np.ndarray:
+        w = np.asarray(states)[..., 1]
+        return 0.5 * disk.inertia_tensor(self.params)[1, 1] * w * w
+
+    def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        return {"energy": self.energy(states)}
+
+    def exact(self, state0: np.ndarray, t: float) -> np.ndarray:
+        s0 = np.asarray(state0, dtype=float)
+        out = s0.copy()
+        out[..., 0] = s0[..., 0] + s0[..., 1] * t
+        return out
+
+    def error(self, y: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        return _relative(y, ref)
+
+
+System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk

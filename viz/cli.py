@@ -1,0 +1,44 @@
+"""The ``mechviz`` command: one entry point, a subcommand per use.
+
+``analyze`` and ``simulate`` come from :mod:`dynamics.cli` and need no viewer; ``view``,
+``record``, ``play`` and ``bench`` import what they need only when run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from dynamics.cli import CliError, add_commands
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``mechviz: error: ...``) and exit status 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="mechviz", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    add_commands(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except CliError as exc:
+        print(f"mechviz: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("mechviz: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
