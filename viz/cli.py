@@ -7,9 +7,13 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 
 from dynamics.cli import CliError, add_commands
+
+# view (viz.app), record and play (viz.recording), bench (viz.bench).
+_COMMAND_MODULES = ("viz.app_cli", "viz.recording_cli", "viz.bench_cli")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -24,6 +28,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mechviz", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     add_commands(sub)
+    # Each of these modules registers its own subcommands and imports viser (or matplotlib)
+    # only inside the command it runs, so `analyze` and `simulate` stay light.
+    for module in _COMMAND_MODULES:
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name != module:
+                raise
+            continue  # not written yet
+        mod.add_commands(sub)
     return parser
 
 
