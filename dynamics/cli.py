@@ -230,6 +230,9 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         raise CliError(f"--dt: must be positive, got {dt}")
     if not method.adaptive and method.backend != "exact" and dt is None:
         raise CliError(f"--dt: required for the fixed-step method {method.name}")
+    if dt is not None:
+        # Land exactly on --t-end: the largest step <= --dt that divides it.
+        dt = args.t_end / math.ceil(args.t_end / dt - 1e-9)
     if args.rtol is not None and not 0 < args.rtol < 1:
         raise CliError(f"--rtol: must lie in (0, 1), got {args.rtol}")
     sim = Simulation(sysm, method, dt=dt, rtol=args.rtol, state=state)

@@ -1,0 +1,193 @@
+"""The headless command line: `mechviz analyze` and `mechviz simulate`."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+
+def mechviz(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "viz.cli", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_analyze_cyclotron_json_gives_the_seed_results():
+    out = mechviz(
+        "analyze",
+        "cyclotron",
+        "--charge",
+        "2",
+        "--mass",
+        "3",
+        "--field",
+        "1.5",
+        "--speed",
+        "4",
+        "--json",
+    )
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert r["gyrofrequency"] == pytest.approx(1.0)
+    assert r["radius"] == pytest.approx(4.0)
+    assert r["period"] == pytest.approx(2 * math.pi)
+    assert r["radial_oscillation_frequency"] == pytest.approx(1.0)
+
+
+def test_analyze_disk_json_gives_the_seed_results():
+    out = mechviz("analyze", "disk", "--json")
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    np.testing.assert_allclose(r["inertia_tensor"], [[2.5, -1.25, 0], [-1.25, 1.5, 0], [0, 0, 4]])
+    r29 = math.sqrt(29)
+    assert r["principal_moments"] == pytest.approx([2 - r29 / 4, 2 + r29 / 4, 4])
+    assert len(r["principal_axes"]) == 3 and all(len(a) == 3 for a in r["principal_axes"])
+    assert r["axle_force_amplitude"] == pytest.approx(5 / 8)
+    out = mechviz(
+        "analyze", "disk", "--omega", "2", "--radius", "0.5", "--disk-mass", "4", "--json"
+    )
+    assert json.loads(out.stdout)["axle_force_amplitude"] == pytest.approx(5 / 8 * 4 * 4 * 0.5)
+
+
+def test_analyze_hoop_json_gives_the_seed_modes():
+    out = mechviz(
+        "analyze",
+        "hoop",
+        "--hoop-mass",
+        "2",
+        "--bead-mass",
+        "1",
+        "--radius",
+        "0.5",
+        "--gravity",
+        "10",
+        "--json",
+    )
+    r = json.loads(out.stdout)
+    assert r["mode_frequencies"] == pytest.approx([math.sqrt(10), math.sqrt(1.5 * 20)])
+    assert r["mode_shapes"][0] == pytest.approx([1, 1])
+    assert r["mode_shapes"][1][0] / r["mode_shapes"][1][1] == pytest.approx(-1 / 3)
+
+
+def test_analyze_prints_a_readable_table_without_json():
+    out = mechviz("analyze", "hoop")
+    assert out.returncode == 0 and "mode_frequencies" in out.stdout and "{" not in out.stdout
+
+
+def test_simulate_hoop_json_reports_state_drift_work_and_exact_error():
+    out = mechviz(
+        "simulate",
+        "hoop",
+        "--theta1",
+        "0.4",
+        "--theta2",
+        "0.4",
+        "--t-end",
+        "3",
+        "--method",
+        "rk4",
+        "--dt",
+        "0.01",
+        "--json",
+    )
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert set(r["final_state"]) == {"theta1", "theta2", "omega1", "omega2"}
+    assert r["steps"] == 300 and r["rhs_evaluations"] == 1200
+    assert abs(r["energy_drift"]) < 1e-8
+    assert r["error_vs_exact"] < 1e-7  # mode 1 has a closed form at any amplitude
+
+
+def test_simulate_cyclotron_and_disk():
+    r = json.loads(
+        mechviz(
+            "simulate",
+            "cyclotron",
+            "--vz",
+            "0.2",
+            "--t-end",
+            "6.283185307179586",
+            "--method",
+            "boris",
+            "--dt",
+            "0.01",
+            "--json",
+        ).stdout
+    )
+    assert r["error_vs_exact"] < 1e-3 and abs(r["energy_drift"]) < 1e-13
+    assert r["final_state"]["z"] == pytest.approx(0.2 * 2 * math.pi, rel=1e-9)
+    r = json.loads(mechviz("simulate", "disk", "--t-end", "2", "--json").stdout)
+    assert r["method"] == "exact" and r["final_state"]["angle"] == pytest.approx(2.0)
+    r = json.loads(
+        mechviz(
+            "simulate",
+            "disk",
+            "--motion",
+            "released",
+            "--wz",
+            "0.01",
+            "--t-end",
+            "5",
+            "--method",
+            "splitting",
+            "--dt",
+            "0.01",
+            "--json",
+        ).stdout
+    )
+    assert r["error_vs_reference"] < 1e-3 and r["steps"] == 500
+
+
+def test_list_methods_shows_every_method_with_its_properties():
+    out = mechviz("simulate", "--list-methods")
+    assert out.returncode == 0
+    for name in (
+        "euler",
+        "rk4",
+        "dop853",
+        "boris",
+        "verlet",
+        "splitting",
+        "yoshida4",
+        "midpoint",
+        "exact",
+        "scipy-rk45",
+        "scipy-dop853",
+        "scipy-radau",
+        "scipy-lsoda",
+        "odeint",
+    ):
+        assert name in out.stdout
+    assert "symplectic" in out.stdout and "adaptive" in out.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["analyze", "cyclotron", "--mass", "-1"], "--mass"),
+        (["analyze", "cyclotron", "--field", "0"], "--field"),
+        (["analyze", "hoop", "--gravity", "nan"], "--gravity"),
+        (["analyze", "disk", "--radius", "abc"], "--radius"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "rk4", "--dt", "0"], "--dt"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "rk4", "--dt", "-0.1"], "--dt"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "boris", "--dt", "0.1"], "--method"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "warp", "--dt", "0.1"], "--method"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "rk4"], "--dt"),
+        (["simulate", "cyclotron", "--t-end", "1", "--method", "dop853", "--rtol", "5"], "--rtol"),
+        (["simulate", "cyclotron", "--t-end", "-1", "--method", "rk4", "--dt", "0.1"], "--t-end"),
+        (
+            ["simulate", "cyclotron", "--t-end", "1e4", "--method", "euler", "--dt", "0.9"],
+            "euler with dt=",
+        ),
+        (["analyze", "pendulum"], "pendulum"),
+    ],
+)
+def test_bad_input_exits_nonzero_with_one_line_naming_the_flag(args, needle):
+    out = mechviz(*args)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1, out.stderr
+    assert needle in lines[0] and "Traceback" not in out.stderr

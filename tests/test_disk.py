@@ -1,0 +1,190 @@
+"""Spinning disk with a bead: inertia, principal axes, bearing forces, released free body."""
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from dynamics import ReleasedDisk, Simulation, disk
+from dynamics.disk import DiskParams
+
+SEED = DiskParams()
+OTHERS = [DiskParams(2.0, 0.5, 0.3, 3.0), DiskParams(1.0, 1.5, 4.0, -2.0)]
+
+
+def _symbolic_disk_inertia_about_A():
+    """Integrate (r^2 delta - r r^T) dm over the uniform disk centred at (0, R, 0)."""
+    M, R, rho, phi = sp.symbols("M R rho phi", positive=True)
+    x = rho * sp.cos(phi)
+    y = R + rho * sp.sin(phi)
+    r = [x, y, 0]
+    sigma = M / (sp.pi * R**2)
+    tensor = sp.zeros(3, 3)
+    for i in range(3):
+        for j in range(3):
+            integrand = (sum(c**2 for c in r) * (1 if i == j else 0) - r[i] * r[j]) * sigma * rho
+            tensor[i, j] = sp.integrate(integrand, (rho, 0, R), (phi, 0, 2 * sp.pi))
+    return M, R, sp.simplify(tensor)
+
+
+def test_disk_inertia_about_A_matches_direct_integration_and_the_seed():
+    M, R, tensor = _symbolic_disk_inertia_about_A()
+    assert sp.simplify(tensor - M * R**2 / 4 * sp.diag(5, 1, 6)) == sp.zeros(3, 3)
+    for p in [SEED, *OTHERS]:
+        numeric = np.array(tensor.subs({M: p.disk_mass, R: p.radius}), dtype=float)
+        np.testing.assert_allclose(disk.inertia_tensor_disk(p), numeric, rtol=1e-14, atol=1e-14)
+
+
+def test_seed_total_inertia_tensor_about_A():
+    expected = np.array([[5 / 2, -5 / 4, 0], [-5 / 4, 3 / 2, 0], [0, 0, 4]])
+    np.testing.assert_allclose(disk.inertia_tensor(SEED), expected, rtol=1e-15)
+    np.testing.assert_allclose(
+        disk.inertia_tensor_bead(SEED), 5 / 4 * np.array([[1, -1, 0], [-1, 1, 0], [0, 0, 2]])
+    )
+
+
+def test_seed_principal_moments_and_axes():
+    moments, axes = disk.principal_axes(SEED)
+    r29 = math.sqrt(29)
+    np.testing.assert_allclose(moments, [2 - r29 / 4, 2 + r29 / 4, 4], rtol=1e-14)
+    x1 = np.array([r29 - 2, 5, 0]) / math.sqrt(58 - 4 * r29)
+    y1 = np.array([-2 - r29, 5, 0]) / math.sqrt(58 + 4 * r29)
+    np.testing.assert_allclose(axes, [x1, y1, [0, 0, 1]], atol=1e-14)
+
+
+@pytest.mark.parametrize("p", [SEED, *OTHERS])
+def test_principal_axes_diagonalise_the_tensor(p):
+    moments, axes = disk.principal_axes(p)
+    np.testing.assert_allclose(axes @ disk.inertia_tensor(p) @ axes.T, np.diag(moments), atol=1e-12)
+    np.testing.assert_allclose(axes @ axes.T, np.eye(3), atol=1e-14)
+    assert np.all(np.diff(moments) >= 0)
+
+
+def test_seed_spin_components_in_the_principal_frame_are_swapped_in_the_seed():
+    """omega y projected on x' is 5 omega / sqrt(58 - 4 sqrt29) (the seed prints + under the root)
+    and on y' 5 omega / sqrt(58 + 4 sqrt29); their product, all the force needs, is unchanged."""
+    _, axes = disk.principal_axes(SEED)
+    r29 = math.sqrt(29)
+    w = axes @ np.array([0.0, 1.0, 0.0])
+    np.testing.assert_allclose(w[:2], [5 / math.sqrt(58 - 4 * r29), 5 / math.sqrt(58 + 4 * r29)])
+    moments, _ = disk.principal_axes(SEED)
+    assert (moments[1] - moments[0]) * w[0] * w[1] == pytest.approx(5 / 4)
+
+
+def test_seed_bearing_force_at_B():
+    """F = 5/8 M omega^2 R (-cos wt x + sin wt z) (seed 2c), for several omega and times."""
+    for omega in (1.0, 2.5, -3.0):
+        p = DiskParams(omega=omega)
+        for t in (0.0, 0.3, 2.0):
+            wt = omega * t
+            expected = 5 / 8 * omega**2 * np.array([-math.cos(wt), 0.0, math.sin(wt)])
+            np.testing.assert_allclose(disk.bearing_force_b(p, t), expected, atol=1e-14)
+        assert disk.axle_force_amplitude(p) == pytest.approx(5 / 8 * omega**2)
+
+
+@pytest.mark.parametrize("p", [SEED, *OTHERS])
+def test_bearing_forces_supply_the_centripetal_force_and_the_torque(p):
+    """Numerically along the driven motion: d(sum m v)/dt = F_A + F_B and dL_A/dt = r_B x F_B,
+    with momentum and angular momentum summed over the disk (quadrature) and the bead."""
+    rho, phi = np.meshgrid(
+        np.linspace(0, p.radius, 60)[1:] - p.radius / 118, np.linspace(0, 2 * np.pi, 121)[:-1]
+    )
+    area = (p.radius / 59) * rho * (2 * np.pi / 120)
+    pts = np.stack([rho * np.cos(phi), p.radius + rho * np.sin(phi), 0 * rho], -1).reshape(-1, 3)
+    masses = (area / area.sum() * p.disk_mass).ravel()
+    pts = np.vstack([pts, disk.bead_position(p)])
+    masses = np.append(masses, p.bead_mass)
+    w = p.omega * np.array([0.0, 1.0, 0.0])
+
+    def momenta(t):
+        r = pts @ disk.rotation_about_axle(p.omega * t).T
+        v = np.cross(w, r)
+        return (masses[:, None] * v).sum(0), (masses[:, None] * np.cross(r, v)).sum(0)
+
+    h = 1e-4
+    for t in (0.0, 0.4, 1.7):
+        (P1, L1), (P0, L0) = momenta(t + h), momenta(t - h)
+        dP, dL = (P1 - P0) / (2 * h), (L1 - L0) / (2 * h)
+        scale = p.bead_mass * p.radius * p.omega**2
+        np.testing.assert_allclose(
+            dP, disk.bearing_force_a(p, t) + disk.bearing_force_b(p, t), atol=1e-6 * scale
+        )
+        torque = np.cross(disk.axle_points(p)[1], disk.bearing_force_b(p, t))
+        np.testing.assert_allclose(dL, torque, atol=1e-6 * scale * p.radius)
+        np.testing.assert_allclose(
+            torque, disk.required_torque(p, t), atol=1e-12 * scale * p.radius
+        )
+        # No torque along the axle is needed to keep the rate uniform.
+        assert abs(disk.required_torque(p, t)[1]) < 1e-12
+
+
+def test_bead_opposite_the_axle_midpoint_loads_both_bearings_equally():
+    for p in [SEED, *OTHERS]:
+        np.testing.assert_allclose(
+            disk.bearing_force_a(p, 0.7), disk.bearing_force_b(p, 0.7), atol=1e-12
+        )
+        assert disk.axle_force_amplitude(p) == pytest.approx(
+            p.bead_mass * p.radius * p.omega**2 / 2
+        )
+
+
+def test_seed_moments_about_the_centre_of_mass_make_the_axle_the_intermediate_axis():
+    moments, axes = disk.principal_axes_cm(SEED)
+    np.testing.assert_allclose(moments, [1 / 4, 29 / 36, 19 / 18], rtol=1e-13)
+    np.testing.assert_allclose(np.abs(axes), np.eye(3), atol=1e-14)
+
+
+def test_quaternion_conversion_round_trips():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        q *= np.sign(q[0])
+        R = disk.quaternion_to_matrix(q)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-14)
+        np.testing.assert_allclose(disk._matrix_to_quaternion(R), q, atol=1e-12)
+
+
+def test_released_disk_starts_in_the_driven_pose_with_the_driven_velocities():
+    sysm = ReleasedDisk(SEED)
+    s0 = sysm.default_state()
+    rot, a = disk.released_pose(SEED, s0, 0.0)
+    np.testing.assert_allclose(rot, np.eye(3), atol=1e-14)
+    np.testing.assert_allclose(a, 0.0, atol=1e-14)
+    # Angular momentum about the CM plus that of the CM's motion equals L about A when driven.
+    L_cm = disk.free_angular_momentum_space(sysm.kernel_params(), s0)
+    r_cm = disk.centre_of_mass(SEED)
+    v_cm = np.cross(SEED.omega * np.array([0, 1.0, 0]), r_cm)
+    np.testing.assert_allclose(
+        L_cm + SEED.total_mass * np.cross(r_cm, v_cm), disk.angular_momentum(SEED), atol=1e-14
+    )
+
+
+def test_released_disk_conserves_energy_and_angular_momentum_and_tumbles():
+    sysm = ReleasedDisk(SEED, (0.0, 0.0, 0.01))
+    traj = Simulation(sysm, "dop853", rtol=1e-11, atol=1e-11).run(60.0, 601)
+    states = traj.states[:, 0]
+    E = sysm.energy(states)
+    L = disk.free_angular_momentum_space(sysm.kernel_params(), states)
+    assert np.max(np.abs(E / E[0] - 1)) < 1e-9
+    assert np.max(np.linalg.norm(L - L[0], axis=1)) < 1e-9 * np.linalg.norm(L[0])
+    # Spin about the intermediate axis is unstable: w2 reverses (the Dzhanibekov flip).
+    assert states[:, 1].min() < -0.5 * SEED.omega
+    assert traj.error is not None and traj.error[-1, 0] < 1e-7  # against the 1e-12 reference
+
+
+def test_released_disk_rk4_matches_the_tight_reference():
+    sysm = ReleasedDisk(SEED, (0.01, 0.0, 0.01))
+    sim = Simulation(sysm, "rk4", dt=0.005)
+    sim.advance_to(30.0)
+    assert sim.sample().error[0] < 1e-7
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("disk_mass", 0.0), ("radius", -1.0), ("bead_mass", float("nan")), ("omega", float("inf"))],
+)
+def test_bad_parameters_are_rejected_naming_the_field(field, value):
+    with pytest.raises(ValueError, match=rf"^{field} must be"):
+        DiskParams(**{field: value})

@@ -1,0 +1,236 @@
+"""Integrators: convergence orders, invariants, the DOP853 port against scipy, failure handling."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from dynamics import (
+    METHODS,
+    Cyclotron,
+    DrivenDisk,
+    Hoop,
+    IntegrationError,
+    ReleasedDisk,
+    Simulation,
+    cyclotron,
+    disk,
+    methods_for,
+)
+from dynamics.disk import DiskParams
+from dynamics.hoop import HoopParams
+
+# name -> (system, initial state, duration T, step sizes). The step sizes keep every method in
+# its asymptotic regime and above the round-off floor (PERF_NOTES section 6 on why that matters).
+PROBLEMS = {
+    "cyclotron": (Cyclotron(), np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.1]), 2 * math.pi),
+    "hoop": (Hoop(HoopParams()), np.array([0.5, -0.3, 0.0, 0.0]), 2.0),
+    "free-body": (ReleasedDisk(DiskParams(), (0.3, 0.0, 0.2)), None, 4.0),
+}
+
+
+def _reference(system, s0, T):
+    exact = system.exact(s0, T)
+    if exact is not None:
+        return exact
+    sim = Simulation(system, "dop853", rtol=1e-13, atol=1e-13, state=s0, reference=None)
+    sim.advance_to(T)
+    return sim.state[0]
+
+
+def _final_error(system, method, s0, T, n):
+    sim = Simulation(system, method, dt=T / n, state=s0, reference=None)
+    sim.advance_to(T)
+    return float(system.error(sim.state[0], _reference(system, s0, T)))
+
+
+FIXED = [
+    (m.name, system)
+    for system in PROBLEMS
+    for m in methods_for(system)
+    if not m.adaptive and m.backend == "numba" and m.name != "exact"
+]
+
+
+@pytest.mark.parametrize(("method", "system"), FIXED)
+def test_convergence_order_matches_the_stated_order(method, system):
+    """Fit the slope of log(error) against log(dt) (diffrax's order test); it must be within 0.25
+    of the method's order. Points outside the asymptotic range or at round-off are dropped."""
+    sysm, s0, T = PROBLEMS[system]
+    s0 = sysm.default_state() if s0 is None else s0
+    order = METHODS[method].order
+    ns = [2**k for k in range(4, 15)]
+    dts, errs = [], []
+    for n in ns:
+        try:
+            e = _final_error(sysm, method, s0, T, n)
+        except IntegrationError:
+            continue  # a step too large for the implicit solve: not asymptotic anyway
+        if 1e-11 < e < 1e-2:
+            dts.append(T / n)
+            errs.append(e)
+    assert len(errs) >= 3, f"too few asymptotic points: {errs}"
+    slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
+    assert abs(slope - order) < 0.25, f"{method} on {system}: slope {slope:.3f}, order {order}"
+
+
+def test_exact_flow_is_exact_at_any_step():
+    sysm, s0, _ = PROBLEMS["cyclotron"]
+    for dt in (0.01, 1.0, 3.0):
+        sim = Simulation(sysm, "exact", dt=dt, state=s0)
+        sim.advance_to(300 * dt)
+        assert sim.sample().error[0] < 1e-12
+
+
+def test_driven_disk_exact_motion_turns_at_omega():
+    p = DiskParams(omega=2.0)
+    traj = Simulation(DrivenDisk(p), "exact").run(3.0, 4)
+    np.testing.assert_allclose(traj.states[:, 0, 0], 2.0 * traj.t)
+    assert np.all(traj.energy_error == 0)
+
+
+def test_boris_keeps_the_speed_to_round_off_at_any_step():
+    sysm, s0, _ = PROBLEMS["cyclotron"]
+    for dt in (0.01, 0.5, 2.0, 10.0):
+        traj = Simulation(sysm, "boris", dt=dt, state=s0).run(2000 * dt, 11)
+        assert np.max(np.abs(traj.energy_error)) < 1e-12
+
+
+def test_rotation_splitting_keeps_angular_momentum_to_round_off():
+    sysm = ReleasedDisk(DiskParams(), (0.01, 0.0, 0.01))
+    traj = Simulation(sysm, "splitting", dt=0.2).run(2000.0, 21)
+    L = disk.free_angular_momentum_space(sysm.kernel_params(), traj.states[:, 0])
+    norms = np.linalg.norm(L, axis=1)
+    assert np.max(np.abs(norms / norms[0] - 1)) < 1e-12
+    assert np.max(np.linalg.norm(L - L[0], axis=1)) < 1e-11 * norms[0]
+
+
+def _energy_trend(system, method, dt, T, s0=None):
+    traj = Simulation(system, method, dt=dt, state=s0).run(T, 401)
+    e = traj.energy_error[:, 0]
+    k = len(e) // 10
+    return e, abs(np.mean(e[-k:]) - np.mean(e[1 : k + 1]))
+
+
+@pytest.mark.parametrize(
+    ("system", "symplectic", "dt"),
+    [
+        (Hoop(), "verlet", 0.05),
+        (Hoop(), "yoshida4", 0.05),
+        (ReleasedDisk(DiskParams(), (0.01, 0, 0.01)), "splitting", 0.2),
+    ],
+)
+def test_symplectic_energy_error_stays_bounded_while_rk4_drifts(system, symplectic, dt):
+    """Over a long run at one step size RK4's energy error grows linearly; a symplectic or
+    symmetric method's oscillates without trend (means of first and last tenth agree)."""
+    T = 5000.0
+    e_rk4, trend_rk4 = _energy_trend(system, "rk4", dt, T)
+    e_sym, trend_sym = _energy_trend(system, symplectic, dt, T)
+    assert trend_sym < 0.1 * np.max(np.abs(e_sym)) + 1e-12
+    assert trend_rk4 > 20 * trend_sym
+    # RK4's drift is linear: the error at T is about twice that at T/2.
+    assert e_rk4[-1] / e_rk4[200] == pytest.approx(2.0, rel=0.1)
+
+
+@pytest.mark.parametrize("system", ["cyclotron", "hoop", "free-body"])
+def test_compiled_dop853_takes_scipys_steps(system):
+    """Our DOP853 is a port of scipy's: same evaluations, same final state to round-off."""
+    sysm, s0, T = PROBLEMS[system]
+    s0 = sysm.default_state() if s0 is None else s0
+    for tol in (1e-6, 1e-10):
+        ours = Simulation(sysm, "dop853", rtol=tol, atol=tol, state=s0, reference=None)
+        ours.advance_to(T)
+        theirs = Simulation(sysm, "scipy-dop853", rtol=tol, atol=tol, state=s0, reference=None)
+        theirs.advance_to(T)
+        assert ours.nfev == theirs.nfev
+        np.testing.assert_allclose(ours.state, theirs.state, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "method", ["scipy-rk45", "scipy-dop853", "scipy-radau", "scipy-lsoda", "odeint"]
+)
+def test_scipy_methods_go_through_the_same_driver_and_converge(method):
+    sysm, s0, T = PROBLEMS["cyclotron"]
+    sim = Simulation(sysm, method, rtol=1e-10, atol=1e-10, state=s0)
+    sim.advance_to(T)
+    assert sim.nfev > 0 and sim.steps > 0
+    assert sim.sample().error[0] < 1e-6
+
+
+def test_batched_states_advance_independently():
+    sysm = Cyclotron()
+    states = np.array([cyclotron.circular_orbit_state(sysm.params, v) for v in (0.5, 1.0, 2.0)])
+    sim = Simulation(sysm, "rk4", dt=0.01, state=states)
+    sim.advance_to(5.0)
+    for i, s0 in enumerate(states):
+        single = Simulation(sysm, "rk4", dt=0.01, state=s0)
+        single.advance_to(5.0)
+        np.testing.assert_array_equal(sim.state[i], single.state[0])
+    # Every orbit has the same period, whatever its speed.
+    sim.advance_to(cyclotron.period(sysm.params))
+    assert np.max(sim.sample().error) < 1e-7
+
+
+def test_blow_up_raises_a_clear_error_and_keeps_the_last_good_state():
+    sysm, s0, _ = PROBLEMS["cyclotron"]
+    sim = Simulation(sysm, "euler", dt=0.5, state=s0)
+    sim.advance_to(10.0)
+    with pytest.raises(
+        IntegrationError, match=r"euler with dt=0.5 s: state became non-finite .* at t = "
+    ):
+        sim.advance_to(1e6)
+    assert np.all(np.isfinite(sim.state))
+    assert sim.t == pytest.approx(10.0)
+
+
+def test_implicit_step_that_cannot_converge_raises():
+    with pytest.raises(IntegrationError, match="implicit solve did not converge"):
+        Simulation(Hoop(), "midpoint", dt=2.0, state=[2.0, -2.0, 5.0, -5.0]).advance_to(20.0)
+
+
+def test_fixed_steps_are_exactly_dt_and_time_is_counted_in_steps():
+    sim = Simulation(Hoop(), "rk4", dt=0.03)
+    sim.advance_to(1.0)
+    assert sim.steps == 33 and sim.t == pytest.approx(0.99)
+    sim.advance(0.02)  # clock 1.02: the 0.01 s left over from 1.0 makes one more step fit
+    assert sim.steps == 34 and sim.nfev == 4 * 34
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"method": "rk4", "dt": 0.0}, "dt must be positive"),
+        ({"method": "rk4", "dt": -1.0}, "dt must be positive"),
+        ({"method": "rk4", "dt": float("nan")}, "dt must be finite"),
+        ({"method": "rk4"}, "dt is required"),
+        ({"method": "dop853", "rtol": 2.0}, "rtol must be below 1"),
+        ({"method": "boris", "dt": 0.1}, "does not apply to hoop"),
+        ({"method": "nope", "dt": 0.1}, "method must be one of"),
+        (
+            {"method": "rk4", "dt": 0.1, "state": [0.0, float("nan"), 0.0, 0.0]},
+            "state must be finite",
+        ),
+        ({"method": "rk4", "dt": 0.1, "state": [0.0, 0.0]}, "state must have shape"),
+    ],
+)
+def test_bad_simulation_settings_are_rejected_naming_the_field(kwargs, message):
+    method = kwargs.pop("method")
+    with pytest.raises(ValueError, match=message):
+        Simulation(Hoop(), method, **kwargs)
+
+
+def test_reference_solution_agrees_with_scipy_radau():
+    """The tight DOP853 reference the driver measures errors against is itself right: it agrees
+    with scipy's Radau at 1e-12 (an independent, implicit method)."""
+    sysm, s0, T = PROBLEMS["hoop"]
+    ref = _reference(sysm, s0, T)
+    f = lambda t, y: (lambda out: (sysm_rhs(y, out), out)[1])(np.empty(4))  # noqa: E731
+
+    def sysm_rhs(y, out):
+        from dynamics.hoop import rhs
+
+        rhs(np.ascontiguousarray(y), sysm.kernel_params(), out)
+
+    radau = solve_ivp(f, (0, T), s0, method="Radau", rtol=1e-12, atol=1e-12).y[:, -1]
+    assert np.linalg.norm(radau - ref) / np.linalg.norm(ref) < 1e-10
