@@ -41,6 +41,7 @@ class Sample:
     reference: np.ndarray | None  # (N, d) the state it was measured against
     nfev: int
     steps: int
+    invariants: dict[str, np.ndarray] | None = None  # the system's conserved quantities, by name
 
 
 @dataclass(frozen=True)
@@ -248,6 +249,7 @@ class Simulation:
             scale = np.where(self.E0 != 0.0, np.abs(self.E0), 1.0)
             ref = self.reference_state() if self._track_error else None
             err = None if ref is None else self.system.error(self.state, ref)
+            invariants = self.system.invariants(self.state)
         return Sample(
             self.t,
             self.state.copy(),
@@ -257,6 +259,7 @@ class Simulation:
             None if ref is None else ref.copy(),
             self.nfev,
             self.steps,
+            invariants,
         )
 
     def stream(self, t_end: float, frame_dt: float) -> Iterator[Sample]:
