@@ -254,7 +254,9 @@ def free_kernel_params(p: DiskParams) -> np.ndarray:
 def released_initial_state(p: DiskParams, extra_spin=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Free-body state at release: spin ``omega y + extra_spin`` (disk-frame components, rad/s)."""
     _, frame = _principal_frame_cm(p)
-    w_space = p.omega * AXLE + np.array([_v.finite(n, x) for n, x in zip("xyz", extra_spin, strict=True)])
+    w_space = p.omega * AXLE + np.array(
+        [_v.finite(n, x) for n, x in zip("xyz", extra_spin, strict=True)]
+    )
     return np.concatenate([frame.T @ w_space, _matrix_to_quaternion(frame)])
 
 
@@ -312,13 +314,33 @@ def free_rhs(y, p, out):
 
 
 @njit(cache=True)
+def _free_rates(w1, w2, w3, q0, q1, q2, q3, k1, k2, k3):
+    """:func:`free_derivatives` with the Euler coefficients ``k1 = (I2 - I3) / I1`` (cyclic)
+    computed once by the caller: three divisions fewer per evaluation."""
+    return (
+        k1 * w2 * w3,
+        k2 * w3 * w1,
+        k3 * w1 * w2,
+        0.5 * (-q1 * w1 - q2 * w2 - q3 * w3),
+        0.5 * (q0 * w1 + q2 * w3 - q3 * w2),
+        0.5 * (q0 * w2 + q3 * w1 - q1 * w3),
+        0.5 * (q0 * w3 + q1 * w2 - q2 * w1),
+    )
+
+
+@njit(cache=True)
 def free_rk4_step(y, p, h):
-    """One classical RK4 step in scalar locals, in place; returns the 4 evaluations."""
+    """One classical RK4 step in scalar locals, in place; returns the 4 evaluations.
+
+    The coefficients ``(I2 - I3)/I1`` etc. are formed once per step rather than once per
+    evaluation (12 divisions become 3; results change only at round-off).
+    """
     i1, i2, i3 = p[0], p[1], p[2]
+    k1, k2, k3 = (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
     a0, a1, a2, a3, a4, a5, a6 = y[0], y[1], y[2], y[3], y[4], y[5], y[6]
     hh = 0.5 * h
-    b0, b1, b2, b3, b4, b5, b6 = free_derivatives(a0, a1, a2, a3, a4, a5, a6, i1, i2, i3)
-    c0, c1, c2, c3, c4, c5, c6 = free_derivatives(
+    b0, b1, b2, b3, b4, b5, b6 = _free_rates(a0, a1, a2, a3, a4, a5, a6, k1, k2, k3)
+    c0, c1, c2, c3, c4, c5, c6 = _free_rates(
         a0 + hh * b0,
         a1 + hh * b1,
         a2 + hh * b2,
@@ -326,11 +348,11 @@ def free_rk4_step(y, p, h):
         a4 + hh * b4,
         a5 + hh * b5,
         a6 + hh * b6,
-        i1,
-        i2,
-        i3,
+        k1,
+        k2,
+        k3,
     )
-    d0, d1, d2, d3, d4, d5, d6 = free_derivatives(
+    d0, d1, d2, d3, d4, d5, d6 = _free_rates(
         a0 + hh * c0,
         a1 + hh * c1,
         a2 + hh * c2,
@@ -338,11 +360,11 @@ def free_rk4_step(y, p, h):
         a4 + hh * c4,
         a5 + hh * c5,
         a6 + hh * c6,
-        i1,
-        i2,
-        i3,
+        k1,
+        k2,
+        k3,
     )
-    e0, e1, e2, e3, e4, e5, e6 = free_derivatives(
+    e0, e1, e2, e3, e4, e5, e6 = _free_rates(
         a0 + h * d0,
         a1 + h * d1,
         a2 + h * d2,
@@ -350,9 +372,9 @@ def free_rk4_step(y, p, h):
         a4 + h * d4,
         a5 + h * d5,
         a6 + h * d6,
-        i1,
-        i2,
-        i3,
+        k1,
+        k2,
+        k3,
     )
     c = h / 6.0
     y[0] = a0 + c * (b0 + 2.0 * (c0 + d0) + e0)
@@ -374,10 +396,12 @@ def _rotation(angle, lj, lk, ij, ik, q0, qi, qj, qk):
     multiplied on the right by the rotation ``+angle`` about ``e_i``. Both are exact, so ``|L|``
     is kept to round-off. Returns the new ``(w_j, w_k, q0, q_i, q_j, q_k)``.
     """
-    c = math.cos(angle)
-    s = math.sin(angle)
+    # Two libm calls instead of four: the whole angle from the half angle by the double-angle
+    # formulas (the step is bound by sin/cos; results change only at round-off).
     ch = math.cos(0.5 * angle)
     sh = math.sin(0.5 * angle)
+    c = (ch - sh) * (ch + sh)
+    s = 2.0 * sh * ch
     return (
         (c * lj + s * lk) / ij,
         (-s * lj + c * lk) / ik,

@@ -68,6 +68,10 @@ def run_dop853(rhs, Y, p, t0, t1, rtol, atol, H, F, stats, status):
     K = np.empty((N_STAGES + 1, d))
     tmp = np.empty(d)
     y_new = np.empty(d)
+    # Each stage is evaluated into kout and copied into its row of K: passing the row view
+    # K[s] to rhs instead would create (and reference count) a new array object per stage,
+    # which cost more than the hoop's whole right-hand side.
+    kout = np.empty(d)
     status[0] = OK
     for i in range(n):
         y = Y[i]
@@ -102,13 +106,17 @@ def run_dop853(rhs, Y, p, t0, t1, rtol, atol, H, F, stats, status):
                         for r in range(s):
                             acc += K[r, j] * _A[s, r]
                         tmp[j] = y[j] + h * acc
-                    rhs(tmp, p, K[s])
+                    rhs(tmp, p, kout)
+                    for j in range(d):
+                        K[s, j] = kout[j]
                 for j in range(d):
                     acc = 0.0
                     for r in range(N_STAGES):
                         acc += K[r, j] * _B[r]
                     y_new[j] = y[j] + h * acc
-                rhs(y_new, p, K[N_STAGES])
+                rhs(y_new, p, kout)
+                for j in range(d):
+                    K[N_STAGES, j] = kout[j]
                 stats[i, 0] += N_STAGES
                 # Error estimate (scipy's DOP853._estimate_error_norm).
                 e5 = 0.0

@@ -10,10 +10,11 @@ Two kinds of step, each with one signature:
 
 Each advances one state ``y`` (d,) by ``h`` in place and returns the number of evaluations
 used, or -1 if an implicit solve failed. :func:`run_direct` and :func:`run_composed` advance a
-batch ``Y`` (N, d), ensemble on the leading axis, by ``n_steps`` steps inside compiled code (time
-outer, ensemble inner). numba specialises them for each step function they receive, so the step
-is called directly; every extra call layer that passes arrays costs tens of ns per step here
-(reference counting), which is why the direct steps are the physics functions themselves.
+batch ``Y`` (N, d), ensemble on the leading axis, by ``n_steps`` steps inside compiled code
+(member outer: see :func:`run_direct`). numba specialises them for each step function they
+receive, so the step is called directly; every extra call layer that passes arrays costs tens
+of ns per step here (reference counting), which is why the direct steps are the physics
+functions themselves.
 Functions that receive compiled functions as arguments are compiled once per process (about
 0.3-1 s each) rather than cached on disk.
 """
@@ -119,18 +120,27 @@ def _report(status, e, k, i):
 def run_direct(step, Y, p, h, n_steps, status):
     """Advance every row of ``Y`` (N, d) by ``n_steps`` direct steps of ``h``, in place.
 
-    Returns the total number of evaluations. On failure stops at once and fills
-    ``status = [code, step index, member index]``; the caller restores the states it passed in.
+    Returns the total number of evaluations. On failure stops and fills
+    ``status = [code, step index, member index]`` with the earliest failure in time (the
+    lowest member index among failures at the same step); the caller restores the states.
+
+    The members are independent, so each is taken through all its steps before the next
+    (member outer): the row view ``Y[i]`` is then made once per member instead of once per
+    step. That view is reference counted, and doing it every step cost more than a whole
+    Boris step (measured 25 -> 11 ns/step); the states are bit for bit those of a time-outer
+    loop. A member only needs stepping up to the earliest failure found so far.
     """
     nfev = 0
     status[0] = OK
-    for k in range(n_steps):
-        for i in range(Y.shape[0]):
-            y = Y[i]
+    limit = n_steps
+    for i in range(Y.shape[0]):
+        y = Y[i]
+        for k in range(limit):
             e = step(y, p, h)
             if _failed(y, e):
                 _report(status, e, k, i)
-                return nfev
+                limit = k
+                break
             nfev += e
     return nfev
 
@@ -141,13 +151,15 @@ def run_composed(step, inner, Y, p, h, n_steps, status):
     work = np.empty((3, Y.shape[1]))
     nfev = 0
     status[0] = OK
-    for k in range(n_steps):
-        for i in range(Y.shape[0]):
-            y = Y[i]
+    limit = n_steps
+    for i in range(Y.shape[0]):
+        y = Y[i]
+        for k in range(limit):
             e = step(inner, y, p, h, work)
             if _failed(y, e):
                 _report(status, e, k, i)
-                return nfev
+                limit = k
+                break
             nfev += e
     return nfev
 

@@ -1,0 +1,148 @@
+"""PNG charts of a benchmark result (matplotlib, imported here only, Agg backend)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .sweeps import TARGETS
+
+OURS_STYLE = {"linestyle": "-", "marker": "o"}
+# One colour per method across every chart (11 methods: more than one default cycle).
+COLORS = {
+    "rk4": "tab:blue", "dop853": "tab:orange", "boris": "tab:green", "verlet": "tab:green",
+    "splitting": "tab:green", "yoshida4": "tab:olive", "midpoint": "tab:purple",
+    "euler": "tab:brown", "exact": "tab:gray", "scipy-rk45": "tab:pink",
+    "scipy-dop853": "tab:red", "scipy-radau": "black", "scipy-lsoda": "tab:cyan",
+    "odeint": "darkgoldenrod",
+}  # fmt: skip
+SCIPY_STYLE = {"linestyle": "--", "marker": "s"}
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def work_precision(result: dict, out: Path) -> list[Path]:
+    plt = _plt()
+    files = []
+    for key, pb in result["problems"].items():
+        fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+        by_method: dict[str, list] = {}
+        for p in result["points"]:
+            if p["problem"] == key and p["error"] is not None and p["seconds"]:
+                by_method.setdefault(p["method"], []).append(p)
+        for m, pts in sorted(by_method.items()):
+            style = SCIPY_STYLE if (m.startswith("scipy") or m == "odeint") else OURS_STYLE
+            err = [max(p["error"], 1e-16) for p in pts]
+            kw = dict(label=m, markersize=3.5, color=COLORS.get(m), **style)
+            axes[0].loglog([p["seconds"] for p in pts], err, **kw)
+            axes[1].loglog([max(p["nfev"], 1) for p in pts], err, **kw)
+        for ax, xl in zip(axes, ("wall time per run [s] (median)", "right-hand-side evaluations"),
+                          strict=True):  # fmt: skip
+            for t in TARGETS:
+                ax.axhline(t, color="0.6", linewidth=0.8, linestyle=":")
+            ax.axhline(pb["floor"], color="tab:red", linewidth=0.8, linestyle=":")
+            ax.set_xlabel(xl)
+            ax.set_ylabel("relative final error")
+            ax.grid(True, which="major", alpha=0.3)
+        axes[0].legend(fontsize=8, ncol=2)
+        fig.suptitle(f"{pb['title']}: error against cost (solid: ours, dashed: scipy); "
+                     f"{result['date']}, {result['mode']} run")  # fmt: skip
+        fig.tight_layout()
+        path = out / f"work_precision_{key}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        files.append(path)
+    return files
+
+
+def long_run(result: dict, out: Path) -> Path:
+    plt = _plt()
+    data = result["long_run"]
+    fig, axes = plt.subplots(1, len(data), figsize=(16, 4.6))
+    for ax, (key, res) in zip(axes, data.items(), strict=True):
+        for m, r in res["methods"].items():
+            err = [max(abs(e), 1e-17) for e in r["energy_error"][1:]]
+            ax.semilogy(r["t"][1:], err, label=f"{m} (max {r['max_abs']:.1e})", linewidth=1)
+        ax.set_title(f"{key}: dt = {res['dt']:g} s, {res['periods']:.0e} periods")
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("|E - E0| / |E0|")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("Energy error over 10^4 periods: RK4 drifts linearly, symplectic/symmetric "
+                 "methods stay bounded")  # fmt: skip
+    fig.tight_layout()
+    path = out / "energy_long_run.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def stability(result: dict, out: Path) -> Path:
+    plt = _plt()
+    data = result["stability"]
+    fig, ax = plt.subplots(figsize=(10, 6))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, ((m, r), c) in enumerate(zip(data["methods"].items(), colors, strict=False)):
+        ax.plot(data["x"], r["theory"], color=c, linewidth=1.2, label=f"{m} ({r['on']})")
+        ok = [p for p in r["points"] if p["measured"] is not None]
+        ax.plot([p["x"] for p in ok], [p["measured"] for p in ok], "o", color=c, markersize=5,
+                markerfacecolor="none")  # fmt: skip
+        bad = [p for p in r["points"] if p["measured"] is None]
+        if bad:
+            ax.plot([p["x"] for p in bad], [1.0] * len(bad), "x", color=c, markersize=6)
+        if r["limit"]:
+            ax.axvline(r["limit"], color=c, linestyle="--", linewidth=0.9)
+            ax.text(r["limit"], 12.0 / 1.35 ** (i % 3), f" {m} {r['limit']:.3f}", color=c,
+                    fontsize=7, va="top")  # fmt: skip
+    ax.axhline(1.0, color="k", linewidth=0.6)
+    ax.set_yscale("log")
+    ax.set_ylim(0.4, 15)
+    ax.set_xlim(0, 4)
+    ax.set_xlabel("omega dt")
+    ax.set_ylabel("amplification factor per step (spectral radius)")
+    ax.set_title("Stability: theory (lines), measured (circles; x: implicit solve failed), "
+                 "limits (dashed)")  # fmt: skip
+    ax.legend(fontsize=8, loc="lower right")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    path = out / "stability.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def per_step(result: dict, out: Path) -> Path:
+    plt = _plt()
+    rows = result["per_step"]["rows"]
+    names = list(rows)
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    xs = range(len(names))
+    ax.bar([x - 0.2 for x in xs], [rows[n]["numba_ns"] for n in names], 0.4, label="numba")
+    ax.bar([x + 0.2 for x in xs], [rows[n].get("c_ns") or 0 for n in names], 0.4,
+           label="C -O2 (same run)")  # fmt: skip
+    ax.set_xticks(list(xs), names, rotation=20)
+    ax.set_yscale("log")
+    ax.set_ylabel("ns per step")
+    ax.set_title("Cost of one compiled step")
+    ax.legend()
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    path = out / "per_step.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def all_charts(result: dict, out: Path) -> list[str]:
+    out.mkdir(parents=True, exist_ok=True)
+    files = work_precision(result, out)
+    files.append(long_run(result, out))
+    files.append(stability(result, out))
+    files.append(per_step(result, out))
+    return [str(f) for f in files]

@@ -1,0 +1,158 @@
+"""Model no more than a scene needs: the cheapest method and step for each viewer exhibit.
+
+For each exhibit (its default parameters and initial state as in ``viz/defaults.py``) and each
+candidate fixed-step method, the step is halved from one display frame (1/60 s) down until the
+largest on-screen position error over 10 minutes of simulated time, sampled every second
+against a tight reference, is below ``1e-3`` of the exhibit's size. The cheapest of the
+passing (method, step) pairs, by measured compute time per simulated second, is the default;
+its step must also lie below the method's stability limit (:mod:`dynamics.stability`).
+
+On-screen error, per exhibit:
+
+- charge: distance between the computed and the exact position [m]; size: orbit diameter
+  ``2 v / omega``.
+- hoop: the larger of the errors of the hoop's centre and of the bead [m]; size: ``2 a``.
+- released disk: rotation error times the farthest body point's distance from the centre of
+  mass (the centre of mass itself moves exactly); size: ``2 R``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .. import cyclotron, disk, hoop, stability
+from ..integrators.base import IntegrationError
+from ..simulation import Simulation
+from ..systems import Cyclotron, Hoop, ReleasedDisk
+
+SPAN = 600.0  # 10 minutes of simulated time [s]
+SAMPLE = 1.0  # error sampled every second [s]
+FRAME = 1.0 / 60.0
+TOLERANCE = 1e-3  # of the exhibit's size
+
+
+def _exhibits() -> dict:
+    cp = cyclotron.CyclotronParams(1.0, 1.0, 1.0)
+    hp = hoop.HoopParams(1.0, 0.5, 1.0, 9.81)
+    dp = disk.DiskParams(1.0, 1.0, 1.25, 2.0)
+    released = ReleasedDisk(dp, extra_spin=(0.0, 0.0, 0.02))
+    rim = np.array([[0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+    reach = float(np.max(np.linalg.norm(rim - disk.centre_of_mass(dp), axis=1)))
+    _, frame = disk._principal_frame_cm(dp)
+
+    def charge_err(y, ref):
+        return float(np.linalg.norm(y[:3] - ref[:3]))
+
+    def hoop_err(y, ref):
+        c1, b1 = hoop.positions(hp, y)
+        c2, b2 = hoop.positions(hp, ref)
+        return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
+
+    def disk_err(y, ref):
+        r1 = disk.quaternion_to_matrix(y[3:7]) @ frame.T
+        r2 = disk.quaternion_to_matrix(ref[3:7]) @ frame.T
+        return float(np.linalg.norm(r1 - r2, 2) * reach)
+
+    return {
+        "cyclotron": {
+            "system": Cyclotron(cp),
+            "state": cyclotron.circular_orbit_state(cp, 1.0, (0.0, 0.0), 0.05),
+            "size": 2.0,
+            "error": charge_err,
+            "methods": ("exact", "boris", "rk4", "yoshida4"),
+            "state_note": "speed 1 m/s, vz 0.05 m/s (viz/defaults.py)",
+        },
+        "hoop": {
+            "system": Hoop(hp),
+            "state": hoop.mode_state(hp, (0.25, 0.25)),
+            "size": 2.0 * hp.radius,
+            "error": hoop_err,
+            "methods": ("verlet", "rk4", "yoshida4"),
+            "state_note": "mode 'mix', amplitude 0.5: modes 1 and 2 at 0.25 rad each (viz/scene_hoop.py)",
+        },
+        "disk-released": {
+            "system": released,
+            "state": released.default_state(),
+            "size": 2.0 * dp.radius,
+            "error": disk_err,
+            "methods": ("splitting", "rk4", "yoshida4"),
+            "state_note": "omega 2 rad/s, extra spin (0, 0, 0.02) rad/s (viz/defaults.py)",
+        },
+    }
+
+
+def _reference_path(ex: dict, times: np.ndarray) -> np.ndarray:
+    sysm = ex["system"]
+    exact = sysm.exact(ex["state"], 0.0)
+    if exact is not None:
+        return np.stack([sysm.exact(ex["state"], t) for t in times])
+    sim = Simulation(sysm, "dop853", rtol=1e-13, atol=1e-13, state=ex["state"], reference=None)
+    out = []
+    for t in times:
+        sim.advance_to(float(t))
+        out.append(sim.state[0].copy())
+    return np.stack(out)
+
+
+def _max_error(ex, method, dt, times, ref) -> tuple[float | None, float, int]:
+    sim = Simulation(ex["system"], method, dt=dt, state=ex["state"], reference=None)
+    worst = 0.0
+    t0 = time.perf_counter()
+    try:
+        for t, r in zip(times, ref, strict=True):
+            sim.advance_to(float(t))
+            # Fixed steps stop at the last whole step before t: compare at that time exactly.
+            worst = max(worst, ex["error"](sim.state[0], r) if sim.t == t else math.inf)
+    except IntegrationError:
+        return None, time.perf_counter() - t0, sim.steps
+    # Cost: the sampled run above compiled everything; time clean runs over the whole span
+    # (best of three), as a viewer advancing frame by frame pays the same steps.
+    best = math.inf
+    for _ in range(3):
+        clean = Simulation(ex["system"], method, dt=dt, state=ex["state"], reference=None)
+        t0 = time.perf_counter()
+        clean.advance_to(SPAN)
+        best = min(best, time.perf_counter() - t0)
+    return worst, best, sim.steps
+
+
+def choose_defaults(quick: bool = False, progress=None) -> dict:
+    """Sweep each exhibit's candidate methods; return the table and the chosen defaults."""
+    out = {}
+    times = np.arange(1, int(SPAN / SAMPLE) + 1) * SAMPLE
+    divisors = (1, 2, 4, 8, 16, 32, 64, 128) if not quick else (1, 4, 16, 64)
+    for name, ex in _exhibits().items():
+        ref = _reference_path(ex, times)
+        budget = TOLERANCE * ex["size"]
+        rows = []
+        for method in ex["methods"]:
+            limit = stability.stability_limit(method, ex["system"], ex["state"])
+            for k in divisors:
+                dt = FRAME / k
+                # Sample times on whole steps: 60 k steps per second.
+                err, secs, steps = _max_error(ex, method, dt, times, ref)
+                rows.append({
+                    "method": method, "dt": dt, "steps_per_frame": k, "max_error": err,
+                    "relative_error": None if err is None else err / ex["size"],
+                    "seconds_per_simulated_second": secs / SPAN, "steps": steps,
+                    "stability_limit_dt": limit,
+                    "passes": err is not None and err <= budget,
+                })  # fmt: skip
+                if progress:
+                    progress()
+                if err is not None and err <= budget:
+                    break  # the largest passing step of this method: smaller ones cost more
+        passing = [r for r in rows if r["passes"]]
+        best = min(passing, key=lambda r: r["seconds_per_simulated_second"]) if passing else None
+        out[name] = {
+            "size": ex["size"],
+            "budget": budget,
+            "state": [float(v) for v in ex["state"]],
+            "state_note": ex["state_note"],
+            "rows": rows,
+            "chosen": best,
+        }
+    return out

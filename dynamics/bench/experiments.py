@@ -1,0 +1,233 @@
+"""The benchmark's other measurements: long-run energy, stability, and cost per compiled step.
+
+- :func:`long_run_energy`: relative energy error over ``10^4`` periods at one loose step, RK4
+  against the symplectic / symmetric methods (the regime of a viewer whose step is fixed).
+- :func:`stability_points`: the measured amplification factor per step against ``omega dt``,
+  beside the closed forms of :mod:`dynamics.stability`.
+- :func:`per_step_costs`: ns per compiled step of the direct kernels through
+  :func:`dynamics.integrators.kernels.run_direct`, and the same steps written in C
+  (``c_steps.c``, built with gcc ``-O2`` when a compiler is found), measured in the same run.
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import shutil
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import hoop, stability
+from ..integrators import kernels
+from ..integrators.base import IntegrationError
+from ..simulation import Simulation
+from ..systems import Cyclotron, Hoop
+from .problems import PROBLEMS
+
+# ----------------------------------------------------------------------------- long runs
+LONG_RUNS = {
+    # problem: (step, methods); the step is loose on purpose: a frame-budget step.
+    "charge": (0.1, ("rk4", "boris", "yoshida4", "midpoint")),
+    "hoop": (0.05, ("rk4", "verlet", "yoshida4")),
+    "disk": (0.1, ("rk4", "splitting", "yoshida4")),
+}
+
+
+def long_run_energy(periods: float = 1e4, samples: int = 400, progress=None) -> dict:
+    """Energy error ``(E - E0)/|E0|`` at ``samples`` times over ``periods`` periods."""
+    out = {}
+    for key, (dt, methods) in LONG_RUNS.items():
+        pb = PROBLEMS[key]
+        T = periods * pb.period
+        n = int(round(T / dt))
+        T = n * dt
+        res = {"dt": dt, "t_end": T, "periods": periods, "methods": {}}
+        for m in methods:
+            sim = Simulation(pb.system, m, dt=dt, state=pb.y0, reference=None)
+            E0 = float(pb.system.energy(pb.y0))
+            ts, errs = [0.0], [0.0]
+            t0 = time.perf_counter()
+            for k in range(1, samples + 1):
+                sim.advance_to(T * k / samples)
+                ts.append(sim.t)
+                errs.append((float(pb.system.energy(sim.state)[0]) - E0) / abs(E0))
+            secs = time.perf_counter() - t0
+            e = np.array(errs[1:])
+            tenth = max(1, len(e) // 10)
+            res["methods"][m] = {
+                "t": ts,
+                "energy_error": errs,
+                "max_abs": float(np.max(np.abs(e))),
+                "mean_first_10pc": float(np.mean(e[:tenth])),
+                "mean_last_10pc": float(np.mean(e[-tenth:])),
+                "seconds": secs,
+                "steps": sim.steps,
+            }
+            if progress:
+                progress()
+        out[key] = res
+    return out
+
+
+# ----------------------------------------------------------------------------- stability
+X_POINTS = (0.25, 0.5, 1.0, 1.5, 1.9, 2.1, 2.5, 2.75, 2.9, 3.25, 3.75)
+
+
+def _charge_factor(method: str, x: float, n: int = 64) -> tuple[float | None, str]:
+    """Measured ``(|v_perp(n)| / |v_perp(0)|)^(1/n)`` on the charge at ``omega dt = x``."""
+    sim = Simulation(Cyclotron(), method, dt=x, state=np.array([1.0, 0, 0, 0, 1.0, 0]),
+                     reference=None)  # fmt: skip
+    try:
+        sim.advance_to(n * x)
+    except IntegrationError as exc:
+        return None, exc.reason
+    v = math.hypot(sim.state[0, 3], sim.state[0, 4])
+    return v ** (1.0 / sim.steps), "ok"
+
+
+def _mode2_amplitude(p, omega2: float, state: np.ndarray) -> float:
+    """Amplitude of the linearised hoop's mode 2, ``sqrt(c^2 + (c'/omega2)^2)``."""
+    _, shapes = hoop.normal_modes(p)
+    basis = shapes.T
+    c = np.linalg.solve(basis, state[:2])[1]
+    cd = np.linalg.solve(basis, state[2:])[1]
+    return math.hypot(c, cd / omega2)
+
+
+def hoop_mode2_factor(method: str, x: float, n_max: int = 400, a0: float = 1e-6):
+    """Measured growth per step of the hoop's mode 2 (amplitude ``a0``, linear regime) at
+    ``omega_max dt = x``: the largest amplitude over the last quarter of the steps over the
+    largest over the first quarter, to the power ``1 / (steps between)``. Stepping stops early
+    once the amplitude has grown ``1e4``-fold (still linear)."""
+    sysm = Hoop()
+    p = sysm.params
+    w2 = float(hoop.normal_modes(p)[0][1])
+    dt = x / w2
+    sim = Simulation(sysm, method, dt=dt, state=hoop.mode_state(p, (0.0, a0)), reference=None)
+    amps = []
+    try:
+        for _ in range(n_max):
+            sim.advance_to(sim.t + dt * (1 + 1e-12))
+            amps.append(_mode2_amplitude(p, w2, sim.state[0]))
+            if amps[-1] > 1e4 * a0:
+                break
+    except IntegrationError as exc:
+        return None, exc.reason
+    q = max(1, len(amps) // 4)
+    first, last = max(amps[:q]), max(amps[-q:])
+    span = len(amps) - q
+    return (last / first) ** (1.0 / span), "ok"
+
+
+def stability_points(progress=None) -> dict:
+    """Theory curves and measured points of the amplification factor against ``omega dt``."""
+    xs = np.linspace(0.0, 4.0, 401)
+    methods = {
+        "euler": ("charge", _charge_factor),
+        "rk4": ("charge", _charge_factor),
+        "midpoint": ("charge", _charge_factor),
+        "boris": ("charge", _charge_factor),
+        "exact": ("charge", _charge_factor),
+        "verlet": ("hoop mode 2", hoop_mode2_factor),
+        "yoshida4": ("hoop mode 2", hoop_mode2_factor),
+    }
+    out = {"x": xs.tolist(), "methods": {}}
+    for m, (where, fn) in methods.items():
+        theory = [stability.amplification(m, x) for x in xs]
+        limit = stability.limit_omega_dt(m, "hoop" if where.startswith("hoop") else "cyclotron")
+        pts = []
+        for x in X_POINTS:
+            g, status = fn(m, x)
+            pts.append({"x": x, "measured": g, "theory": stability.amplification(m, x),
+                        "status": status})  # fmt: skip
+        out["methods"][m] = {"on": where, "theory": theory, "limit": limit, "points": pts,
+                             "reason": stability.REASONS[m]}  # fmt: skip
+        if progress:
+            progress()
+    return out
+
+
+# ----------------------------------------------------------------------------- per-step cost
+C_SOURCE = Path(__file__).with_name("c_steps.c")
+STEP_CASES = (
+    # name, system key, table, system id, h, steps
+    ("rk4-charge", "charge", kernels.RK4, kernels.CYCLOTRON, 0.01, 1_000_000),
+    ("boris", "charge", kernels.SYMMETRIC2, kernels.CYCLOTRON, 0.01, 1_000_000),
+    ("rk4-hoop", "hoop", kernels.RK4, kernels.HOOP, 0.001, 125_000),
+    ("verlet-hoop", "hoop", kernels.SYMMETRIC2, kernels.HOOP, 0.001, 125_000),
+    ("rk4-free-body", "disk", kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
+    ("splitting", "disk", kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
+)
+# PERF_NOTES section 3 (C -O2, other machine load): the issue's reference figures.
+NOTES_C_NS = {"rk4-charge": 10.7, "boris": 4.0, "rk4-hoop": 168.0, "rk4-free-body": 16.0,
+              "splitting": 77.0}  # fmt: skip
+
+
+def _numba_cost(table, sys_id, key, h, n, repeats) -> tuple[float, float]:
+    pb = PROBLEMS[key]
+    step = table[sys_id]
+    p = pb.system.kernel_params()
+    status = np.zeros(3, dtype=np.int64)
+    Y = np.atleast_2d(pb.y0).copy()
+    t0 = time.perf_counter()
+    kernels.run_direct(step, Y.copy(), p, h, 10, status)  # compiles (or loads) the loop
+    compile_s = time.perf_counter() - t0
+    ts = []
+    gc.disable()
+    try:
+        for _ in range(repeats):
+            Yc = Y.copy()
+            t0 = time.perf_counter()
+            kernels.run_direct(step, Yc, p, h, n, status)
+            ts.append(time.perf_counter() - t0)
+    finally:
+        gc.enable()
+    return statistics.median(ts) / n * 1e9, compile_s
+
+
+def _c_costs(n: int, repeats: int) -> dict[str, float] | str:
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        return "no C compiler found"
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "c_steps"
+        try:
+            subprocess.run([cc, "-O2", str(C_SOURCE), "-lm", "-o", str(exe)], check=True,
+                           capture_output=True, timeout=60)  # fmt: skip
+            out = subprocess.run([str(exe), str(n), str(repeats)], check=True,
+                                 capture_output=True, text=True, timeout=120).stdout  # fmt: skip
+        except (subprocess.SubprocessError, OSError) as exc:
+            return f"C build or run failed: {exc}"
+    return {line.split()[0]: float(line.split()[1]) for line in out.splitlines() if line.strip()}
+
+
+def per_step_costs(quick: bool = False, progress=None) -> dict:
+    """ns per step, numba (through ``run_direct``) and C, measured in the same run."""
+    repeats = 3 if quick else 7
+    scale = 4 if quick else 1
+    rows = {}
+    for name, key, table, sys_id, h, n in STEP_CASES:
+        ns, comp = _numba_cost(table, sys_id, key, h, n // scale, repeats)
+        rows[name] = {"numba_ns": ns, "first_call_s": comp, "steps": n // scale}
+        if progress:
+            progress()
+    c = _c_costs(1_000_000 // scale, repeats)
+    for name, row in rows.items():
+        row["c_notes_ns"] = NOTES_C_NS.get(name)
+        if isinstance(c, dict) and name in c:
+            row["c_ns"] = c[name]
+            row["ratio_to_c"] = row["numba_ns"] / c[name]
+            row["within_2x_of_c"] = row["ratio_to_c"] <= 2.0
+    return {
+        "rows": rows,
+        "c": "gcc -O2, same arithmetic, state in locals (dynamics/bench/c_steps.c)"
+        if isinstance(c, dict)
+        else c,
+        "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "
+        "array every step, non-finite check every step); median of repeats.",
+    }

@@ -1,0 +1,102 @@
+"""Markdown tables of a benchmark result (written beside ``results.json`` as ``tables.md``)."""
+
+from __future__ import annotations
+
+
+def _ms(x: float | None) -> str:
+    if x is None:
+        return "-"
+    return f"{1e3 * x:.3g} ms"
+
+
+def ratio_table(result: dict) -> str:
+    lines = [
+        "| problem | accuracy | fastest of ours | fastest scipy | scipy / ours |",
+        "|---|---|---|---|---|",
+    ]
+    for key, row in result["ratios"].items():
+        for target, e in row.items():
+            ours = e.get("ours") or {}
+            sci = e.get("scipy") or {}
+            r = e.get("ratio")
+            rs = "-" if r is None else (">= " if e.get("ratio_is_lower_bound") else "") + f"{r:.0f}x"
+            sci_s = f"{sci['method']} {_ms(sci['seconds'])}" if sci else "not reached within the cap"
+            lines.append(f"| {key} | {target} | {ours.get('method', '-')} {_ms(ours.get('seconds'))} "
+                         f"| {sci_s} | {rs} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def method_table(result: dict) -> str:
+    """Time each method needs to reach 1e-3, 1e-6, 1e-9 (with its evaluations)."""
+    lines = []
+    for key, row in result["ratios"].items():
+        methods = sorted({m for e in row.values() for m in e["per_method"]})
+        lines += [f"\n**{key}**\n", "| method | " + " | ".join(row) + " |",
+                  "|---|" + "---|" * len(row)]  # fmt: skip
+        for m in methods:
+            cells = []
+            for e in row.values():
+                v = e["per_method"].get(m)
+                cells.append("-" if v is None else f"{_ms(v['seconds'])} ({v['nfev']} fev)")
+            lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def step_table(result: dict) -> str:
+    lines = [
+        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | PERF_NOTES C |",
+        "|---|---|---|---|---|",
+    ]
+    for name, r in result["per_step"]["rows"].items():
+        c = r.get("c_ns")
+        ratio = r.get("ratio_to_c")
+        lines.append(f"| {name} | {r['numba_ns']:.1f} | {'-' if c is None else f'{c:.1f}'} | "
+                     f"{'-' if ratio is None else f'{ratio:.2f}'} | "
+                     f"{r.get('c_notes_ns') or '-'} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def exhibit_table(result: dict) -> str:
+    lines = [
+        "| exhibit | method | dt [s] | steps/frame | max error / size (600 s) | "
+        "compute per simulated s | stability limit dt | passes |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, ex in result["exhibits"].items():
+        for r in ex["rows"]:
+            rel = "failed" if r["relative_error"] is None else f"{r['relative_error']:.2e}"
+            lim = r["stability_limit_dt"]
+            lim_s = "none" if lim is None else f"{lim:.3g}"
+            mark = "**yes (chosen)**" if ex["chosen"] is r or ex["chosen"] == r else (
+                "yes" if r["passes"] else "no")  # fmt: skip
+            lines.append(f"| {name} | {r['method']} | {r['dt']:.5g} | {r['steps_per_frame']} | "
+                         f"{rel} | {1e6 * r['seconds_per_simulated_second']:.3g} us | {lim_s} | "
+                         f"{mark} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def long_run_table(result: dict) -> str:
+    lines = [
+        "| problem | dt | method | max abs dE/E | mean first 10 % | mean last 10 % |",
+        "|---|---|---|---|---|---|",
+    ]
+    for key, res in result["long_run"].items():
+        for m, r in res["methods"].items():
+            lines.append(f"| {key} | {res['dt']:g} | {m} | {r['max_abs']:.2e} | "
+                         f"{r['mean_first_10pc']:.2e} | {r['mean_last_10pc']:.2e} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def markdown(result: dict) -> str:
+    head = (f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
+            f"load average {result['load_average']}; {result['machine'].get('cpu', '')}, "
+            f"{result['machine']['cpus']} CPUs; versions {result['versions']}.")  # fmt: skip
+    return "\n\n".join([
+        "# Benchmark tables", head,
+        "## Time to reach each accuracy: fastest scipy over fastest of ours", ratio_table(result),
+        "## Time per method to reach 1e-3, 1e-6, 1e-9", method_table(result),
+        "## Cost of one compiled step", step_table(result),
+        "## Energy error over 10^4 periods", long_run_table(result),
+        "## Exhibit defaults (10 min of simulated time, error below 1e-3 of the size)",
+        exhibit_table(result),
+    ]) + "\n"  # fmt: skip

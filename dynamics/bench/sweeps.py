@@ -1,0 +1,249 @@
+"""Work-precision sweeps: every method on every problem, each through the same driver.
+
+Fixed-step methods sweep the number of steps ``n = n0 * 2^(k/2)`` (``2^k`` in quick mode),
+``dt = T / n``; adaptive methods sweep ``rtol = atol`` from ``1e-3`` down in half-decades
+(decades in quick mode). A sweep stops when the error falls below the problem's floor, when
+one call takes longer than the cap, or when the error stops falling (round-off).
+
+Each point records the final error, the median wall time of ``Simulation.advance_to(T)``
+(:mod:`.timing`), evaluations and steps, and the largest relative energy error seen at
+``energy_samples`` equally spaced times. For fixed-step methods those samples come from the
+untimed first run itself (advancing in pieces takes exactly the same steps); an adaptive run
+restarted at every sample would change its steps, so there the samples come from a second,
+segmented run, and the final state from the unsegmented one.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..integrators.base import IntegrationError, get_method
+from ..simulation import Simulation
+from .problems import ADAPTIVE_SCIPY, Problem, reference_state
+from .timing import time_calls
+
+
+@dataclass
+class Point:
+    problem: str
+    method: str
+    adaptive: bool
+    dt: float | None
+    tol: float | None
+    steps: int
+    nfev: int
+    error: float | None  # None: the run failed
+    energy_error_max: float | None
+    seconds: float | None  # median wall time of one run to T
+    seconds_best: float | None  # fastest sample
+    first_call: float | None
+    samples: int
+    calls_per_sample: int
+    status: str
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Settings:
+    quick: bool = False
+    repeats: int = 5
+    min_sample: float = 2e-3
+    cap: float = 2.0  # stop a sweep after a single call longer than this [s]
+    energy_samples: int = 50
+    half_steps: bool = True  # fixed-step sweep in factors sqrt(2) (else 2)
+    tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 2) for k in range(6, 25))
+    scipy_methods: tuple[str, ...] = ADAPTIVE_SCIPY
+    skip_fixed: tuple[str, ...] = ()
+
+    @classmethod
+    def for_mode(cls, quick: bool) -> Settings:
+        if not quick:
+            return cls()
+        return cls(
+            quick=True,
+            repeats=3,
+            cap=0.25,
+            energy_samples=10,
+            half_steps=False,
+            tolerances=tuple(10.0**-k for k in range(3, 13)),
+            # The scipy options that can be fastest (full runs: RK45 and Radau never are).
+            scipy_methods=("scipy-dop853", "scipy-lsoda", "odeint"),
+            # Never fastest at any target, and each costs ~1 s of compilation per system.
+            skip_fixed=("euler", "midpoint"),
+        )
+
+
+def _simulation(problem: Problem, method: str, dt: float | None, tol: float | None) -> Simulation:
+    return Simulation(
+        problem.system, method, dt=dt, rtol=tol, atol=tol, state=problem.y0, reference=None
+    )
+
+
+def _energy(problem: Problem, y: np.ndarray) -> float:
+    with np.errstate(over="ignore", invalid="ignore"):  # a run that blew up is huge, not wrong
+        return float(np.asarray(problem.system.energy(np.atleast_2d(y)))[0])
+
+
+def run_point(
+    problem: Problem,
+    method: str,
+    settings: Settings,
+    *,
+    dt: float | None = None,
+    tol: float | None = None,
+) -> Point:
+    adaptive = get_method(method).adaptive
+    ref = reference_state(problem)
+    T = problem.t_end
+    S = settings.energy_samples
+    E0 = float(problem.system.energy(problem.y0))
+    energy_max = 0.0
+    try:
+        sim = _simulation(problem, method, dt, tol)
+        t0 = time.perf_counter()
+        if adaptive:
+            sim.advance_to(T)
+        else:
+            for k in range(1, S + 1):
+                sim.advance_to(T * k / S)
+                e = _energy(problem, sim.state)
+                energy_max = max(energy_max, abs(e - E0) / abs(E0))
+        first = time.perf_counter() - t0
+        y, steps, nfev = sim.state[0].copy(), sim.steps, sim.nfev
+        if adaptive and first < settings.cap:
+            seg = _simulation(problem, method, dt, tol)
+            for k in range(1, S + 1):
+                seg.advance_to(T * k / S)
+                e = _energy(problem, seg.state)
+                energy_max = max(energy_max, abs(e - E0) / abs(E0))
+        elif adaptive:
+            energy_max = abs(_energy(problem, y) - E0) / abs(E0)
+    except IntegrationError as exc:
+        return Point(problem.key, method, adaptive, dt, tol, 0, 0, None, None, None, None, None,
+                     0, 0, f"failed: {exc.reason}")  # fmt: skip
+    err = problem.error(y, ref)
+    if not math.isfinite(err):
+        return Point(problem.key, method, adaptive, dt, tol, steps, nfev, None, None, None, None,
+                     first, 0, 0, "failed: non-finite final state")  # fmt: skip
+
+    def make():
+        s = _simulation(problem, method, dt, tol)
+        return lambda: s.advance_to(T)
+
+    timing = time_calls(
+        make,
+        repeats=settings.repeats,
+        min_sample=settings.min_sample,
+        first_call=first if adaptive else None,
+    )
+    return Point(
+        problem.key,
+        method,
+        adaptive,
+        dt,
+        tol,
+        int(steps),
+        int(nfev),
+        err,
+        energy_max,
+        timing.median,
+        timing.best,
+        timing.first_call,
+        timing.samples,
+        timing.calls_per_sample,
+        "ok",
+    )
+
+
+def sweep_fixed(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
+    points: list[Point] = []
+    factor = math.sqrt(2.0) if settings.half_steps else 2.0
+    best = math.inf
+    rises = 0
+    for k in range(60):
+        n = int(round(problem.n0 * factor**k))
+        pt = run_point(problem, method, settings, dt=problem.t_end / n)
+        points.append(pt)
+        if progress:
+            progress()
+        if pt.error is None:
+            continue  # unstable or no convergence at this step: try a smaller one
+        if pt.error < problem.floor:
+            break
+        if (pt.first_call or 0.0) > settings.cap or n > 2**26:
+            break
+        if pt.error >= best and best < 1e-5:
+            rises += 1
+            if rises >= 2:
+                break  # round-off floor reached
+        best = min(best, pt.error)
+    return points
+
+
+def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
+    points: list[Point] = []
+    for tol in settings.tolerances:
+        pt = run_point(problem, method, settings, tol=tol)
+        points.append(pt)
+        if progress:
+            progress()
+        if pt.error is not None and pt.error < problem.floor:
+            break
+        if (pt.first_call or 0.0) > settings.cap:
+            break
+    return points
+
+
+TARGETS = (1e-3, 1e-6, 1e-9)
+
+
+def time_to_reach(points: list[Point], target: float) -> Point | None:
+    """The fastest point whose error is at or below ``target``."""
+    ok = [p for p in points if p.error is not None and p.error <= target and p.seconds]
+    return min(ok, key=lambda p: p.seconds) if ok else None
+
+
+def ratio_table(points: list[Point], ours: set[str], theirs: set[str]) -> dict:
+    """Per problem and target: the fastest of ours, the fastest scipy option, and their ratio.
+
+    When no scipy option reaches the target within the cap, the ratio is a lower bound: the
+    slowest scipy call made (which still missed) over our time.
+    """
+    table: dict = {}
+    for key in sorted({p.problem for p in points}):
+        pts = [p for p in points if p.problem == key]
+        row = {}
+        for target in TARGETS:
+            per_method = {}
+            for m in sorted({p.method for p in pts}):
+                best = time_to_reach([p for p in pts if p.method == m], target)
+                per_method[m] = None if best is None else {
+                    "seconds": best.seconds, "nfev": best.nfev, "dt": best.dt, "tol": best.tol,
+                    "error": best.error,
+                }  # fmt: skip
+            our = [(v["seconds"], m) for m, v in per_method.items() if m in ours and v]
+            sci = [(v["seconds"], m) for m, v in per_method.items() if m in theirs and v]
+            entry = {"per_method": per_method}
+            if our:
+                entry["ours"] = {"method": min(our)[1], "seconds": min(our)[0]}
+            if our and sci:
+                entry["scipy"] = {"method": min(sci)[1], "seconds": min(sci)[0]}
+                entry["ratio"] = min(sci)[0] / min(our)[0]
+                entry["ratio_is_lower_bound"] = False
+            elif our:
+                tried = [p.seconds for p in pts if p.method in theirs and p.seconds]
+                entry["ratio"] = (max(tried) / min(our)[0]) if tried else None
+                entry["ratio_is_lower_bound"] = True
+            row[f"{target:.0e}"] = entry
+        table[key] = row
+    return table
+
+
+def finite_or_none(x: float | None) -> float | None:
+    return None if x is None or not np.isfinite(x) else float(x)

@@ -1,0 +1,81 @@
+"""``mechviz bench``: speed against accuracy (issue 6).
+
+Runs :func:`dynamics.bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
+energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
+the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
+``--out`` (default ``docs/bench``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+
+def _viewer_measurements(quick: bool) -> dict:
+    """Frame cost of the viewer and speed of the recorder, or why they are not available."""
+    out: dict = {}
+    try:
+        from viz.app import measure_frame_cost
+
+        out["frame_cost"] = measure_frame_cost(100 if quick else 300)
+    except (ImportError, AttributeError) as exc:
+        out["frame_cost"] = f"not available ({exc.__class__.__name__}: {exc})"
+    except Exception as exc:  # a measurement that breaks must not lose the whole benchmark
+        out["frame_cost"] = f"failed ({exc.__class__.__name__}: {exc})"
+    try:
+        from viz.recording import measure_record_speed
+
+        out["record_speed"] = measure_record_speed(duration=5.0 if quick else 30.0)
+    except (ImportError, AttributeError) as exc:
+        out["record_speed"] = f"not available ({exc.__class__.__name__}: {exc})"
+    except Exception as exc:
+        out["record_speed"] = f"failed ({exc.__class__.__name__}: {exc})"
+    return out
+
+
+def _run(args: argparse.Namespace) -> int:
+    from dynamics.bench import run_bench, summary
+
+    viewer = _viewer_measurements(args.quick)
+    result = run_bench(quick=args.quick, out=args.out, extras={"viewer": viewer})
+    s = summary(result)
+    if args.json:
+        print(json.dumps(s, indent=1, default=str))
+        return 0
+    print(f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})")
+    print("time to reach each accuracy: fastest scipy option / fastest of ours")
+    for key, row in result["ratios"].items():
+        cells = []
+        for t, e in row.items():
+            if e.get("ratio") is None:
+                cells.append(f"{t}: n/a")
+                continue
+            bound = ">=" if e.get("ratio_is_lower_bound") else ""
+            ours = e.get("ours", {})
+            cells.append(f"{t}: {bound}{e['ratio']:.0f}x ({ours.get('method')} "
+                         f"{1e3 * ours.get('seconds', 0):.3g} ms)")  # fmt: skip
+        print(f"  {key:7s} " + "; ".join(cells))
+    print("ns per compiled step (numba / C, same run):")
+    for k, v in s["per_step_ns"].items():
+        print(f"  {k:14s} {v['numba']:8.1f} / {v['c'] if v['c'] is not None else 'n/a'}")
+    print(f"viewer: {viewer}")
+    print(f"results: {args.out}/results.json; charts: {', '.join(s['charts'] or [])}")
+    return 0
+
+
+def add_commands(sub) -> None:
+    p = sub.add_parser(
+        "bench",
+        help="benchmark speed against accuracy; write results.json and charts",
+        description=__doc__.splitlines()[0],
+    )
+    p.add_argument("--quick", action="store_true", help="fewer points and repeats (< 2 min)")
+    p.add_argument("--json", action="store_true", help="print a JSON summary (with 'ratios')")
+    p.add_argument("--out", default="docs/bench", help="output directory (default docs/bench)")
+    p.set_defaults(func=_run)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(0)
