@@ -19,9 +19,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 run: $(VENV)/.installed
-	$(BIN)/mechviz analyze cyclotron
-	$(BIN)/mechviz analyze disk
-	$(BIN)/mechviz analyze hoop
+	$(BIN)/mechviz view
 
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .

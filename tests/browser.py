@@ -1,0 +1,171 @@
+"""Shared helper for tests (and the recorder) that drive headless Chromium through playwright.
+
+Debian's ``chromium`` package is used through ``executable_path``; ``playwright install`` is never
+run (it downloads a browser build and fails offline). The launch flags and the persistent-context
+launch follow ``VISER_NOTES.md`` section 7.
+
+Stable API (the recording helper imports it too)::
+
+    find_chromium() -> str | None                # path of a Chromium executable, or None
+    require_browser() -> str                     # that path; pytest.skip(...) when missing,
+                                                 # pytest.fail(...) if MECHVIZ_REQUIRE_BROWSER=1
+    CHROMIUM_ARGS                                # the command-line flags
+    open_page(url, *, width=1280, height=800, timeout_s=30.0) -> context manager yielding page
+    canvas(page)                                 # locator of viser's WebGL canvas
+    dismiss_webgl_alert(page)                    # closes "Software WebGL rendering detected"
+    wait_for_pixels(page, predicate, timeout_s)  # polls canvas screenshots until predicate(img)
+    screenshot_array(page) -> np.ndarray         # (H, W, 3) uint8 of the canvas
+
+``open_page`` starts playwright, launches a persistent context in a fresh temporary profile,
+loads ``url`` and waits until viser shows "Connected"; on exit it closes everything.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/lib/chromium/chromium")
+REQUIRE_ENV = "MECHVIZ_REQUIRE_BROWSER"
+
+
+def find_chromium() -> str | None:
+    """Path of a usable Chromium executable (env ``MECHVIZ_CHROMIUM`` first), or ``None``."""
+    explicit = os.environ.get("MECHVIZ_CHROMIUM")
+    candidates = ((explicit,) if explicit else ()) + _CANDIDATES
+    for path in candidates:
+        if path and os.path.isfile(path) and os.access(path, os.X_OK):
+            return path
+    found = shutil.which("chromium")
+    return found
+
+
+def _playwright_available() -> bool:
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def require_browser() -> str:
+    """Return Chromium's path, or skip the calling test with the reason (fail instead when
+    ``MECHVIZ_REQUIRE_BROWSER=1``, as ``.ci/run`` sets after installing Chromium)."""
+    import pytest
+
+    path = find_chromium()
+    reason = None
+    if path is None:
+        reason = "no Chromium found (apt-get install chromium; looked in /usr/bin/chromium)"
+    elif not _playwright_available():
+        reason = "the Python package playwright is not installed (pip install -e '.[test]')"
+    if reason is not None:
+        if os.environ.get(REQUIRE_ENV) == "1":
+            pytest.fail(f"{REQUIRE_ENV}=1 but {reason}", pytrace=False)
+        pytest.skip(reason)
+    return path
+
+
+@contextlib.contextmanager
+def open_page(
+    url: str,
+    *,
+    width: int = 1280,
+    height: int = 800,
+    timeout_s: float = 30.0,
+    executable: str | None = None,
+    wait_connected: bool = True,
+) -> Iterator[object]:
+    """Open ``url`` in headless Chromium; yield the playwright ``Page``; close all on exit."""
+    from playwright.sync_api import sync_playwright
+
+    exe = executable or find_chromium()
+    if exe is None:
+        raise RuntimeError("no Chromium executable found")
+    profile = tempfile.mkdtemp(prefix="mechviz-chromium-")
+    try:
+        with sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                profile,
+                executable_path=exe,
+                headless=True,
+                args=CHROMIUM_ARGS,
+                viewport={"width": width, "height": height},
+            )
+            try:
+                page = context.pages[0] if context.pages else context.new_page()
+                page.goto(url)
+                if wait_connected:
+                    page.get_by_text("Connected", exact=True).wait_for(timeout=timeout_s * 1000)
+                yield page
+            finally:
+                context.close()
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+def canvas(page):
+    """viser's WebGL canvas (the first bare ``canvas`` in the DOM is a 0x0 helper)."""
+    return page.locator('canvas[data-engine^="three.js"]')
+
+
+def dismiss_webgl_alert(page, timeout_s: float = 5.0) -> bool:
+    """Close the "Software WebGL rendering detected" alert if it shows; True if closed."""
+    alert = page.get_by_role("alert").filter(has_text="Software WebGL")
+    try:
+        alert.first.wait_for(timeout=timeout_s * 1000)
+        alert.first.get_by_role("button").first.click()
+        return True
+    except Exception:
+        return False
+
+
+def screenshot_array(page) -> np.ndarray:
+    """The canvas as an (H, W, 3) uint8 array."""
+    import imageio.v3 as iio
+
+    png = canvas(page).screenshot()
+    img = iio.imread(io.BytesIO(png))
+    return np.asarray(img)[..., :3]
+
+
+def wait_for_pixels(
+    page, predicate: Callable[[np.ndarray], bool], timeout_s: float = 30.0
+) -> np.ndarray:
+    """Poll canvas screenshots until ``predicate(image)`` holds; return that image.
+
+    Raises ``TimeoutError`` (with the last image's distinct-colour count) otherwise.
+    """
+    deadline = time.monotonic() + timeout_s
+    img = screenshot_array(page)
+    while not predicate(img):
+        if time.monotonic() > deadline:
+            n = len(np.unique(img.reshape(-1, 3), axis=0))
+            raise TimeoutError(f"canvas never satisfied the check ({n} distinct colours)")
+        time.sleep(0.3)
+        img = screenshot_array(page)
+    return img
+
+
+def count_colour(img: np.ndarray, rgb: tuple[int, int, int], tol: int = 40) -> int:
+    """Pixels within ``tol`` (per channel) of ``rgb``."""
+    d = np.abs(img.astype(np.int16) - np.array(rgb, np.int16)).max(axis=-1)
+    return int((d <= tol).sum())

@@ -1,0 +1,390 @@
+"""The live viewer, headless: the app on port 0 without its loop thread, driven frame by frame.
+
+Checks that the scene nodes exist and sit where :mod:`dynamics` puts the bodies at the same
+time, that GUI commands (pause, step, method change, invalid parameter, kick) act as they should,
+and that a blown-up method pauses only its own exhibit.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+
+import dynamics
+from dynamics import cyclotron as cy
+from dynamics import disk as dk
+from dynamics import hoop as hp
+
+viser = pytest.importorskip("viser")
+
+from viz import geometry as geo  # noqa: E402
+from viz.app import MechvizApp, measure_frame_cost, warm_up  # noqa: E402
+from viz.scene_cyclotron import CyclotronConfig, CyclotronExhibit  # noqa: E402
+from viz.scene_disk import LIFT, DiskExhibit, P  # noqa: E402
+from viz.scene_hoop import HoopConfig, HoopExhibit  # noqa: E402
+
+FRAME = 1.0 / 60.0
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _compiled():
+    warm_up("defaults")
+
+
+@pytest.fixture
+def app():
+    a = MechvizApp(port=0, start_loop=False, environment_map=False)
+    yield a
+    a.stop()
+
+
+@pytest.fixture
+def server():
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield s
+    with contextlib.redirect_stdout(io.StringIO()):
+        s.stop()
+
+
+def frames(app, n: int) -> None:
+    for _ in range(n):
+        app.step_frame()
+
+
+def same_rotation(q1, q2, tol=1e-9) -> bool:
+    q1, q2 = np.asarray(q1, float), np.asarray(q2, float)
+    return min(np.abs(q1 - q2).max(), np.abs(q1 + q2).max()) < tol
+
+
+# --------------------------------------------------------------------------- serving
+def test_app_serves_the_client_page_on_the_port_it_reports(app):
+    assert app.port > 0
+    assert app.url == f"http://127.0.0.1:{app.port}/"
+    with urllib.request.urlopen(app.url, timeout=10) as r:
+        assert r.status == 200
+        assert b"<html" in r.read(2000).lower()
+
+
+def test_every_exhibit_has_its_scene_nodes(app):
+    names = set(app.server.scene._handle_from_node_name)  # viser 1.1 has no public lookup
+    for name in (
+        "/floor",
+        "/cyclotron/charges",
+        "/cyclotron/field",
+        "/cyclotron/theory_circle",
+        "/cyclotron/label",
+        "/disk/body",
+        "/disk/body/disk",
+        "/disk/body/bead",
+        "/disk/body/centre_of_mass",
+        "/disk/body/principal_axes",
+        "/disk/axle",
+        "/disk/bearing_A",
+        "/disk/bearing_B",
+        "/disk/bearing_forces",
+        "/disk/vectors",
+        "/disk/label",
+        "/hoop/rings",
+        "/hoop/beads",
+        "/hoop/pivot",
+        "/hoop/label",
+    ):
+        assert name in names, name
+    frames(app, 5)
+    assert any(n.startswith("/cyclotron/trail/") for n in app.server.scene._handle_from_node_name)
+
+
+# --------------------------------------------------------------------------- poses = dynamics
+def test_charge_is_drawn_on_the_exact_helix_at_the_simulated_time(app):
+    frames(app, 90)
+    ex = app.exhibits["cyclotron"]
+    p = ex.params
+    exact = cy.exact_solution(p, ex.initial_state(), ex.t)
+    drawn = ex.bodies.batched_positions[0]  # viser stores batched positions as float32
+    np.testing.assert_allclose(drawn[:2], exact[:2], atol=1e-6)
+    assert drawn[2] == pytest.approx(exact[2] % ex.config.height, abs=1e-6)
+    # the theory circle is centred on the guiding centre with the radius sqrt(2 m E)/(|q| B)
+    centre = cy.guiding_centre(p, exact)
+    np.testing.assert_allclose(ex.ring.position[:2], centre[:2], atol=1e-9)
+    assert ex._ring_radius == pytest.approx(cy.larmor_radius(p, exact), rel=1e-9)
+
+
+def test_driven_disk_pose_and_bearing_forces_equal_dynamics(app):
+    frames(app, 75)
+    ex = app.exhibits["disk"]
+    p, t = ex.params, ex.sample.t
+    assert t == pytest.approx(75 * FRAME * app.speed)
+    rot = dk.rotation_about_axle(p.omega * t)
+    assert same_rotation(ex.body.wxyz, geo.quat_from_matrix(P @ rot))
+    np.testing.assert_allclose(ex.body.position, LIFT, atol=1e-12)
+    a, b = dk.axle_points(p)
+    arrows = ex.forces.points.astype(float)
+    for k, (pt, force) in enumerate(((a, dk.bearing_force_a(p, t)), (b, dk.bearing_force_b(p, t)))):
+        np.testing.assert_allclose(arrows[k, 0], LIFT + P @ pt, atol=1e-6)
+        np.testing.assert_allclose(
+            arrows[k, 1] - arrows[k, 0], P @ force * ex.force_scale, atol=1e-5
+        )
+    # the measured amplitude (dL/dt over a frame) agrees with m R omega^2 / 2
+    assert ex._measured_force == pytest.approx(dk.axle_force_amplitude(p), rel=1e-3)
+
+
+def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
+    ex = app.exhibits["hoop"]
+    c = ex.config
+    twin = dynamics.Simulation(
+        dynamics.Hoop(c.physics()), c.method, dt=c.dt, state=c.initial_state()
+    )
+    for _ in range(50):
+        app.step_frame()
+        twin.advance(FRAME * app.speed)
+    state = twin.sample().state[0]
+    np.testing.assert_array_equal(ex.sample.state[0], state)
+    centre, bead = hp.positions(ex.params, state)
+    pivot = ex.pivot_local
+    rings, beads = ex.rings.batched_positions, ex.beads.batched_positions  # float32 in viser
+    np.testing.assert_allclose(rings[0], pivot + [centre[0], 0, centre[1]], atol=1e-6)
+    np.testing.assert_allclose(beads[0], pivot + [bead[0], 0, bead[1]], atol=1e-6)
+    q = ex.rings.batched_wxyzs[0]
+    assert same_rotation(q, geo.quat_about_axis((0.0, -1.0, 0.0), state[0]), tol=1e-6)
+    # the ghost follows the linear theory from the same start
+    ghost = hp.linear_solution(ex.params, c.initial_state(), twin.t)
+    _, gbead = hp.positions(ex.params, ghost)
+    np.testing.assert_allclose(beads[1], pivot + [gbead[0], 0, gbead[1]], atol=1e-6)
+
+
+def test_released_disk_is_drawn_with_the_free_body_pose(server):
+    ex = DiskExhibit(server)
+    ex.apply({"op": "set", "mode": "released", "follow_cm": False})
+    for _ in range(40):
+        ex.advance(FRAME)
+    ex.draw()
+    smp = ex.sample
+    rot, a = dk.released_pose(ex.params, smp.state[0], smp.t, ex.config.extra_spin)
+    assert same_rotation(ex.body.wxyz, geo.quat_from_matrix(P @ rot))
+    np.testing.assert_allclose(ex.body.position, LIFT + P @ a, atol=1e-12)
+
+
+# --------------------------------------------------------------------------- GUI commands
+def test_pause_stops_simulated_time_and_step_advances_one_frame(app):
+    frames(app, 3)
+    app.enqueue("app", {"op": "pause"})
+    frames(app, 1)
+    t = {k: ex.t for k, ex in app.exhibits.items()}
+    frames(app, 10)
+    assert {k: ex.t for k, ex in app.exhibits.items()} == t
+    assert app.w["play"].label == "Play"
+    app.enqueue("app", "step")
+    frames(app, 1)
+    assert app.exhibits["disk"].t == pytest.approx(t["disk"] + FRAME * app.speed)
+    app.enqueue("app", "play")
+    frames(app, 2)
+    assert app.exhibits["disk"].t > t["disk"] + FRAME
+    assert app.w["play"].label == "Pause"
+
+
+def test_speed_scales_simulated_time_per_frame(app):
+    app.w["speed"].value = 3.0  # as the slider does
+    frames(app, 1)  # applies the speed
+    t0 = app.exhibits["disk"].t
+    frames(app, 6)
+    assert app.exhibits["disk"].t - t0 == pytest.approx(6 * 3.0 * FRAME)
+
+
+def test_method_change_from_the_dropdown_switches_the_integrator_and_readout(app):
+    frames(app, 5)
+    assert "`rk4`" in app.exhibits["hoop"].readout()
+    app.w["hoop.method"].value = "verlet"  # fires the callback as a browser would
+    frames(app, 3)
+    ex = app.exhibits["hoop"]
+    assert ex.sim.method.name == "verlet"
+    assert "`verlet`" in ex.readout()
+    assert "Stormer-Verlet" in app.w["hoop.about"].content
+
+
+def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
+    frames(app, 20)
+    app.enqueue("app", "pause")
+    frames(app, 1)
+    ex = app.exhibits["cyclotron"]
+    sim, state, t, config = ex.sim, ex.sample.state.copy(), ex.t, ex.config
+    app.w["cyclotron.params.mass"].value = -2.0
+    frames(app, 1)
+    assert ex.sim is sim and ex.config == config and ex.t == t
+    np.testing.assert_array_equal(ex.sample.state, state)
+    _title, body = app.messages[-1]
+    assert "mass" in body and "positive" in body
+    assert app.w["cyclotron.params.mass"].value == 1.0  # the widget shows the value in use
+    app.enqueue("app", "play")
+    frames(app, 2)
+    assert ex.t > t
+
+
+def test_invalid_step_size_is_refused_with_the_field_named(app):
+    app.w["hoop.dt"].value = 0.0
+    frames(app, 1)
+    assert "dt" in app.messages[-1][1]
+    assert app.exhibits["hoop"].config.dt == pytest.approx(1 / 60)
+
+
+def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app):
+    frames(app, 30)
+    ex = app.exhibits["cyclotron"]
+    p = ex.params
+    before = ex.sample.state[0]
+    v = math.hypot(before[3], before[4])
+    _expected_state, expected_centre, expected_radius = cy.radial_kick(p, before, 0.5)
+    app.w["cyclotron.kick"].value = 0.5
+    app.enqueue("cyclotron", {"op": "kick", "dv": 0.5})
+    app.enqueue("app", "pause")
+    frames(app, 1)
+    assert ex.theory_radius == pytest.approx(math.hypot(v, 0.5), rel=1e-12)
+    np.testing.assert_allclose(ex.theory_centre[:2], expected_centre[:2], atol=1e-12)
+    assert ex._ring_radius == pytest.approx(expected_radius, rel=1e-9)
+    app.enqueue("app", "play")
+    frames(app, 120)
+    st = ex.sample.state[0]
+    assert math.hypot(*(st[:2] - expected_centre[:2])) == pytest.approx(expected_radius, rel=1e-9)
+
+
+def test_camera_presets_point_at_each_exhibit(app):
+    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
+        position, target = app.camera_preset(view)
+        assert abs(target[0] - app.exhibits[key].origin[0]) < 2.0
+        assert np.linalg.norm(np.subtract(position, target)) > 3.0
+    app.enqueue("app", {"op": "camera", "view": "Hoop"})  # no client: nothing to move, no error
+    frames(app, 1)
+
+
+# --------------------------------------------------------------------------- failures
+def test_diverging_euler_pauses_only_the_charge_and_reset_recovers(app):
+    app.w["cyclotron.dt"].value = 0.5
+    app.w["cyclotron.method"].value = "euler"
+    app.w["speed"].value = 10.0
+    frames(app, 2)
+    ex = app.exhibits["cyclotron"]
+    assert ex.sim.method.name == "euler"
+    for _ in range(300):
+        app.step_frame()
+        if ex.paused:
+            break
+    assert ex.paused
+    assert "euler" in ex.failure and "dt=0.5" in ex.failure
+    assert any("euler" in body for _, body in app.messages)
+    t_cyc, t_hoop = ex.t, app.exhibits["hoop"].t
+    frames(app, 5)
+    assert ex.t == t_cyc
+    assert app.exhibits["hoop"].t > t_hoop
+    app.enqueue("cyclotron", "reset")
+    frames(app, 3)
+    assert not ex.paused and ex.failure is None and ex.t > 0
+
+
+def test_a_step_beyond_the_stability_limit_pauses_the_hoop_with_the_step_named(server):
+    ex = HoopExhibit(server, HoopConfig.from_defaults(method="rk4", dt=0.9, amplitude=0.3))
+    for _ in range(400):
+        ex.advance(0.5)
+        if ex.paused:
+            break
+    assert ex.paused
+    assert "rk4" in ex.failure and "dt=0.9" in ex.failure
+    title, _body = ex.events[-1]
+    assert "Hoop" in title
+    ex.apply("reset")
+    assert not ex.paused and ex.t == 0.0
+
+
+# --------------------------------------------------------------------------- physics shown
+def test_beam_charges_of_different_speeds_return_together_after_one_period(server):
+    ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(beam=True, beam_size=8, vz=0.0))
+    start = ex.beam.state[:, :2].copy()
+    speeds = np.hypot(ex.beam.state[:, 3], ex.beam.state[:, 4])
+    assert speeds.max() / speeds.min() > 5
+    period = cy.period(ex.params)
+    ex.advance(0.5 * period)
+    assert np.abs(ex.beam.state[:, :2] - start).max() > 0.4  # spread out at half a period
+    ex.advance(0.5 * period)
+    np.testing.assert_allclose(ex.beam.state[:, :2], start, atol=1e-9)
+    ex.draw()
+    assert len(ex.beam_node.batched_positions) == 8
+
+
+def test_hoop_mode_frequencies_are_measured_from_the_motion(server):
+    for mode, k in (("mode 1", 0), ("mode 2", 1)):
+        ex = HoopExhibit(server, HoopConfig.from_defaults(mode=mode, amplitude=0.02))
+        for _ in range(900):  # 15 s at 60 frames per second
+            ex.advance(FRAME)
+        freqs, _ = hp.normal_modes(ex.params)
+        measured = ex.measured_mode_frequencies()
+        assert measured[k] == pytest.approx(freqs[k], rel=5e-3)
+        assert measured[1 - k] is None  # the other mode is not excited
+
+
+def test_comparison_run_is_drawn_beside_with_its_own_method(server):
+    ex = HoopExhibit(server, HoopConfig.from_defaults(compare_method="verlet"))
+    for _ in range(30):
+        ex.advance(FRAME)
+    ex.draw()
+    assert ex.compare.method.name == "verlet" and ex.sim.method.name == "rk4"
+    assert ex.rings.batched_scales[2] == 1.0
+    assert len(ex.chart_data()) == 5 and np.isfinite(ex.chart_data()[3]).all()
+
+
+def test_trails_stay_capped_over_a_long_run(server):
+    ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(trail_cap=120))
+    for _ in range(1000):
+        ex.advance(0.05)
+        ex.draw()
+    assert ex.trail.n_segments <= 120 + 60
+    assert ex.trail.n_nodes <= 120 // 60 + 2
+
+
+# --------------------------------------------------------------------------- bench and CLI
+def test_measure_frame_cost_reports_milliseconds_per_frame():
+    r = measure_frame_cost(40, warmup_frames=5)
+    assert r["n_frames"] == 40
+    assert 0 < r["median_ms"] <= r["p95_ms"] <= r["max_ms"]
+    assert r["trail_segments"] > 0
+
+
+def test_view_command_prints_the_url_and_stops_cleanly_on_ctrl_c():
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "view", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        url = None
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            if "http://127.0.0.1:" in line:
+                url = line.split(" at ")[-1].strip()
+                break
+        assert url, proc.stderr.read()
+        with urllib.request.urlopen(url, timeout=10) as r:
+            assert r.status == 200
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
+    assert "Traceback" not in err and "Traceback" not in out
+    assert "stopped" in out

@@ -1,0 +1,130 @@
+"""The live viewer in headless Chromium (Debian's package, driven by playwright).
+
+One app with its 60 Hz loop serves one page for the whole module; the tests run in order on it:
+the scene is drawn with the three exhibits, Pause stops simulated time, the method dropdown
+changes the readout, an invalid parameter shows a notification. The last test switches the
+environment lighting on and saves the README screenshot (``docs/img/viewer.png``).
+Skipped with the reason when no Chromium is found (a failure under MECHVIZ_REQUIRE_BROWSER=1).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import browser
+import numpy as np
+import pytest
+from playwright.sync_api import Error as PlaywrightError
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parents[1]
+SCREENSHOT = ROOT / "docs" / "img" / "viewer.png"
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    browser.require_browser()
+    from viz.app import MechvizApp, warm_up
+
+    warm_up("defaults")
+    # geometry checks only: no environment map (SwiftShader draws lit meshes slowly with it)
+    app = MechvizApp(port=0, environment_map=False)
+    try:
+        with browser.open_page(app.url, width=1280, height=800, timeout_s=60) as page:
+            browser.dismiss_webgl_alert(page)
+            yield app, page, None
+    finally:
+        app.stop()
+
+
+def _hues(img: np.ndarray) -> dict[str, np.ndarray]:
+    """x coordinates of the pixels of each exhibit's line colour (lines are blended at their
+    edges, so pixels are classified by hue rather than matched exactly)."""
+    img = img[:, : img.shape[1] - 350].astype(int)  # leave out the GUI panel docked on the right
+    R, G, B = img[..., 0], img[..., 1], img[..., 2]
+    masks = {
+        "trail": (R > 190) & (G > 60) & (G < 175) & (B < 130) & (R - B > 110),  # orange
+        "rim": (R < 130) & (G > 120) & (B > 130) & (np.abs(G - B) < 80) & (G - R > 60),  # cyan
+        "bead": (R > 140) & (G < 120) & (B > 100) & (R - G > 80) & (B - G > 40),  # magenta
+    }
+    return {k: np.nonzero(m)[1] for k, m in masks.items()}
+
+
+def _three_exhibits(img: np.ndarray) -> bool:
+    xs = _hues(img)
+    if min(len(v) for v in xs.values()) < 20:
+        return False
+    # the charge's trail (left) < the disk's rim (middle) < the bead's trail on the hoop (right)
+    rim = xs["rim"].mean()
+    return xs["trail"].mean() < rim and (xs["bead"] > rim + 150).sum() >= 15
+
+
+def test_page_draws_the_three_exhibits_side_by_side(viewer):
+    _, page, _ = viewer
+    img = browser.wait_for_pixels(page, _three_exhibits, timeout_s=90)
+    colours = len(np.unique(img.reshape(-1, 3), axis=0))
+    assert colours > 1500, f"canvas looks blank ({colours} distinct colours)"
+
+
+def test_pause_button_stops_simulated_time_and_play_resumes(viewer):
+    app, page, _ = viewer
+    page.get_by_role("button", name="Pause").click()
+    page.get_by_role("button", name="Play").wait_for(timeout=10_000)
+    time.sleep(0.5)
+    t0 = app.sim_time
+    time.sleep(1.0)
+    assert app.sim_time == t0
+    assert not app.playing
+    page.get_by_text("paused", exact=False).first.wait_for(timeout=10_000)
+    page.get_by_role("button", name="Play").click()
+    page.get_by_role("button", name="Pause").wait_for(timeout=10_000)
+    time.sleep(1.0)
+    assert app.sim_time > t0
+
+
+def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
+    app, page, _ = viewer
+    page.get_by_role("tab", name="Hoop").click()
+    readout = page.get_by_text("(dt=0.0166667 s)", exact=False).first
+    readout.wait_for(timeout=10_000)
+    assert "rk4" in page.content()
+    page.get_by_role("combobox", name="Method").click()
+    page.get_by_role("option", name="verlet", exact=True).click()
+    page.get_by_text("Stormer-Verlet", exact=False).first.wait_for(timeout=15_000)
+    deadline = time.monotonic() + 15
+    while app.exhibits["hoop"].sim.method.name != "verlet" and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert app.exhibits["hoop"].sim.method.name == "verlet"
+    page.locator("code", has_text="verlet").first.wait_for(timeout=10_000)
+
+
+def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
+    app, page, _ = viewer
+    page.get_by_role("tab", name="Hoop").click()
+    sim = app.exhibits["hoop"].sim
+    box = page.get_by_role("textbox", name="Gravity g [m/s²]")
+    box.fill("-3")
+    box.press("Enter")
+    page.get_by_role("alert").filter(has_text="gravity must be positive").first.wait_for(
+        timeout=15_000
+    )
+    assert app.exhibits["hoop"].sim is sim
+
+
+def test_readme_screenshot_with_environment_lighting(viewer):
+    app, page, _ = viewer
+    app.enqueue("call", lambda a: a.server.scene.configure_environment_map(hdri="warehouse"))
+    page.get_by_role("tab", name="Hoop").click()  # its chart has data
+    for alert in page.get_by_role("alert").all():  # close notifications left by earlier tests
+        try:
+            alert.get_by_role("button").first.click(timeout=2_000)
+        except PlaywrightError:
+            pass  # it closed itself meanwhile (notifications auto-close)
+    time.sleep(1.0)
+    browser.wait_for_pixels(page, _three_exhibits, timeout_s=120)
+    time.sleep(2.0)  # a couple more frames with the lighting settled
+    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SCREENSHOT))
+    assert SCREENSHOT.stat().st_size > 20_000

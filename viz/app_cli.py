@@ -1,0 +1,78 @@
+"""``mechviz view``: serve the live viewer (imports viser only when the command runs)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_commands(sub) -> None:
+    p = sub.add_parser(
+        "view",
+        help="serve the live 3-D viewer of the three systems",
+        description="Serve the live viewer at http://HOST:PORT/ until Ctrl-C.",
+    )
+    p.add_argument(
+        "--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1: this machine)"
+    )
+    p.add_argument(
+        "--port", type=int, default=8080, help="port (default 8080; the next free one if busy)"
+    )
+    p.add_argument(
+        "--warm",
+        choices=("defaults", "all"),
+        default="defaults",
+        help="compile the default methods' kernels before serving (default) or every method",
+    )
+    p.add_argument(
+        "--no-env-map", action="store_true", help="no environment lighting (faster software GL)"
+    )
+    p.set_defaults(func=_view)
+
+
+def _view(args: argparse.Namespace) -> int:
+    import os
+    import signal
+    import threading
+    import time
+
+    from dynamics.cli import CliError
+
+    if not 0 <= args.port <= 65535:
+        raise CliError(f"--port must be in 0..65535, got {args.port}")
+
+    # Ctrl-C only sets a flag: the loop and the compiler are never interrupted mid-call, so
+    # the server always stops cleanly (a second Ctrl-C exits at once).
+    interrupted = threading.Event()
+
+    def on_sigint(_signum, _frame) -> None:
+        if interrupted.is_set():
+            os._exit(130)
+        interrupted.set()
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        from .app import MechvizApp, warm_up
+
+        t0 = time.perf_counter()
+        print(f"mechviz: compiling integrators ({args.warm}) ...", flush=True)
+        warm_up(args.warm, should_stop=interrupted.is_set)
+        if interrupted.is_set():
+            print("mechviz: interrupted", flush=True)
+            return 130
+        app = MechvizApp(host=args.host, port=args.port, environment_map=not args.no_env_map)
+        try:
+            used = app.port
+            if args.port and used != args.port:
+                print(f"mechviz: port {args.port} is busy; using port {used} instead", flush=True)
+            print(
+                f"mechviz: viewer ready in {time.perf_counter() - t0:.1f} s at {app.url}",
+                flush=True,
+            )
+            print("mechviz: press Ctrl-C to stop", flush=True)
+            app.run_forever(until=interrupted)
+        finally:
+            app.stop()
+        print("mechviz: viewer stopped", flush=True)
+        return 0
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -1,0 +1,252 @@
+"""Shared geometry for the exhibits: trimesh meshes built once, a capped chunked trail, helpers.
+
+Conventions: the world is viser's, +z up, metres. Meshes are created here once per exhibit and
+afterwards only moved (``position`` / ``wxyz`` / ``batched_*`` assignments). Quaternions are
+``(w, x, y, z)`` and always unit length (viser does not normalise them).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+import trimesh
+
+# Colour palette (RGB uint8) shared by all exhibits and checked by the browser test.
+CHARGE = (235, 70, 40)
+COMPARE = (40, 170, 255)
+BEAM = (250, 190, 40)
+FIELD = (120, 140, 255)
+DISK = (90, 160, 210)
+RIM = (0, 190, 200)
+BEAD = (220, 40, 160)
+AXLE = (150, 150, 150)
+FORCE = (240, 60, 60)
+OMEGA = (40, 200, 90)
+MOMENTUM = (250, 170, 30)
+HOOP = (200, 120, 50)
+GHOST = (180, 180, 180)
+TRAIL = (255, 120, 60)
+CENTRE = (255, 255, 255)
+AXES_RGB = ((230, 60, 60), (60, 200, 60), (60, 110, 240))
+
+
+# ----------------------------------------------------------------------------- meshes
+def disk_mesh(radius: float, thickness: float, sections: int = 64) -> trimesh.Trimesh:
+    """A flat disk centred at the origin, normal along +z."""
+    return trimesh.creation.cylinder(radius=radius, height=thickness, sections=sections)
+
+
+def torus_mesh(major_radius: float, minor_radius: float) -> trimesh.Trimesh:
+    """A ring in the x-y plane (axis +z) centred at the origin: the hoop."""
+    return trimesh.creation.torus(
+        major_radius=major_radius, minor_radius=minor_radius, major_sections=64, minor_sections=12
+    )
+
+
+def rod_mesh(length: float, radius: float, sections: int = 16) -> trimesh.Trimesh:
+    """A cylinder along +z from ``z = 0`` to ``z = length``."""
+    rod = trimesh.creation.cylinder(radius=radius, height=length, sections=sections)
+    rod.apply_translation((0.0, 0.0, 0.5 * length))
+    return rod
+
+
+def rod_between(a, b, radius: float, sections: int = 16) -> trimesh.Trimesh:
+    """A cylinder from point ``a`` to point ``b``."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return trimesh.creation.cylinder(radius=radius, segment=np.stack([a, b]), sections=sections)
+
+
+def arrow_mesh(length: float, shaft_radius: float, head_radius: float, head_length: float):
+    """An arrow along +z from the origin, ``length`` long (head included)."""
+    shaft_len = max(length - head_length, 1e-6)
+    shaft = rod_mesh(shaft_len, shaft_radius)
+    head = trimesh.creation.cone(radius=head_radius, height=head_length, sections=16)
+    head.apply_translation((0.0, 0.0, shaft_len))
+    return trimesh.util.concatenate([shaft, head])
+
+
+def sphere_mesh(radius: float, subdivisions: int = 2) -> trimesh.Trimesh:
+    return trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+
+
+def circle_segments(radius: float, n: int = 96, centre=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """A circle in a plane parallel to x-y as (n, 2, 3) float32 line segments."""
+    ang = np.linspace(0.0, 2.0 * math.pi, n + 1)
+    pts = np.stack([radius * np.cos(ang), radius * np.sin(ang), np.zeros_like(ang)], axis=1)
+    pts = pts + np.asarray(centre, float)
+    return np.stack([pts[:-1], pts[1:]], axis=1).astype(np.float32)
+
+
+# ----------------------------------------------------------------------------- rotations
+def quat_from_matrix(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), ``w >= 0``, of a proper rotation matrix."""
+    r = np.asarray(r, float)
+    tr = r[0, 0] + r[1, 1] + r[2, 2]
+    if tr > 0.0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        q = np.array(
+            [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+        )
+    else:
+        i = int(np.argmax([r[0, 0], r[1, 1], r[2, 2]]))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * math.sqrt(max(1.0 + r[i, i] - r[j, j] - r[k, k], 1e-300))
+        q = np.zeros(4)
+        q[0] = (r[k, j] - r[j, k]) / s
+        q[1 + i] = 0.25 * s
+        q[1 + j] = (r[j, i] + r[i, j]) / s
+        q[1 + k] = (r[k, i] + r[i, k]) / s
+    q /= np.linalg.norm(q)
+    return q if q[0] >= 0.0 else -q
+
+
+def quat_to_matrix(q) -> np.ndarray:
+    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quat_about_axis(axis, angle: float) -> np.ndarray:
+    axis = np.asarray(axis, float)
+    axis = axis / np.linalg.norm(axis)
+    h = 0.5 * angle
+    return np.concatenate([[math.cos(h)], math.sin(h) * axis])
+
+
+def quat_z_to(direction) -> np.ndarray:
+    """Quaternion turning +z onto ``direction`` (any non-zero vector)."""
+    d = np.asarray(direction, float)
+    n = np.linalg.norm(d)
+    if n == 0.0:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    d = d / n
+    c = d[2]
+    if c < -1.0 + 1e-12:
+        return np.array([0.0, 1.0, 0.0, 0.0])
+    axis = np.cross([0.0, 0.0, 1.0], d)
+    q = np.array([1.0 + c, axis[0], axis[1], axis[2]])
+    return q / np.linalg.norm(q)
+
+
+# ----------------------------------------------------------------------------- trail
+class ChunkedTrail:
+    """A polyline trail with a capped length, drawn as frozen chunks plus one open chunk.
+
+    Every ``chunk`` segments the open chunk is frozen (its node is never touched again) and a
+    new node starts; the oldest chunk node is removed once the trail holds more than ``cap``
+    segments. Each frame therefore rewrites at most one small node, which keeps live frames cheap
+    and recordings small (VISER_NOTES section 8). ``push(p)`` appends a point; ``lift()`` makes
+    the next point start a new piece (no segment joins them, e.g. when a display coordinate wraps).
+    Call :meth:`draw` once per frame (inside the caller's ``server.atomic()``).
+    """
+
+    def __init__(
+        self,
+        scene,
+        name: str,
+        color,
+        *,
+        cap: int = 600,
+        chunk: int = 60,
+        thickness: float = 2.0,
+        visible: bool = True,
+    ) -> None:
+        self.scene, self.name = scene, name
+        self.color = np.asarray(color, np.uint8)
+        self.cap, self.chunk, self.thickness = int(cap), int(chunk), float(thickness)
+        self._frozen: deque = deque()  # (handle, n_segments)
+        self._open_handle = None
+        self._open: list[np.ndarray] = []
+        self._last: np.ndarray | None = None
+        self._dirty = False
+        self._counter = 0
+        self._visible = visible
+        self._frozen_segments = 0
+
+    @property
+    def n_segments(self) -> int:
+        return self._frozen_segments + len(self._open)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self._frozen) + (self._open_handle is not None)
+
+    @property
+    def last_point(self) -> np.ndarray | None:
+        """The newest point (``None`` after :meth:`lift` or :meth:`clear`)."""
+        return self._last
+
+    def push(self, point) -> None:
+        p = np.asarray(point, np.float32)
+        if self._last is not None and np.any(p != self._last):
+            self._open.append(np.stack([self._last, p]))
+            self._dirty = True
+        self._last = p
+
+    def lift(self) -> None:
+        self._last = None
+
+    def clear(self) -> None:
+        for handle, _ in self._frozen:
+            handle.remove()
+        self._frozen.clear()
+        self._frozen_segments = 0
+        if self._open_handle is not None:
+            self._open_handle.remove()
+            self._open_handle = None
+        self._open = []
+        self._last = None
+        self._dirty = False
+
+    @property
+    def visible(self) -> bool:
+        return self._visible
+
+    @visible.setter
+    def visible(self, value: bool) -> None:
+        self._visible = bool(value)
+        for handle, _ in self._frozen:
+            handle.visible = self._visible
+        if self._open_handle is not None:
+            self._open_handle.visible = self._visible
+
+    def _new_node(self, segments: np.ndarray):
+        self._counter += 1
+        return self.scene.add_line_segments(
+            f"{self.name}/c{self._counter:06d}",
+            segments,
+            colors=self.color,
+            thickness=self.thickness,
+            thickness_units="screen",
+            visible=self._visible,
+        )
+
+    def draw(self) -> None:
+        if not self._dirty:
+            return
+        self._dirty = False
+        while self._open:
+            take = self._open[: self.chunk]
+            segs = np.asarray(take, np.float32)
+            if self._open_handle is None:
+                self._open_handle = self._new_node(segs)
+            else:
+                self._open_handle.points = segs
+            if len(take) < self.chunk:
+                break
+            # the open chunk is full: freeze it and continue with the rest
+            self._frozen.append((self._open_handle, self.chunk))
+            self._frozen_segments += self.chunk
+            self._open_handle = None
+            self._open = self._open[self.chunk :]
+        while self._frozen and self.n_segments > self.cap:
+            handle, n = self._frozen.popleft()
+            handle.remove()
+            self._frozen_segments -= n

@@ -1,0 +1,290 @@
+"""Hoop-with-bead exhibit: a hoop swinging in its own plane about a pivot on its rim, a bead
+sliding on it without friction.
+
+The dynamics' swing plane (x right, y up, pivot at the origin, gravity along -y) is drawn in the
+world's x-z plane: ``(x, y)_plane -> (x, 0, y) + pivot`` with the pivot ``2a + 0.4`` m above the
+exhibit origin. Beside the nonlinear motion the linear-theory motion from the same initial state
+(``dynamics.hoop.linear_solution``) is drawn as a faint ghost, so the difference at large amplitude
+shows. Both normal-mode frequencies are measured from the motion: the angles are projected on the
+mode shapes and the period of each modal coordinate is timed between its upward zero crossings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import dynamics
+from dynamics import hoop as hp
+
+from . import geometry as geo
+from .defaults import DEFAULTS
+from .exhibit import Exhibit, check_method, fmt, make_simulation, positive
+
+MODES = ("mode 1", "mode 2", "mix", "custom")
+COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class HoopConfig:
+    """Settings of the hoop exhibit (defaults: ``DEFAULTS["hoop"]``)."""
+
+    method: str = "rk4"
+    dt: float = 1 / 60
+    rtol: float = 1e-9
+    params: dict = field(default_factory=lambda: dict(DEFAULTS["hoop"]["params"]))
+    mode: str = "mix"
+    amplitude: float = 0.5
+    angles: tuple = (0.4, -0.3)
+    compare_method: str | None = None
+    trail_cap: int = 240
+
+    @classmethod
+    def from_defaults(cls, **overrides) -> HoopConfig:
+        d = {
+            k: v
+            for k, v in DEFAULTS["hoop"].items()
+            if k in {f.name for f in dataclasses.fields(cls)}
+        }
+        d["params"] = dict(d["params"])
+        d.update(overrides)
+        return cls(**d)
+
+    def physics(self) -> hp.HoopParams:
+        return hp.HoopParams(**self.params)
+
+    def validate(self) -> None:
+        self.physics()
+        check_method("hoop", self.method)
+        check_method("hoop", self.compare_method, "compare_method")
+        positive("dt", self.dt)
+        if not 0.0 < float(self.rtol) < 1.0:
+            raise ValueError(f"rtol must be in (0, 1), got {self.rtol!r}")
+        if self.mode not in MODES:
+            raise ValueError(f"mode must be one of {', '.join(MODES)}; got {self.mode!r}")
+        a = float(self.amplitude)
+        if not (math.isfinite(a) and abs(a) < 3.0):
+            raise ValueError(
+                f"amplitude must be a finite angle below 3 rad, got {self.amplitude!r}"
+            )
+        if len(self.angles) != 2 or not all(
+            math.isfinite(float(x)) and abs(float(x)) < math.pi for x in self.angles
+        ):
+            raise ValueError(f"angles must be two angles in (-pi, pi) rad, got {self.angles!r}")
+
+    def initial_state(self) -> np.ndarray:
+        p, a = self.physics(), float(self.amplitude)
+        if self.mode == "mode 1":
+            return hp.mode_state(p, (a, 0.0))
+        if self.mode == "mode 2":
+            return hp.mode_state(p, (0.0, a))
+        if self.mode == "mix":
+            return hp.mode_state(p, (0.5 * a, 0.5 * a))
+        return np.array([float(self.angles[0]), float(self.angles[1]), 0.0, 0.0])
+
+
+class _ZeroCrossings:
+    """Period of an oscillating coordinate from its upward zero crossings."""
+
+    def __init__(self) -> None:
+        self.times: deque = deque(maxlen=12)
+        self.prev: tuple[float, float] | None = None
+        self.peak = 0.0
+
+    def add(self, t: float, q: float) -> None:
+        self.peak = max(self.peak, abs(q))
+        if self.prev is not None:
+            t0, q0 = self.prev
+            if q0 < 0.0 <= q and q != q0:
+                self.times.append(t0 + (t - t0) * (-q0) / (q - q0))
+        self.prev = (t, q)
+
+    def frequency(self) -> float | None:
+        if len(self.times) < 2:
+            return None
+        return 2.0 * math.pi * (len(self.times) - 1) / (self.times[-1] - self.times[0])
+
+
+class HoopExhibit(Exhibit):
+    key = "hoop"
+    title = "Hoop with bead"
+    Config = HoopConfig
+    chart_series = ("energy", "error", "energy_compare", "error_compare")
+
+    def _build(self) -> None:
+        s, r = self.scene, self.root
+        s.add_frame(r, show_axes=False, position=self.origin)
+        self.label = s.add_label(f"{r}/label", "Bead on a hanging hoop", anchor="bottom-center")
+        self._built_radius = None
+
+    def _build_body(self, p: hp.HoopParams) -> None:
+        s, r, a = self.scene, self.root, p.radius
+        self._built_radius = a
+        self.pivot_local = np.array([0.0, 0.0, 2.0 * a + 0.4])
+        zp = self.pivot_local[2]
+        self.label.position = (0.0, 0.0, zp + 0.45)
+        # a small gallows holding the pivot
+        post = geo.rod_between((-0.9 * a, 0.25, 0.0), (-0.9 * a, 0.25, zp + 0.08), 0.03)
+        beam = geo.rod_between((-0.9 * a, 0.25, zp + 0.08), (0.0, 0.25, zp + 0.08), 0.03)
+        pin = geo.rod_between((0.0, 0.25, zp), (0.0, -0.1, zp), 0.02)
+        stand = geo.trimesh.util.concatenate([post, beam, pin])
+        s.add_mesh_simple(f"{r}/stand", stand.vertices, stand.faces, color=(110, 110, 110))
+        s.add_icosphere(f"{r}/pivot", radius=0.05, color=geo.CENTRE, position=self.pivot_local)
+        # one batched node per shape: instance 0 the hoop, 1 the linear-theory ghost, 2 the
+        # comparison method (scale 0 while there is none)
+        ring = geo.torus_mesh(a, 0.025 * a)
+        ring.apply_transform(geo.trimesh.transformations.rotation_matrix(math.pi / 2, (1, 0, 0)))
+        bead = geo.sphere_mesh(0.08 * a)
+        ident = np.tile([1.0, 0.0, 0.0, 0.0], (3, 1))
+        colors = np.array([geo.HOOP, geo.GHOST, geo.COMPARE], np.uint8)
+        self.rings = s.add_batched_meshes_simple(
+            f"{r}/rings", ring.vertices, ring.faces, batched_wxyzs=ident,
+            batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
+            batched_colors=colors, batched_opacities=np.array([1.0, 0.3, 1.0]), lod="off",
+        )  # fmt: skip
+        bead_colors = np.array([geo.BEAD, geo.GHOST, geo.COMPARE], np.uint8)
+        self.beads = s.add_batched_meshes_simple(
+            f"{r}/beads", bead.vertices, bead.faces, batched_wxyzs=ident,
+            batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
+            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.35, 1.0]), lod="off",
+        )  # fmt: skip
+        self.cmp_label = s.add_label(
+            f"{r}/compare_label",
+            "",
+            position=self.pivot_local + COMPARE_OFFSET + (0.0, 0.0, 0.3),
+            visible=False,
+            anchor="bottom-center",
+        )
+        if hasattr(self, "trail"):
+            self.trail.clear()
+            self.cmp_trail.clear()
+        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.config.trail_cap)
+        self.cmp_trail = geo.ChunkedTrail(
+            s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
+        )
+
+    # ------------------------------------------------------------------ simulations
+    def _start(self) -> None:
+        c = self.config
+        p = c.physics()
+        system = dynamics.Hoop(p)
+        s0 = c.initial_state()
+        sim = make_simulation(system, c.method, c.dt, c.rtol, s0)
+        cmp_ = (
+            make_simulation(system, c.compare_method, c.dt, c.rtol, s0)
+            if c.compare_method
+            else None
+        )
+        self.params = p
+        self.sim, self.compare = sim, cmp_
+        self._reset_common()
+        if self._built_radius != p.radius:
+            self._build_body(p)
+        self.trail.clear()
+        self.cmp_trail.clear()
+        self.cmp_label.visible = cmp_ is not None
+        scales = np.array([1.0, 1.0, 1.0 if cmp_ is not None else 0.0])
+        self.rings.batched_scales = scales
+        self.beads.batched_scales = scales
+        if cmp_ is not None:
+            self.cmp_label.text = f"{c.compare_method} (blue)"
+        _, shapes = hp.normal_modes(p)
+        self._basis = shapes.T
+        self._crossings = [_ZeroCrossings(), _ZeroCrossings()]
+        self._after_advance()
+
+    # ------------------------------------------------------------------ geometry from dynamics
+    def plane_to_local(self, xy) -> np.ndarray:
+        xy = np.asarray(xy, float)
+        return self.pivot_local + np.stack(
+            [xy[..., 0], np.zeros_like(xy[..., 0]), xy[..., 1]], axis=-1
+        )
+
+    def poses(self, state) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(hoop wxyz, hoop centre, bead)`` relative to the exhibit origin for one state."""
+        centre, bead = hp.positions(self.params, state)
+        # an anticlockwise plane rotation (towards +x from straight down) is a turn about world -y
+        q = geo.quat_about_axis((0.0, -1.0, 0.0), float(state[0]))
+        return q, self.plane_to_local(centre), self.plane_to_local(bead)
+
+    def ghost_state(self) -> np.ndarray:
+        return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t)
+
+    def modal_coordinates(self, state) -> np.ndarray:
+        return np.linalg.solve(self._basis, np.asarray(state, float)[:2])
+
+    def _after_advance(self) -> None:
+        q = self.modal_coordinates(self.sample.state[0])
+        for k in range(2):
+            self._crossings[k].add(self.t, float(q[k]))
+
+    def measured_mode_frequencies(self) -> list[float | None]:
+        peak = max(c.peak for c in self._crossings)
+        return [c.frequency() if c.peak > 0.02 * peak else None for c in self._crossings]
+
+    # ------------------------------------------------------------------ drawing
+    def draw(self) -> None:
+        st = self.sample.state[0]
+        q, centre, bead = self.poses(st)
+        gq, gc, gb = self.poses(self.ghost_state())
+        c = self.compare_sample
+        if c is not None:
+            cq, cc, cb = self.poses(c.state[0])
+            cc, cb = cc + COMPARE_OFFSET, cb + COMPARE_OFFSET
+        else:
+            cq, cc, cb = q, centre, bead
+        self.rings.batched_wxyzs = np.array([q, gq, cq])
+        self.rings.batched_positions = np.array([centre, gc, cc])
+        self.beads.batched_positions = np.array([bead, gb, cb])
+        self.trail.push(bead)
+        self.trail.draw()
+        if c is not None:
+            self.cmp_trail.push(cb)
+            self.cmp_trail.draw()
+
+    @property
+    def camera(self):
+        o = self.origin + (0.5 * COMPARE_OFFSET if self.compare is not None else 0.0)
+        dist = 6.0 if self.compare is None else 8.0
+        return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
+
+    # ------------------------------------------------------------------ readout
+    def readout(self) -> str:
+        p, smp, c = self.params, self.sample, self.config
+        freqs, _ = hp.normal_modes(p)
+        meas = self.measured_mode_frequencies()
+        lines = [
+            f"**t = {self.t:.2f} s** · {self.method_line(self.sim)} · {c.mode}",
+            "",
+            "| normal mode | ω linear theory [rad/s] | ω measured [rad/s] |",
+            "|---|---|---|",
+            f"| 1: in phase, √(g/2a) | {fmt(freqs[0])} | {fmt(meas[0]) if meas[0] else '—'} |",
+            f"| 2: out of phase, √((1+m/M)g/a) | {fmt(freqs[1])} | {fmt(meas[1]) if meas[1] else '—'} |",
+        ]
+        if c.mode == "mode 1" and 0 < abs(c.amplitude) < math.pi:
+            w_nl = 2 * math.pi / hp.mode1_period(p, abs(float(c.amplitude)))
+            lines.append(
+                f"| 1 at amplitude {abs(c.amplitude):.3g} rad (exact, elliptic) | {fmt(w_nl)} | |"
+            )
+        kind = self.sim.reference_kind or "—"
+        err = float(np.max(smp.error)) if smp.error is not None else 0.0
+        lines += [
+            f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
+            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 | {err:.2e} |",
+            "",
+            "Grey ghost: linear theory from the same start.",
+        ]
+        cs = self.compare_sample
+        if cs is not None:
+            lines.append(
+                f"\nComparison {self.method_line(self.compare)} (blue, right): |ΔE/E₀| = "
+                f"{float(np.max(np.abs(cs.energy_error))):.2e}"
+            )
+        lines.append(f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}.")
+        if self.failure:
+            lines.append(f"\n**Paused:** {self.failure}")
+        return "\n".join(lines)
