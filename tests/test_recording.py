@@ -1,0 +1,380 @@
+"""Recording demo sessions (viz.recording), headless: every built-in demo records, its manifest
+agrees with theory, the .viser decodes frame by frame, failures leave no partial files."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from viz import recording as rec
+from viz.cli import main
+
+# Short runs that still hold enough motion to measure each demo's figures.
+SHORT = {
+    "beam": 6.3,  # one gyro-period (2 pi s)
+    "driven-disk": 3.5,
+    "euler-vs-boris": 3.0,
+    "helix": 3.0,
+    "hoop-large-amplitude": 4.0,
+    "hoop-mode1": 3.0,
+    "hoop-mode2": 3.0,
+    "radial-kick": 8.0,  # the kick is at t = 5 s
+    "rk4-vs-verlet": 2.0,
+    "tumbling-disk": 5.0,
+}
+FPS = 15
+
+
+def test_every_builtin_demo_is_listed_with_a_short_run_here():
+    assert sorted(SHORT) == rec.demo_names()
+    assert len(rec.demo_names()) >= 10
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demos")
+    results = {}
+    for name, duration in SHORT.items():
+        demo = rec.load_demo(name).with_overrides(duration=duration, fps=FPS)
+        results[name] = rec.record(demo, out)
+    return out, results
+
+
+@pytest.mark.parametrize("name", sorted(SHORT))
+def test_builtin_demo_records_five_complete_files(recorded, name):
+    out, results = recorded
+    res = results[name]
+    for suffix in rec.SUFFIXES:
+        assert (out / f"{name}{suffix}").stat().st_size > 0
+    assert not list(out.glob(".*partial"))
+    man = json.loads((out / f"{name}.json").read_text())
+    assert man["demo"] == name and man["frames"] == res.frames == round(SHORT[name] * FPS) + 1
+    for key in ("parameters", "method", "step", "duration", "versions", "figures", "final_errors"):
+        assert key in man, key
+    assert man["versions"]["viser"] and man["versions"]["numpy"]
+    for fname, meta in man["files"].items():
+        assert (out / fname).stat().st_size == meta["bytes"]
+    html = (out / f"{name}.html").read_text()
+    assert "window.__VISER_EMBED_DATA__=" in html and "</html>" in html.lower()
+    png = (out / f"{name}.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("name", sorted(SHORT))
+def test_viser_file_decodes_and_holds_one_frame_per_fps_tick(recorded, name):
+    out, results = recorded
+    data = (out / f"{name}.viser").read_bytes()
+    decoded = rec.decode_recording(data)
+    frames = results[name].frames
+    assert decoded["durationSeconds"] == pytest.approx(frames / FPS)
+    times = rec.frame_times(data)
+    assert len(times) == frames
+    assert times == pytest.approx([k / FPS for k in range(frames)])
+
+
+@pytest.mark.parametrize("name", sorted(SHORT))
+def test_csv_holds_every_run_member_and_frame(recorded, name):
+    out, results = recorded
+    rows = list(csv.DictReader(io.StringIO((out / f"{name}.csv").read_text())))
+    res = results[name]
+    demo = res.demo
+    runs = 1 + (demo.compare is not None)
+    members = demo.initial.get("beam", 1)
+    ghost = res.frames if demo.ghost else 0
+    assert len(rows) == runs * members * res.frames + ghost
+    first = rows[0]
+    names = rec.system_for(demo).state_names
+    assert list(first)[:3] == ["run", "member", "t"] and all(n in first for n in names)
+    assert float(first["t"]) == 0.0 and float(first["energy_error"]) == 0.0
+
+
+def _figures(recorded, name):
+    return {f["name"]: f for f in recorded[1][name].manifest["figures"]}
+
+
+# (demo, figure, relative tolerance against the analytic prediction)
+AGREES = [
+    ("helix", "gyrofrequency", 1e-4),  # Boris lags by (Omega dt)^2 / 12 = 8e-6
+    ("helix", "Larmor radius", 1e-9),
+    ("helix", "helix pitch", 1e-4),
+    ("radial-kick", "circle shift after the kick", 1e-6),
+    ("radial-kick", "radius after the kick", 1e-6),
+    ("radial-kick", "gyrofrequency after the kick", 1e-4),
+    ("beam", "shortest period in the beam", 1e-4),
+    ("beam", "longest period in the beam", 1e-4),
+    ("driven-disk", "spin rate", 1e-9),
+    ("driven-disk", "bearing force amplitude at B", 5e-3),  # central differences at 15 fps
+    ("driven-disk", "bearing force frequency", 1e-3),
+    ("tumbling-disk", "wobble growth rate", 2e-2),
+    ("hoop-mode1", "mode 1 frequency (linear theory)", 5e-3),
+    ("hoop-mode2", "mode 2 frequency (linear theory)", 1e-2),  # 0.1 rad: weakly nonlinear
+    ("hoop-large-amplitude", "mode 1 frequency (exact, finite amplitude)", 1e-3),
+    ("euler-vs-boris", "final energy error, euler", 1e-9),  # (1 + (Omega dt)^2)^n - 1
+]
+
+
+@pytest.mark.parametrize(("name", "figure", "tol"), AGREES)
+def test_manifest_figure_agrees_with_analytic_prediction(recorded, name, figure, tol):
+    f = _figures(recorded, name)[figure]
+    assert f["relative_difference"] is not None
+    assert f["relative_difference"] < tol, f
+
+
+def test_large_amplitude_hoop_departs_from_linear_theory(recorded):
+    f = _figures(recorded, "hoop-large-amplitude")["mode 1 frequency (linear theory)"]
+    assert f["relative_difference"] > 0.2  # 2 rad: the period is 33 % longer than linear theory
+
+
+def test_symplectic_runs_conserve_what_theory_says(recorded):
+    boris = _figures(recorded, "euler-vs-boris")["final energy error, boris"]
+    assert abs(boris["measured"]) < 1e-12
+    assert _figures(recorded, "tumbling-disk")["final |L| change"]["measured"] < 1e-10
+    errs = recorded[1]["rk4-vs-verlet"].manifest["final_errors"]
+    assert set(errs) == {"verlet", "rk4"}
+
+
+def test_beam_periods_are_equal_although_speeds_differ(recorded):
+    figs = _figures(recorded, "beam")
+    assert figs["speed ratio in the beam"]["measured"] == pytest.approx(6.0)
+    lo = figs["shortest period in the beam"]["measured"]
+    hi = figs["longest period in the beam"]["measured"]
+    assert (hi - lo) / lo < 1e-9
+
+
+# --------------------------------------------------------------------------- failures
+def _files(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())} if folder.exists() else {}
+
+
+def _short(name="helix"):
+    return rec.load_demo(name).with_overrides(duration=1.0, fps=10)
+
+
+def _interrupt_at(frame):
+    def progress(done, total):
+        if done == frame:
+            raise KeyboardInterrupt
+
+    return progress
+
+
+def test_interrupted_first_recording_leaves_nothing(tmp_path):
+    out = tmp_path / "new"
+    with pytest.raises(rec.RecordingFailed, match="interrupted; nothing was written") as info:
+        rec.record(_short(), out, progress=_interrupt_at(5))
+    assert info.value.interrupted
+    assert _files(out) == {}
+
+
+def test_interrupted_recording_keeps_the_previous_files_unchanged(tmp_path):
+    rec.record(_short(), tmp_path)
+    before = _files(tmp_path)
+    assert len(before) == 5
+    with pytest.raises(rec.RecordingFailed, match="keeps the previous complete recording of helix"):
+        rec.record(_short(), tmp_path, progress=_interrupt_at(3))
+    assert _files(tmp_path) == before
+
+
+def test_full_disk_while_writing_leaves_no_partial_file(tmp_path, monkeypatch):
+    rec.record(_short(), tmp_path)
+    before = _files(tmp_path)
+    calls = []
+    real_fsync = os.fsync
+
+    def failing_fsync(fd):
+        calls.append(fd)
+        if len(calls) == 3:
+            raise OSError(28, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(rec.os, "fsync", failing_fsync)
+    with pytest.raises(rec.RecordingFailed, match=r"No space left.*keeps the previous"):
+        rec.record(_short(), tmp_path)
+    assert _files(tmp_path) == before  # no .partial file left behind, old files intact
+
+
+def _blowing_up_demo(name="blowup"):
+    raw = {
+        "title": "Euler blows up",
+        "description": "explicit Euler with a huge step",
+        "exhibit": "cyclotron",
+        "method": "euler",
+        "dt": 100.0,
+        "duration": 10.0,
+        "fps": 10,
+        "speed": 1000.0,
+        "initial": {"speed": 1.0},
+    }
+    return rec.parse_demo(raw, name=name)
+
+
+@pytest.mark.parametrize("scene", ["auto", "fallback"])
+def test_method_that_blows_up_fails_the_recording_and_writes_nothing(tmp_path, scene):
+    with pytest.raises(rec.RecordingFailed, match=r"euler.*nothing was written") as info:
+        rec.record(_blowing_up_demo(), tmp_path / "out", scene=scene)
+    assert isinstance(info.value.__cause__, rec.dynamics.IntegrationError)
+    assert _files(tmp_path / "out") == {}
+
+
+def test_fallback_scene_records_the_same_frames(tmp_path):
+    res = rec.record(_short("euler-vs-boris"), tmp_path, scene="fallback")
+    assert res.manifest["scene"] == "recording-scene"
+    assert len(rec.frame_times(res.paths[".viser"].read_bytes())) == res.frames
+
+
+# --------------------------------------------------------------------------- command line
+def test_record_list_names_every_demo_with_a_description(capsys):
+    assert main(["record", "--list"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in out] == rec.demo_names()
+    assert all(len(line.split(None, 1)[1]) > 20 for line in out)
+
+
+def test_record_command_writes_the_files_and_reports(tmp_path, capsys):
+    assert (
+        main(["record", "hoop-mode1", "--out", str(tmp_path), "--duration", "1", "--fps", "10"])
+        == 0
+    )
+    out = capsys.readouterr().out
+    assert "hoop-mode1: 11 frames" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"hoop-mode1{s}" for s in sorted(rec.SUFFIXES)
+    ]
+
+
+BAD_ARGS = [
+    (["record", "nosuchdemo", "--out", "X"], "unknown demo 'nosuchdemo'"),
+    (["record", "helix"], "--out DIR is required"),
+    (["record", "--out", "X"], "give one DEMO or --all"),
+    (["record", "helix", "--out", "X", "--dt", "-1"], "--dt: dt must be positive"),
+    (
+        ["record", "helix", "--out", "X", "--duration", "0"],
+        "--duration: duration must be a positive",
+    ),
+    (["record", "helix", "--out", "X", "--fps", "0"], "--fps: fps must be a whole number"),
+    (
+        ["record", "helix", "--out", "X", "--method", "verlet"],
+        "--method: method 'verlet' does not apply",
+    ),
+    (["record", "helix", "--out", "X", "--method", "nope"], "--method: method must be one of"),
+    (["record", "helix", "--out", "X", "--fps", "ten"], "invalid int value"),
+    (["record", "helix", "--out", "X", "--duration", "nan"], "must be finite"),
+    (["play", "/nonexistent/demo.viser"], "no such file or folder"),
+]
+
+
+@pytest.mark.parametrize(("argv", "message"), BAD_ARGS)
+def test_bad_arguments_give_a_one_line_error_and_exit_status_2(argv, message, capsys, tmp_path):
+    argv = [str(tmp_path / "X") if a == "X" else a for a in argv]
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own errors
+        code = exc.code
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1, err
+    assert message in err, err
+    assert not (tmp_path / "X").exists()
+
+
+def test_record_command_reports_a_blow_up_in_one_line_with_status_1(tmp_path, capsys):
+    demo_file = tmp_path / "blowup.toml"
+    demo_file.write_text(
+        'title = "t"\ndescription = "d"\nexhibit = "cyclotron"\nmethod = "euler"\ndt = 100.0\n'
+        "duration = 10.0\nfps = 10\nspeed = 1000.0\n"
+    )
+    assert main(["record", str(demo_file), "--out", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "nothing was written" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_demo_files_reject_unknown_keys():
+    with pytest.raises(ValueError, match="unknown key 'colour'"):
+        rec.parse_demo({"colour": 1}, name="x")
+    with pytest.raises(ValueError, match=r"\[parameters\] has no 'charg'"):
+        rec.parse_demo(
+            {"title": "t", "description": "d", "exhibit": "cyclotron", "method": "boris",
+             "dt": 0.1, "duration": 1.0, "parameters": {"charg": 1.0}},
+            name="x",
+        )  # fmt: skip
+
+
+# --------------------------------------------------------------------------- play
+def test_play_serves_the_client_and_the_recording_then_stops_on_ctrl_c(tmp_path):
+    res = rec.record(_short(), tmp_path)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        url = None
+        deadline = time.monotonic() + 30
+        while url is None and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if line.startswith("helix.viser: "):
+                url = line.split(": ", 1)[1].strip()
+        assert url and url.startswith("http://127.0.0.1:")
+        page = urllib.request.urlopen(url, timeout=10).read()
+        assert b"<html" in page.lower()[:200] or b"<!doctype html" in page.lower()[:200]
+        base, query = url.split("/?playbackPath=")
+        data = urllib.request.urlopen(f"{base}/{query}", timeout=10).read()
+        assert data == res.paths[".viser"].read_bytes()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    assert "stopped" in out
+
+
+# --------------------------------------------------------------------------- live Record toggle
+def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatch):
+    import base64
+    import re
+
+    from viz.app import MechvizApp
+
+    app = MechvizApp(port=0, start_loop=False, environment_map=False)
+    sent = []
+    monkeypatch.setattr(
+        app.server, "send_file_download", lambda name, content, **kw: sent.append((name, content))
+    )
+    try:
+        recorder = app.recorder
+        assert recorder is not None and recorder.checkbox.label == "Record"
+        app.step_frame()
+        recorder.checkbox.value = True  # as if ticked in the browser
+        for k in range(40):
+            if k == 10:
+                app.enqueue("cyclotron", {"op": "kick", "dv": 0.5})
+            if k == 20:
+                app.enqueue("hoop", {"op": "set", "method": "rk4"})
+            app.step_frame()
+        assert recorder.recording
+        recorder.checkbox.value = False
+        app.step_frame()  # the loop applies the stop
+        assert recorder.finished.wait(30)
+    finally:
+        app.stop()
+    assert not recorder.recording
+    assert [name for name, _ in sent] == [recorder.last_result[0]]
+    name, html = sent[0]
+    assert name.startswith("mechviz-session-") and name.endswith(".html")
+    data = base64.b64decode(re.search(rb'__VISER_EMBED_DATA__="([^"]+)"', html).group(1))
+    assert len(rec.frame_times(data)) >= 40  # one frame per loop frame while recording
+    assert any(title == "Recording saved" for title, _ in app.messages)
