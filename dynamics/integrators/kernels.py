@@ -164,12 +164,6 @@ def run_composed(step, inner, Y, p, h, n_steps, status):
     return nfev
 
 
-@njit(cache=True)
-def rhs_call(rhs, y, p, out):
-    """Evaluate ``rhs`` once (for callers outside compiled code, e.g. scipy)."""
-    rhs(y, p, out)
-
-
 # Per system (index = system id): right-hand side, own symmetric second-order step, RK4.
 RHS = (cyclotron.rhs, hoop.rhs, disk.free_rhs)
 SYMMETRIC2 = (cyclotron.boris_step, hoop.verlet_step, disk.splitting_step)

@@ -19,7 +19,7 @@ def _make_fun(sys_id: int, p: np.ndarray, d: int):
 
     def fun(t, y):
         # Call the compiled right-hand side's dispatcher directly: 1.5 us per call here.
-        # Going through rhs_call(rhs, ...) makes numba type the function argument on every
+        # Going through a jitted wrapper that takes rhs as an argument makes numba type it on every
         # call (12.6 us), which would charge scipy ~10x its real RHS cost in the benchmark.
         out = np.empty(d)
         rhs(np.ascontiguousarray(y, dtype=np.float64), p, out)
