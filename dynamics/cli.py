@@ -98,14 +98,20 @@ def _params(args: argparse.Namespace, system: str):
         raise CliError(f"{flag}: {exc}") from None
 
 
+def _speed(args: argparse.Namespace) -> float:
+    """``--speed`` (default 1 m/s), which must be positive."""
+    speed = 1.0 if args.speed is None else args.speed
+    if speed <= 0:
+        raise CliError(f"--speed: must be positive, got {speed}")
+    return speed
+
+
 # --------------------------------------------------------------------------- analyze
 def analyze(system: str, args: argparse.Namespace) -> dict[str, Any]:
     """The seed's analytic results for ``system`` as a JSON-ready dict."""
     p = _params(args, system)
     if system == "cyclotron":
-        speed = 1.0 if args.speed is None else args.speed
-        if speed <= 0:
-            raise CliError(f"--speed: must be positive, got {speed}")
+        speed = _speed(args)
         ke = 0.5 * p.mass * speed**2
         state = cyclotron.circular_orbit_state(p, speed)
         p_phi = float(cyclotron.canonical_angular_momentum(p, state))
@@ -186,9 +192,7 @@ def _print_table(result: dict[str, Any]) -> None:
 def _system_and_state(system: str, args: argparse.Namespace):
     p = _params(args, system)
     if system == "cyclotron":
-        speed = 1.0 if args.speed is None else args.speed
-        if speed <= 0:
-            raise CliError(f"--speed: must be positive, got {speed}")
+        speed = _speed(args)
         sysm = Cyclotron(p)
         state = cyclotron.circular_orbit_state(p, speed)
     elif system == "hoop":

@@ -146,10 +146,8 @@ class Simulation:
             raise ValueError(f"t must not go backwards: {t_target} < {self.t}")
         self.clock = t_target
         m = self.method
-        if m.backend == "exact" and self.system.sys_id is None:
-            self.state = self.system.exact(self.state0, t_target)
-            self.t = t_target
-        elif m.backend == "exact" and self.dt is None:
+        if m.backend == "exact" and (self.system.sys_id is None or self.dt is None):
+            # Closed form evaluated at the time asked for (no compiled flow, or no step given).
             self.state = np.atleast_2d(self.system.exact(self.state0, t_target))
             self.t = t_target
         elif not m.adaptive:
