@@ -38,7 +38,6 @@ if not numba.config.CACHE_DIR:
     numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
 
 
-
 def njit(*args, **kwargs):
     """``numba.njit`` with ``error_model="numpy"``: a division by zero gives inf or nan (which the
     drivers report as a non-finite state) instead of raising. The raising branch is not just
@@ -47,5 +46,6 @@ def njit(*args, **kwargs):
     remain cost about a third of the hoop's right-hand side inside DOP853."""
     kwargs.setdefault("error_model", "numpy")
     return numba.njit(*args, **kwargs)
+
 
 __all__ = ["njit"]

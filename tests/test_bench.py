@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dynamics.bench.problems import PROBLEMS, load_references, reference_state
-from dynamics.bench.sweeps import Point, ratio_table, time_to_reach
+from dynamics.bench.sweeps import Point, Settings, ratio_table, retime_ratios, time_to_reach
 from dynamics.simulation import Simulation
 
 
@@ -60,6 +60,25 @@ def test_ratio_is_fastest_scipy_over_fastest_ours_and_flags_a_lower_bound():
     # No scipy point reached 1e-6: the ratio uses the slowest scipy call made, as a bound.
     assert table["1e-06"]["ratio_is_lower_bound"]
     assert table["1e-06"]["ratio"] == pytest.approx(0.5 / 0.01)
+
+
+def test_head_to_head_retiming_runs_the_chosen_points_and_keeps_the_sweep_figures():
+    # Real runs of the hoop (short: rk4 at 640 steps, odeint at 1e-4); the assertions are about
+    # bookkeeping, not about which is faster.
+    pb = PROBLEMS["hoop"]
+    ours = Point("hoop", "rk4", False, pb.t_end / 640, None, 640, 2560, 1e-4, 0.0, 1e-3, 1e-3,
+                 0.0, 5, 1, "ok")  # fmt: skip
+    theirs = Point("hoop", "odeint", True, None, 1e-4, 0, 0, 1e-4, 0.0, 2e-2, 2e-2, 0.0, 5, 1, "ok")
+    table = ratio_table([ours, theirs], {"rk4"}, {"odeint"})
+    assert table["hoop"]["1e-03"]["ratio"] == pytest.approx(20.0)
+    retime_ratios(table, [ours, theirs], PROBLEMS, Settings(head_to_head_rounds=2, min_sample=0))
+    e = table["hoop"]["1e-03"]
+    assert e["sweep_ratio"] == pytest.approx(20.0)
+    assert e["sweep"]["ours"] == {"method": "rk4", "seconds": 1e-3}
+    timed = e["head_to_head"]["seconds"]
+    assert set(timed) == {"ours:rk4", "scipy:odeint"} and all(t > 0 for t in timed.values())
+    assert e["ratio"] == pytest.approx(timed["scipy:odeint"] / timed["ours:rk4"])
+    assert e["ours"]["seconds"] == timed["ours:rk4"]
 
 
 def test_bench_command_is_registered_with_its_flags():

@@ -18,7 +18,7 @@ from ..integrators.base import get_method
 from ..simulation import Simulation
 from . import exhibits, experiments
 from .problems import ADAPTIVE_OURS, ADAPTIVE_SCIPY, PROBLEMS, load_references, versions
-from .sweeps import Settings, ratio_table, sweep_adaptive, sweep_fixed
+from .sweeps import Settings, ratio_table, retime_ratios, sweep_adaptive, sweep_fixed
 
 
 class Progress:
@@ -108,7 +108,7 @@ def run_bench(
     refs = load_references()
     n_sweeps = sum(len(_fixed(pb, settings)) + len(ADAPTIVE_OURS) + len(settings.scipy_methods)
                    for pb in PROBLEMS.values())  # fmt: skip
-    total = len(PROBLEMS) + n_sweeps + 10 + 7 + len(experiments.STEP_CASES) + 3
+    total = len(PROBLEMS) + n_sweeps + 1 + 10 + 7 + len(experiments.STEP_CASES) + 3
     progress = Progress(total, show_progress)
     started = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     t_start = time.perf_counter()
@@ -127,6 +127,9 @@ def run_bench(
             progress()
     ours = {m for pb in PROBLEMS.values() for m in pb.fixed} | set(ADAPTIVE_OURS)
     ratios = ratio_table(points, ours, set(ADAPTIVE_SCIPY))
+    progress.set("ratios head to head")
+    retime_ratios(ratios, points, PROBLEMS, settings)
+    progress()
 
     progress.set("long runs (10^4 periods)")
     long_run = experiments.long_run_energy(1e4, 400, progress)
@@ -144,7 +147,8 @@ def run_bench(
             "mechviz benchmark (issue 6). Errors: relative 2-norm of the final state against the "
             "reference (charge: normalised by the transverse part (x, y, vx, vy) of the exact "
             "state). Times: median wall time of Simulation.advance_to(T) after one untimed call, "
-            "gc disabled, short calls repeated to >= 2 ms per sample; compile times separate."
+            "gc disabled, short calls repeated to >= 2 ms per sample; compile times separate. "
+            "Ratios: the contenders of each side re-timed head to head in interleaved rounds."
         ),
         "command": "mechviz bench" + (" --quick" if quick else ""),
         "mode": "quick" if quick else "full",
@@ -160,13 +164,17 @@ def run_bench(
             "energy_samples": settings.energy_samples,
             "fixed_step_factor": math.sqrt(2) if settings.half_steps else 2,
             "tolerances": list(settings.tolerances),
+            "head_to_head_rounds": settings.head_to_head_rounds,
             "scipy_methods": list(settings.scipy_methods),
             "skipped_fixed_methods": list(settings.skip_fixed),
         },
         "problems": {
             k: {
-                "title": pb.title, "t_end": pb.t_end, "state0": list(pb.state0),
-                "floor": pb.floor, "reference": refs["problems"][k]["kind"],
+                "title": pb.title,
+                "t_end": pb.t_end,
+                "state0": list(pb.state0),
+                "floor": pb.floor,
+                "reference": refs["problems"][k]["kind"],
                 "reference_cross_check": refs["problems"][k].get("radau_1e-12"),
             }
             for k, pb in PROBLEMS.items()
@@ -250,7 +258,9 @@ def summary(result: dict) -> dict:
             for k, v in result["per_step"]["rows"].items()
         },
         "exhibit_defaults": {
-            k: None if v["chosen"] is None else {"method": v["chosen"]["method"], "dt": v["chosen"]["dt"]}
+            k: None
+            if v["chosen"] is None
+            else {"method": v["chosen"]["method"], "dt": v["chosen"]["dt"]}
             for k, v in result["exhibits"].items()
         },
         "viewer": result.get("viewer"),
