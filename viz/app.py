@@ -41,6 +41,7 @@ The whole app, headless and without its loop thread::
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
+    app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
     app.stop()
 
 ``measure_frame_cost(n_frames=300)`` returns the server-side milliseconds per frame (all three
@@ -57,7 +58,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -72,6 +73,8 @@ from .scene_hoop import HoopConfig, HoopExhibit
 
 ORIGINS = {"cyclotron": (-5.5, 0.0, 0.0), "disk": (0.0, 0.0, 0.0), "hoop": (5.5, 0.0, 0.0)}
 OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
+CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
+CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
 SYSTEM_OF = {"cyclotron": "cyclotron", "disk": "free-body", "hoop": "hoop"}
 _warm_lock = threading.Lock()
 _warm: set[tuple[str, str]] = set()
@@ -139,6 +142,41 @@ def warm_up(
     return time.perf_counter() - t0
 
 
+# --------------------------------------------------------------------------- frame log
+class FrameLog:
+    """Start time (``time.perf_counter``, s), server-side cost (wall ms) and the loop thread's CPU
+    time in it (ms) of the last ``capacity`` frames, in preallocated arrays: written by the loop
+    thread once per frame, read by anyone. A cost well above its CPU time is time the thread
+    waited (for the interpreter lock, or for a core).
+
+    ``count`` is the number of frames ever logged; :meth:`since` returns the frames from a given
+    index on (those still held), so a reader polling more often than ``capacity`` frames (136 s
+    at 60 Hz by default) sees every frame exactly once.
+    """
+
+    def __init__(self, capacity: int = 8192) -> None:
+        self.capacity = int(capacity)
+        self.start = np.zeros(self.capacity)
+        self.cost_ms = np.zeros(self.capacity)
+        self.cpu_ms = np.zeros(self.capacity)
+        self.count = 0
+
+    def add(self, start: float, cost_ms: float, cpu_ms: float = math.nan) -> None:
+        i = self.count % self.capacity
+        self.start[i] = start
+        self.cost_ms[i] = cost_ms
+        self.cpu_ms[i] = cpu_ms
+        self.count += 1
+
+    def since(self, first: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+        """``(index of the first frame returned, starts, costs, cpu times)`` for frames
+        ``first ..``; the index is larger than ``first`` when older frames were overwritten."""
+        n = self.count
+        lo = max(int(first), n - self.capacity + 1, 0)  # slot n may be being rewritten
+        idx = np.arange(lo, n) % self.capacity
+        return lo, self.start[idx], self.cost_ms[idx], self.cpu_ms[idx]
+
+
 # --------------------------------------------------------------------------- the app
 class MechvizApp:
     """Server, exhibits, GUI and the simulation loop."""
@@ -175,7 +213,11 @@ class MechvizApp:
         self.messages: list[tuple[str, str]] = []  # every notification sent (title, body)
         self.frame_hooks: list[Callable[[MechvizApp], None]] = []
         self.frame_ms: deque = deque(maxlen=600)
+        self.frame_log = FrameLog()  # start time and cost of the last frames (the bench reads it)
         self._rtf_window: deque = deque(maxlen=240)
+        self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
+        self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
+        self._cost_text = ""
         self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -194,18 +236,21 @@ class MechvizApp:
             position=(0.0, 0.0, 0.0),
         )
         cfg = dict(configs or {})
+        # energies and errors (chart points, divergence checks) at CHART_RATE; poses every frame
+        self._measure_every = max(1, round(self.fps / CHART_RATE))
+        history_len = round(CHART_SECONDS * self.fps / self._measure_every)
         self.exhibits: dict[str, Exhibit] = {
-            "cyclotron": CyclotronExhibit(
-                server, cfg.get("cyclotron"), origin=ORIGINS["cyclotron"]
-            ),
-            "disk": DiskExhibit(server, cfg.get("disk"), origin=ORIGINS["disk"]),
-            "hoop": HoopExhibit(server, cfg.get("hoop"), origin=ORIGINS["hoop"]),
+            key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
+            for key, cls in (
+                ("cyclotron", CyclotronExhibit),
+                ("disk", DiskExhibit),
+                ("hoop", HoopExhibit),
+            )
         }
         server.initial_camera.position = OVERVIEW[0]
         server.initial_camera.look_at = OVERVIEW[1]
         with server.atomic():
-            for ex in self.exhibits.values():
-                ex.draw()
+            self._draw()
         self.gui = None
         self.recorder = None  # the Record toggle's viz.recording.LiveRecorder (with the GUI)
         if gui:
@@ -249,6 +294,7 @@ class MechvizApp:
             try:
                 if target == "call":
                     command(self)
+                    self._drawn.clear()  # it may have changed anything: draw all again
                 elif target == "app":
                     self._apply_app(
                         dict(command) if not isinstance(command, str) else {"op": command}
@@ -272,7 +318,7 @@ class MechvizApp:
             self.playing = not self.playing
         elif op == "step":
             self.playing = False
-            self._advance(self.speed * self.frame_dt)
+            self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
             v = float(cmd["value"])
             if not (math.isfinite(v) and v > 0):
@@ -312,20 +358,26 @@ class MechvizApp:
                 c.camera.look_at = target
 
     # ------------------------------------------------------------------ the frame
-    def _advance(self, sim_seconds: float) -> None:
-        for ex in self.exhibits.values():
-            ex.advance(sim_seconds)
+    def _advance(self, sim_seconds: float, *, measure_all: bool = False) -> None:
+        for key, ex in self.exhibits.items():
+            ex.advance(sim_seconds, measure=measure_all or self._measures_now(key))
         self.sim_time += sim_seconds
+
+    def _measures_now(self, key: str) -> bool:
+        """Whether this frame samples ``key``'s energy and error: one exhibit per frame in turn
+        (at 60 Hz each one every third frame), and the frame that refreshes its readout."""
+        n = self._measure_every
+        return n == 1 or self.frame % n == self.MEASURE_PHASE[key] % n
 
     def step_frame(self, frame_dt: float | None = None) -> None:
         """One frame: apply queued commands, advance (if playing), draw, refresh the GUI."""
         t0 = time.perf_counter()
+        c0 = time.thread_time()
         self._apply_commands()
         if self.playing:
             self._advance(self.speed * (self.frame_dt if frame_dt is None else frame_dt))
         with self.server.atomic():
-            for ex in self.exhibits.values():
-                ex.draw()
+            self._draw()
             if self.gui is not None:
                 self._update_gui()
         for ex in self.exhibits.values():
@@ -337,7 +389,17 @@ class MechvizApp:
         self.frame += 1
         now = time.perf_counter()
         self._rtf_window.append((now, self.sim_time))
-        self.frame_ms.append(1e3 * (now - t0))
+        cost_ms = 1e3 * (now - t0)
+        self.frame_ms.append(cost_ms)
+        self.frame_log.add(t0, cost_ms, 1e3 * (time.thread_time() - c0))
+
+    def _draw(self) -> None:
+        """Draw the exhibits whose state changed since they were last drawn (while paused a
+        frame pushes nothing)."""
+        for key, ex in self.exhibits.items():
+            if self._drawn.get(key) != ex.revision:
+                ex.draw()
+                self._drawn[key] = ex.revision
 
     def _loop(self) -> None:
         next_t = time.perf_counter()
@@ -648,27 +710,44 @@ class MechvizApp:
         finally:
             self._syncing = False
 
+    # GUI refresh schedule, a 12-frame cycle at 60 Hz: the status line at 10 Hz (frames 0 and 6),
+    # each exhibit's readout and chart at 5 Hz (one frame each); the other frames push nothing.
+    # An exhibit's refresh frame is one where it was just measured (MEASURE_PHASE: frame % 3),
+    # so its readout reuses that sample.
+    GUI_CYCLE: ClassVar[int] = 12
+    STATUS_FRAMES: ClassVar[tuple[int, ...]] = (0, 6)
+    EXHIBIT_FRAMES: ClassVar[dict[str, int]] = {"cyclotron": 2, "disk": 4, "hoop": 9}
+    MEASURE_PHASE: ClassVar[dict[str, int]] = {"cyclotron": 2, "disk": 1, "hoop": 0}
+
     def _update_gui(self, force: bool = False) -> None:
-        """Readouts at ~10 Hz, staggered so one frame refreshes at most one exhibit."""
-        k = self.frame % 6
-        if force or k == 0:
+        """Refresh the status line and the readouts and charts on their staggered frames (see
+        ``GUI_CYCLE``); a paused exhibit's readout and chart are not pushed again."""
+        k = self.frame % self.GUI_CYCLE
+        if force or k in self.STATUS_FRAMES:
+            if force or not self._cost_text or self.frame % 60 == 0:  # median: once a second
+                ms = np.asarray(self.frame_ms)
+                self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
-            ms = np.asarray(self.frame_ms)
             self.w["status"].content = (
                 f"**t = {self.sim_time:.2f} s** simulated · real-time factor "
                 f"{'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
                 f"{'playing' if self.playing else 'paused'}  \n"
-                f"<small>frame {np.median(ms) if len(ms) else 0:.2f} ms median (server side)</small>"
+                f"<small>{self._cost_text} (server side)</small>"
             )
-        for i, key in enumerate(("cyclotron", "disk", "hoop")):
-            if force or k == 2 * i + 1:
-                ex = self.exhibits[key]
-                self.w[f"{key}.readout"].content = ex.readout()
-                data = ex.chart_data()
+        for key, slot in self.EXHIBIT_FRAMES.items():
+            if not (force or k == slot):
+                continue
+            ex = self.exhibits[key]
+            shown = self._shown.get(key)
+            if not force and shown == (ex.revision, ex.history.version):
+                continue  # nothing new to show (e.g. paused)
+            self.w[f"{key}.readout"].content = ex.readout()
+            if force or shown is None or shown[1] != ex.history.version:
                 chart = self.w[f"{key}.chart"]
-                n = len(chart.series)
+                data = ex.chart_data()
                 if len(data[0]) >= 2:
-                    chart.data = tuple(np.asarray(d[:], dtype=float) for d in data[:n])
+                    chart.data = data[: len(chart.series)]
+            self._shown[key] = (ex.revision, ex.history.version)
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -4,6 +4,10 @@ Runs :func:`dynamics.bench.run_bench` (work-precision sweeps of our methods and 
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
 ``--out`` (default ``docs/bench``).
+
+``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
+(:func:`viz.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
+for SECONDS, frame rate per 10 s window, memory trend) and writes ``endurance.json`` to ``--out``.
 """
 
 from __future__ import annotations
@@ -35,7 +39,37 @@ def _viewer_measurements(quick: bool) -> dict:
     return out
 
 
+def _endurance(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from dynamics.cli import CliError
+
+    from .endurance import EnduranceUnavailable, format_summary, run_endurance
+
+    if not args.endurance > 0:
+        raise CliError(f"--endurance must be a positive number of seconds, got {args.endurance}")
+    if args.clients < 1:
+        raise CliError(f"--clients must be at least 1, got {args.clients}")
+    out = Path(args.out) / "endurance.json"
+    try:
+        result = run_endurance(
+            args.endurance,
+            args.clients,
+            out=out,
+            progress=lambda text: print(f"mechviz bench: {text}", flush=True),
+        )
+    except EnduranceUnavailable as exc:
+        raise CliError(str(exc)) from None
+    if args.json:
+        print(json.dumps(result, indent=1))
+    else:
+        print(format_summary(result))
+    return 0 if result["targets"]["met"] else 1
+
+
 def _run(args: argparse.Namespace) -> int:
+    if args.endurance is not None:
+        return _endurance(args)
     from dynamics.bench import run_bench, summary
 
     viewer = _viewer_measurements(args.quick)
@@ -74,6 +108,17 @@ def add_commands(sub) -> None:
     p.add_argument("--quick", action="store_true", help="fewer points and repeats (< 2 min)")
     p.add_argument("--json", action="store_true", help="print a JSON summary (with 'ratios')")
     p.add_argument("--out", default="docs/bench", help="output directory (default docs/bench)")
+    p.add_argument(
+        "--endurance",
+        type=float,
+        metavar="SECONDS",
+        help="run only the viewer endurance benchmark for SECONDS (600 for the issue-4 target) "
+        "with --clients headless Chromium pages; writes endurance.json; exit status 1 if a "
+        "target is missed",
+    )
+    p.add_argument(
+        "--clients", type=int, default=3, help="browser clients for --endurance (default 3)"
+    )
     p.set_defaults(func=_run)
 
 

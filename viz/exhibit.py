@@ -5,20 +5,24 @@ and the short history its charts and readouts need. It knows nothing of integrat
 asks :mod:`dynamics` for states and draws them. Every exhibit has
 
 - ``config``: a frozen dataclass (``dataclasses.replace`` it, or pass ``apply({"op": "set", ...})``),
-- ``advance(sim_seconds)``: one compiled ``dynamics`` call per simulation (a blow-up pauses the
-  exhibit and queues a message in ``events`` instead of raising),
+- ``advance(sim_seconds, measure=True)``: one compiled ``dynamics`` call per simulation (a
+  blow-up pauses the exhibit and queues a message in ``events`` instead of raising); ``measure``
+  also samples the energy and error (a chart point) and checks them for divergence,
 - ``draw()``: handle assignments only; the caller wraps ``server.atomic()``,
 - ``apply(command)``: ``{"op": "reset"}``, ``{"op": "set", field: value, ...}`` and the exhibit's
   own operations; an invalid value raises ``ValueError`` naming the field and changes nothing,
-- ``sample`` (the current :class:`dynamics.Sample`), ``t``, ``paused``, ``failure``,
-  ``readout()`` (markdown), ``chart_data()`` (for the energy/error chart) and ``camera``.
+- ``state`` (the current state, cheap: what ``draw()`` uses), ``sample`` (the current
+  :class:`dynamics.Sample` with energies and errors, computed on demand), ``t``, ``paused``,
+  ``failure``, ``readout()`` (markdown), ``chart_data()`` (for the energy/error chart) and
+  ``camera``,
+- ``revision``: a counter bumped by every ``advance``, ``apply``, ``set`` and ``reset``; while it
+  is unchanged, ``draw()`` and ``readout()`` would show the same thing (the app skips them).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -32,7 +36,7 @@ LOG_FLOOR = -17.0  # log10 of an error that is exactly zero
 
 
 def log10_abs(x) -> float:
-    v = float(np.max(np.abs(x))) if x is not None else 0.0
+    v = float(np.abs(x).max()) if x is not None else 0.0
     return math.log10(v) if v > 10.0**LOG_FLOOR else LOG_FLOOR
 
 
@@ -72,25 +76,50 @@ def fmt(x: float, digits: int = 4) -> str:
 
 
 class History:
-    """Bounded per-frame samples for the charts: ``t`` and named series."""
+    """Bounded per-frame samples for the charts: ``t`` and named series (the last ``maxlen``).
+
+    Stored in one preallocated ring buffer written twice (at ``i`` and ``i + maxlen``), so the
+    newest ``maxlen`` samples are always one contiguous slice: adding a sample allocates
+    nothing and :meth:`arrays` copies one block. ``count`` grows with every sample added and
+    is reset by :meth:`clear` (with ``version``, it tells a reader whether anything changed).
+    """
 
     def __init__(self, names: tuple[str, ...], maxlen: int = 600) -> None:
-        self.names = names
-        self.t: deque = deque(maxlen=maxlen)
-        self.series = {n: deque(maxlen=maxlen) for n in names}
+        self.names = tuple(names)
+        self.maxlen = int(maxlen)
+        self._buf = np.full((1 + len(self.names), 2 * self.maxlen), math.nan)
+        self._i = 0  # where the next sample goes (mod maxlen)
+        self._n = 0  # samples held (<= maxlen)
+        self.count = 0
+        self.version = 0  # changes on every add and clear
+
+    def __len__(self) -> int:
+        return self._n
 
     def clear(self) -> None:
-        self.t.clear()
-        for s in self.series.values():
-            s.clear()
+        self._i = self._n = self.count = 0
+        self.version += 1
 
     def add(self, t: float, **values: float) -> None:
-        self.t.append(t)
-        for n in self.names:
-            self.series[n].append(values.get(n, math.nan))
+        col = [t]
+        col += [values.get(n, math.nan) for n in self.names]
+        i, m = self._i, self.maxlen
+        self._buf[:, i] = col
+        self._buf[:, i + m] = col
+        self._i = (i + 1) % m
+        self._n = min(self._n + 1, m)
+        self.count += 1
+        self.version += 1
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays()[0]
 
     def arrays(self) -> tuple[np.ndarray, ...]:
-        return (np.asarray(self.t),) + tuple(np.asarray(self.series[n]) for n in self.names)
+        """``(t, *series)`` oldest first, as fresh arrays."""
+        end = self._i + self.maxlen
+        block = self._buf[:, end - self._n : end].copy()
+        return tuple(block)
 
 
 class Exhibit:
@@ -103,7 +132,9 @@ class Exhibit:
     Config: ClassVar[type]
     chart_series: ClassVar[tuple[str, ...]] = ("energy", "error")
 
-    def __init__(self, server, config=None, *, origin=(0.0, 0.0, 0.0)) -> None:
+    def __init__(
+        self, server, config=None, *, origin=(0.0, 0.0, 0.0), history_len: int = 600
+    ) -> None:
         self.server = server
         self.scene = server.scene
         self.origin = np.asarray(origin, dtype=float)
@@ -113,7 +144,8 @@ class Exhibit:
         self.paused = False
         self.failure: str | None = None
         self.events: list[tuple[str, str]] = []  # (title, body) for notifications
-        self.history = History(self.chart_series)
+        self.revision = 0  # bumped by anything that may change what draw() or readout() show
+        self.history = History(self.chart_series, maxlen=max(2, int(history_len)))
         self.t_offset = 0.0
         self.sim: dynamics.Simulation | None = None
         self.compare: dynamics.Simulation | None = None
@@ -126,6 +158,16 @@ class Exhibit:
     @property
     def t(self) -> float:
         return self.t_offset + (self.sim.t if self.sim is not None else 0.0)
+
+    @property
+    def state(self) -> np.ndarray:
+        """The main run's current state (d,): what drawing needs, without the energies and
+        errors of :attr:`sample` (a view, valid until the next advance)."""
+        return self.sim.state[0]
+
+    @property
+    def compare_state(self) -> np.ndarray | None:
+        return None if self.compare is None else self.compare.state[0]
 
     @property
     def sample(self) -> dynamics.Sample:
@@ -145,10 +187,16 @@ class Exhibit:
         return [s for s in (self.sim, self.compare) if s is not None]
 
     # ------------------------------------------------------------------ stepping
-    def advance(self, sim_seconds: float) -> None:
-        """Advance every simulation of the exhibit by ``sim_seconds`` (no-op while paused)."""
+    def advance(self, sim_seconds: float, *, measure: bool = True) -> None:
+        """Advance every simulation of the exhibit by ``sim_seconds`` (no-op while paused).
+
+        ``measure``: also sample the energy and error (a chart point, and the divergence check).
+        The live app measures each exhibit on every third frame only, staggered: a
+        :class:`dynamics.Sample` costs more than the step itself and the chart needs no more.
+        A run that fails is always measured."""
         if self.paused or sim_seconds <= 0.0:
             return
+        self.revision += 1
         for sim in self.simulations() + self._extra_simulations():
             try:
                 sim.advance(sim_seconds)
@@ -157,9 +205,10 @@ class Exhibit:
                 break
         self._sample = None
         self._compare_sample = None
-        if not self.paused:
-            self._check_divergence()
-        self._record()
+        if measure or self.paused:
+            if not self.paused:
+                self._check_divergence()
+            self._record()
         self._after_advance()
 
     def _extra_simulations(self) -> list[dynamics.Simulation]:
@@ -202,6 +251,7 @@ class Exhibit:
     # ------------------------------------------------------------------ commands
     def apply(self, command: Mapping[str, Any] | str) -> str:
         """Apply one command; returns a short description. ``ValueError`` leaves all untouched."""
+        self.revision += 1
         if isinstance(command, str):
             command = {"op": command}
         command = dict(command)
@@ -221,6 +271,7 @@ class Exhibit:
 
     def set(self, **changes) -> str:
         """Change config fields (validated first; the running simulation is kept on error)."""
+        self.revision += 1
         fields = {f.name for f in dataclasses.fields(self.config)}
         for name in changes:
             if name not in fields:
@@ -253,6 +304,7 @@ class Exhibit:
         return f"{self.title}: " + ", ".join(f"{k} = {v}" for k, v in changes.items())
 
     def reset(self) -> None:
+        self.revision += 1
         self._start()
 
     def _reset_common(self) -> None:

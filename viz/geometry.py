@@ -82,24 +82,24 @@ def circle_segments(radius: float, n: int = 96, centre=(0.0, 0.0, 0.0)) -> np.nd
 # ----------------------------------------------------------------------------- rotations
 def quat_from_matrix(r: np.ndarray) -> np.ndarray:
     """Unit quaternion (w, x, y, z), ``w >= 0``, of a proper rotation matrix."""
-    r = np.asarray(r, float)
-    tr = r[0, 0] + r[1, 1] + r[2, 2]
+    m = np.asarray(r, float).tolist()  # plain floats: a 3x3 is cheaper in Python than in numpy
+    tr = m[0][0] + m[1][1] + m[2][2]
     if tr > 0.0:
         s = 2.0 * math.sqrt(1.0 + tr)
-        q = np.array(
-            [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-        )
+        q = [0.25 * s, (m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s]
     else:
-        i = int(np.argmax([r[0, 0], r[1, 1], r[2, 2]]))
+        i = max(range(3), key=lambda n: m[n][n])  # the first largest diagonal entry
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * math.sqrt(max(1.0 + r[i, i] - r[j, j] - r[k, k], 1e-300))
-        q = np.zeros(4)
-        q[0] = (r[k, j] - r[j, k]) / s
+        s = 2.0 * math.sqrt(max(1.0 + m[i][i] - m[j][j] - m[k][k], 1e-300))
+        q = [0.0, 0.0, 0.0, 0.0]
+        q[0] = (m[k][j] - m[j][k]) / s
         q[1 + i] = 0.25 * s
-        q[1 + j] = (r[j, i] + r[i, j]) / s
-        q[1 + k] = (r[k, i] + r[i, k]) / s
-    q /= np.linalg.norm(q)
-    return q if q[0] >= 0.0 else -q
+        q[1 + j] = (m[j][i] + m[i][j]) / s
+        q[1 + k] = (m[k][i] + m[i][k]) / s
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if q[0] < 0.0:
+        n = -n
+    return np.array([q[0] / n, q[1] / n, q[2] / n, q[3] / n])
 
 
 def quat_to_matrix(q) -> np.ndarray:
@@ -145,6 +145,10 @@ class ChunkedTrail:
     and recordings small (VISER_NOTES section 8). ``push(p)`` appends a point; ``lift()`` makes
     the next point start a new piece (no segment joins them, e.g. when a display coordinate wraps).
     Call :meth:`draw` once per frame (inside the caller's ``server.atomic()``).
+
+    The open chunk lives in one preallocated ``(chunk, 2, 3)`` float32 buffer: pushing a point
+    writes into it and drawing assigns a view of it (viser copies what it is given), so a frame
+    allocates no trail arrays; a full chunk is copied once, when it is frozen.
     """
 
     def __init__(
@@ -163,8 +167,12 @@ class ChunkedTrail:
         self.cap, self.chunk, self.thickness = int(cap), int(chunk), float(thickness)
         self._frozen: deque = deque()  # (handle, n_segments)
         self._open_handle = None
-        self._open: list[np.ndarray] = []
-        self._last: np.ndarray | None = None
+        self._buf = np.empty((self.chunk, 2, 3), np.float32)  # the open chunk's segments
+        self._n_open = 0  # segments in the buffer
+        self._full: list[np.ndarray] = []  # chunks filled since the last draw, oldest first
+        self._p = np.empty(3, np.float32)  # scratch: the point being pushed
+        self._last = np.empty(3, np.float32)
+        self._has_last = False
         self._dirty = False
         self._counter = 0
         self._visible = visible
@@ -172,7 +180,7 @@ class ChunkedTrail:
 
     @property
     def n_segments(self) -> int:
-        return self._frozen_segments + len(self._open)
+        return self._frozen_segments + self.chunk * len(self._full) + self._n_open
 
     @property
     def n_nodes(self) -> int:
@@ -181,17 +189,25 @@ class ChunkedTrail:
     @property
     def last_point(self) -> np.ndarray | None:
         """The newest point (``None`` after :meth:`lift` or :meth:`clear`)."""
-        return self._last
+        return self._last.copy() if self._has_last else None
 
     def push(self, point) -> None:
-        p = np.asarray(point, np.float32)
-        if self._last is not None and np.any(p != self._last):
-            self._open.append(np.stack([self._last, p]))
+        p = self._p
+        p[:] = point
+        if self._has_last and p.tobytes() != self._last.tobytes():
+            if self._n_open == self.chunk:  # full: hand it to draw() and start afresh
+                self._full.append(self._buf.copy())
+                self._n_open = 0
+            seg = self._buf[self._n_open]
+            seg[0] = self._last
+            seg[1] = p
+            self._n_open += 1
             self._dirty = True
-        self._last = p
+        self._last[:] = p
+        self._has_last = True
 
     def lift(self) -> None:
-        self._last = None
+        self._has_last = False
 
     def clear(self) -> None:
         for handle, _ in self._frozen:
@@ -201,8 +217,9 @@ class ChunkedTrail:
         if self._open_handle is not None:
             self._open_handle.remove()
             self._open_handle = None
-        self._open = []
-        self._last = None
+        self._full.clear()
+        self._n_open = 0
+        self._has_last = False
         self._dirty = False
 
     @property
@@ -221,31 +238,37 @@ class ChunkedTrail:
         self._counter += 1
         return self.scene.add_line_segments(
             f"{self.name}/c{self._counter:06d}",
-            segments,
+            segments.copy(),
             colors=self.color,
             thickness=self.thickness,
             thickness_units="screen",
             visible=self._visible,
         )
 
+    def _write_open(self, segments: np.ndarray) -> None:
+        if self._open_handle is None:
+            self._open_handle = self._new_node(segments)
+        else:
+            self._open_handle.points = segments
+
+    def _freeze(self) -> None:
+        self._frozen.append((self._open_handle, self.chunk))
+        self._frozen_segments += self.chunk
+        self._open_handle = None
+
     def draw(self) -> None:
         if not self._dirty:
             return
         self._dirty = False
-        while self._open:
-            take = self._open[: self.chunk]
-            segs = np.asarray(take, np.float32)
-            if self._open_handle is None:
-                self._open_handle = self._new_node(segs)
-            else:
-                self._open_handle.points = segs
-            if len(take) < self.chunk:
-                break
-            # the open chunk is full: freeze it and continue with the rest
-            self._frozen.append((self._open_handle, self.chunk))
-            self._frozen_segments += self.chunk
-            self._open_handle = None
-            self._open = self._open[self.chunk :]
+        for full in self._full:  # chunks that filled up since the last draw
+            self._write_open(full)
+            self._freeze()
+        self._full.clear()
+        if self._n_open:
+            self._write_open(self._buf[: self._n_open])
+            if self._n_open == self.chunk:  # the open chunk is full: freeze it
+                self._freeze()
+                self._n_open = 0
         while self._frozen and self.n_segments > self.cap:
             handle, n = self._frozen.popleft()
             handle.remove()

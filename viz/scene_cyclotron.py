@@ -125,6 +125,7 @@ class CyclotronExhibit(Exhibit):
         )
         self.beam_node = None
         self._ring_radius = 1.0
+        self._body_positions = np.zeros((3, 3))
 
     def _field_points(self, sign: float) -> np.ndarray:
         H = self.config.height
@@ -180,7 +181,7 @@ class CyclotronExhibit(Exhibit):
             self.compare_trail.visible = cmp_ is not None
         self._sample = self._compare_sample = None
         self.t_offset = t_offset
-        st = self.sample.state[0]
+        st = self.state
         self.theory_centre = cy.guiding_centre(p, st)
         self.theory_radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
         self._phase = 0.0
@@ -228,7 +229,7 @@ class CyclotronExhibit(Exhibit):
         return np.arctan2(cross, dot)
 
     def _after_advance(self) -> None:
-        st = self.sample.state[0]
+        st = self.state
         self._phase += float(self._turn(self._v_prev, st[3:5]))
         self._v_prev = st[3:5].copy()
         self._r_meas = float(np.hypot(*(st[:2] - self.theory_centre[:2])))
@@ -284,16 +285,19 @@ class CyclotronExhibit(Exhibit):
         trail.draw()
 
     def draw(self) -> None:
-        st = self.sample.state[0]
+        st = self.state
         pos = self.display_position(st)
         p = self.params
         centre = cy.guiding_centre(p, st)
         radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
-        c = self.compare_sample
-        cpos = self.display_position(c.state[0]) if c is not None else pos
-        self.bodies.batched_positions = np.array([pos, cpos, (centre[0], centre[1], pos[2])])
+        cs = self.compare_state
+        cpos = self.display_position(cs) if cs is not None else pos
+        bodies = self._body_positions  # reused: viser copies what it is given
+        bodies[0], bodies[1] = pos, cpos
+        bodies[2] = centre[0], centre[1], pos[2]
+        self.bodies.batched_positions = bodies
         self._push_trail(self.trail, pos)
-        if c is not None:
+        if cs is not None:
             self._push_trail(self.compare_trail, cpos)
         if abs(radius - self._ring_radius) > 1e-4 * max(radius, 1e-9):
             self.ring.points = geo.circle_segments(radius)

@@ -113,6 +113,7 @@ class DiskExhibit(Exhibit):
         self.vector_labels = [s.add_label(f"{r}/vector_label_{n}", n) for n in ("ω", "L")]
         self._built_radius = None
         self._built_masses = None
+        self._pose_cache = None  # (sim, t, config, (rotation, A)) of the last pose() call
 
     def _build_body(self, p: dk.DiskParams) -> None:
         s, r, R = self.scene, self.root, p.radius
@@ -233,6 +234,21 @@ class DiskExhibit(Exhibit):
         self._body_fa = dk.bearing_force_a(p, 0.0)
         self._body_fb = dk.bearing_force_b(p, 0.0)
         self._body_L = dk.angular_momentum(p, 0.0)
+        # what a driven frame draws, apart from the turning: world points of A and B, the fixed
+        # omega arrow, and the body-fixed vectors scaled to their arrows (columns: L, F_A, F_B)
+        self._driven_a = LIFT + to_world(a)
+        self._driven_b = LIFT + to_world(b)
+        self._driven_omega_tip = LIFT + to_world(p.omega * dk.AXLE * self.omega_scale)
+        self._body_arrows = np.stack(
+            [
+                self._body_L * self.momentum_scale,
+                self._body_fa * self.force_scale,
+                self._body_fb * self.force_scale,
+            ],
+            axis=1,
+        )
+        self._vector_points = np.zeros((2, 2, 3), np.float32)  # reused by every frame
+        self._force_points = np.zeros((2, 2, 3), np.float32)
         self.body_labels[0].position = a + dk.bearing_force_a(p, 0.0) * self.force_scale
         self.body_labels[1].position = b + dk.bearing_force_b(p, 0.0) * self.force_scale
         self.body_labels[2].position = a + dk.angular_momentum(p, 0.0) * self.momentum_scale
@@ -242,16 +258,29 @@ class DiskExhibit(Exhibit):
 
     # ------------------------------------------------------------------ kinematics from dynamics
     def pose(self, sample: dynamics.Sample | None = None):
-        """``(rotation disk->space, position of A in space)`` of the current (or given) sample."""
-        smp = self.sample if sample is None else sample
-        p, st = self.params, smp.state[0]
+        """``(rotation disk->space, position of A in space)`` of the current state (or of the
+        given sample)."""
+        if sample is not None:
+            return self._pose_of(sample.state[0], sample.t)
+        sim, cached = self.sim, self._pose_cache
+        if (
+            cached is not None
+            and cached[0] is sim
+            and cached[1] == sim.t
+            and cached[2] is self.config
+        ):
+            return cached[3]  # a frame asks several times for the pose of one state
+        pose = self._pose_of(sim.state[0], sim.t)
+        self._pose_cache = (sim, sim.t, self.config, pose)
+        return pose
+
+    def _pose_of(self, st: np.ndarray, t: float):
         if self.config.mode == "driven":
             return dk.rotation_about_axle(st[0]), np.zeros(3)
         spin = tuple(float(x) for x in self.config.extra_spin)
         # follow_cm: the centre of mass stays where it was at release (its drift w0 x r_cm is
         # uniform), i.e. the pose at t = 0 with the current orientation.
-        rot, a = dk.released_pose(p, st, 0.0 if self.config.follow_cm else smp.t, spin)
-        return rot, a
+        return dk.released_pose(self.params, st, 0.0 if self.config.follow_cm else t, spin)
 
     def body_pose_world(self):
         """``(wxyz, position)`` of the body node relative to the exhibit origin."""
@@ -260,8 +289,7 @@ class DiskExhibit(Exhibit):
 
     def vectors_space(self):
         """Angular velocity and angular momentum (space frame) and the point they are drawn from."""
-        p, smp = self.params, self.sample
-        st = smp.state[0]
+        p, st = self.params, self.state
         rot, a = self.pose()
         if self.config.mode == "driven":
             return p.omega * dk.AXLE, rot @ self._body_L, a
@@ -273,7 +301,7 @@ class DiskExhibit(Exhibit):
     def _after_advance(self) -> None:
         if self.config.mode != "driven":
             return
-        p, t = self.params, self.sample.t
+        p, t = self.params, self.sim.t
         L = self.pose()[0] @ self._body_L
         if self._L_prev is not None and t > self._L_prev[0]:
             torque = (L - self._L_prev[1]) / (t - self._L_prev[0])  # dL/dt measured over a frame
@@ -290,26 +318,39 @@ class DiskExhibit(Exhibit):
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
-        p = self.params
+        if self.config.mode == "driven":
+            self._draw_driven()
+            return
         wxyz, pos = self.body_pose_world()
-        driven = self.config.mode == "driven"
         self.body.wxyz = wxyz
-        if not driven:
-            self.body.position = pos
+        self.body.position = pos
         omega, L, base = self.vectors_space()
         b0 = LIFT + to_world(base)
         tips = [b0 + to_world(omega) * self.omega_scale, b0 + to_world(L) * self.momentum_scale]
-        self.vectors.points = np.array([[b0, tips[0]], [b0, tips[1]]], np.float32)
-        if not driven:  # the free body: both vectors move with the tumble
-            for h, tip in zip(self.vector_labels, tips, strict=True):
-                h.position = tip
-        else:
-            rot = self.pose()[0]
-            a, b = dk.axle_points(p)
-            pa, pb = LIFT + to_world(a), LIFT + to_world(b)
-            fa = to_world(rot @ self._body_fa) * self.force_scale
-            fb = to_world(rot @ self._body_fb) * self.force_scale
-            self.forces.points = np.array([[pa, pa + fa], [pb, pb + fb]], np.float32)
+        pts = self._vector_points
+        pts[:, 0] = b0
+        pts[0, 1], pts[1, 1] = tips
+        self.vectors.points = pts
+        for h, tip in zip(self.vector_labels, tips, strict=True):  # both move with the tumble
+            h.position = tip
+
+    def _draw_driven(self) -> None:
+        """The uniform rotation about the axle: A stays put and omega is fixed; L and the
+        bearing forces are fixed in the body and turn with it (one matrix product)."""
+        rot, _ = self.pose()
+        turn = P @ rot  # disk frame -> world
+        self.body.wxyz = geo.quat_from_matrix(turn)
+        L, fa, fb = (turn @ self._body_arrows).T
+        a, b = self._driven_a, self._driven_b
+        pts = self._vector_points  # drawn from A, which is the body node's origin at LIFT
+        pts[:, 0] = LIFT
+        pts[0, 1] = self._driven_omega_tip
+        pts[1, 1] = LIFT + L
+        self.vectors.points = pts
+        f = self._force_points
+        f[0, 0], f[0, 1] = a, a + fa
+        f[1, 0], f[1, 1] = b, b + fb
+        self.forces.points = f
 
     @property
     def camera(self):

@@ -194,31 +194,40 @@ class HoopExhibit(Exhibit):
             self.cmp_label.text = f"{c.compare_method} (blue)"
         _, shapes = hp.normal_modes(p)
         self._basis = shapes.T
+        self._to_modal = np.linalg.inv(self._basis)  # angles -> modal coordinates, once per run
         self._crossings = [_ZeroCrossings(), _ZeroCrossings()]
         self._after_advance()
 
     # ------------------------------------------------------------------ geometry from dynamics
     def plane_to_local(self, xy) -> np.ndarray:
         xy = np.asarray(xy, float)
-        return self.pivot_local + np.stack(
-            [xy[..., 0], np.zeros_like(xy[..., 0]), xy[..., 1]], axis=-1
-        )
+        out = np.empty(xy.shape[:-1] + (3,))
+        out[..., 0] = xy[..., 0]
+        out[..., 1] = 0.0
+        out[..., 2] = xy[..., 1]
+        out += self.pivot_local
+        return out
 
     def poses(self, state) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(hoop wxyz, hoop centre, bead)`` relative to the exhibit origin for one state."""
-        centre, bead = hp.positions(self.params, state)
+        """``(hoop wxyz, hoop centre, bead)`` relative to the exhibit origin for one state (4,),
+        or for a stack of states (..., 4): shapes (..., 4), (..., 3), (..., 3)."""
+        st = np.asarray(state, float)
+        centre, bead = hp.positions(self.params, st)
         # an anticlockwise plane rotation (towards +x from straight down) is a turn about world -y
-        q = geo.quat_about_axis((0.0, -1.0, 0.0), float(state[0]))
+        half = 0.5 * st[..., 0]
+        q = np.zeros(st.shape[:-1] + (4,))
+        q[..., 0] = np.cos(half)
+        q[..., 2] = -np.sin(half)
         return q, self.plane_to_local(centre), self.plane_to_local(bead)
 
     def ghost_state(self) -> np.ndarray:
         return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t)
 
     def modal_coordinates(self, state) -> np.ndarray:
-        return np.linalg.solve(self._basis, np.asarray(state, float)[:2])
+        return self._to_modal @ np.asarray(state, float)[:2]
 
     def _after_advance(self) -> None:
-        q = self.modal_coordinates(self.sample.state[0])
+        q = self.modal_coordinates(self.state)
         for k in range(2):
             self._crossings[k].add(self.t, float(q[k]))
 
@@ -228,22 +237,23 @@ class HoopExhibit(Exhibit):
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
-        st = self.sample.state[0]
-        q, centre, bead = self.poses(st)
-        gq, gc, gb = self.poses(self.ghost_state())
-        c = self.compare_sample
+        # instance 0 the run, 1 the linear-theory ghost, 2 the comparison (or the run again)
+        c = self.compare_state
+        states = np.empty((3, 4))
+        states[0] = self.state
+        states[1] = self.ghost_state()
+        states[2] = c if c is not None else states[0]
+        q, centre, bead = self.poses(states)  # one vectorised call for the three instances
         if c is not None:
-            cq, cc, cb = self.poses(c.state[0])
-            cc, cb = cc + COMPARE_OFFSET, cb + COMPARE_OFFSET
-        else:
-            cq, cc, cb = q, centre, bead
-        self.rings.batched_wxyzs = np.array([q, gq, cq])
-        self.rings.batched_positions = np.array([centre, gc, cc])
-        self.beads.batched_positions = np.array([bead, gb, cb])
-        self.trail.push(bead)
+            centre[2] += COMPARE_OFFSET
+            bead[2] += COMPARE_OFFSET
+        self.rings.batched_wxyzs = q
+        self.rings.batched_positions = centre
+        self.beads.batched_positions = bead
+        self.trail.push(bead[0])
         self.trail.draw()
         if c is not None:
-            self.cmp_trail.push(cb)
+            self.cmp_trail.push(bead[2])
             self.cmp_trail.draw()
 
     @property
