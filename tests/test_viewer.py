@@ -305,6 +305,34 @@ def test_a_step_beyond_the_stability_limit_pauses_the_hoop_with_the_step_named(s
     assert not ex.paused and ex.t == 0.0
 
 
+def test_the_step_control_shows_the_stability_limit_theory_gives(app):
+    """Under each step control: RK4's limit 2 sqrt 2 / omega_2 on the hoop, Stormer-Verlet's
+    2 / omega_2 after a method change, the gyrofrequency's after a field change, and a warning
+    once dt is beyond the limit."""
+    w = app.w["hoop.limit"]
+    omega2 = hp.normal_modes(app.exhibits["hoop"].params)[0][1]
+    assert f"dt < {2 * math.sqrt(2) / omega2:.4g} s" in w.content
+    app.enqueue("hoop", {"op": "set", "method": "verlet", "dt": 0.01})
+    frames(app, 1)
+    assert f"dt < {2 / omega2:.4g} s" in w.content and "⚠" not in w.content
+    app.enqueue("hoop", {"op": "set", "dt": 0.6})  # beyond 2 / omega_2 = 0.521 s
+    frames(app, 1)
+    assert "⚠" in w.content and "beyond" in w.content
+
+    c = app.w["cyclotron.limit"]
+    assert "exact" in c.content  # the default: the exact flow, any step
+    app.enqueue("cyclotron", {"op": "set", "method": "rk4", "dt": 0.05})
+    app.enqueue("cyclotron", {"op": "set", "params": {"field": 4.0}})  # omega = qB/m = 4 rad/s
+    frames(app, 1)
+    assert f"dt < {2 * math.sqrt(2) / 4.0:.4g} s" in c.content
+    app.enqueue("cyclotron", {"op": "set", "method": "euler"})
+    frames(app, 1)
+    assert "Unstable at every dt" in c.content
+    app.enqueue("cyclotron", {"op": "set", "method": "boris"})
+    frames(app, 1)
+    assert "any dt" in c.content
+
+
 # --------------------------------------------------------------------------- physics shown
 def test_beam_charges_of_different_speeds_return_together_after_one_period(server):
     ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(beam=True, beam_size=8, vz=0.0))

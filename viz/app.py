@@ -497,8 +497,10 @@ class MechvizApp:
             method = gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
             about = gui.add_markdown(self._method_text(ex.config.method))
             dt = gui.add_number("Step dt [s]", initial_value=float(ex.config.dt), step=0.0001)
+            limit = gui.add_markdown(ex.stability_text())
             rtol = gui.add_number("Tolerance rtol", initial_value=float(ex.config.rtol), step=1e-12)
             self.w[f"{key}.method"], self.w[f"{key}.about"] = method, about
+            self.w[f"{key}.limit"] = limit
             self.w[f"{key}.dt"], self.w[f"{key}.rtol"] = dt, rtol
 
             def choose(v, field="method"):
@@ -705,6 +707,7 @@ class MechvizApp:
             if h is not None:
                 h.value = c.compare_method or "none"
             self.w[f"{key}.about"].content = self._method_text(c.method)
+            self.w[f"{key}.limit"].content = self.exhibits[key].stability_text()
             if key == "hoop":
                 self.w["hoop.th1"].value, self.w["hoop.th2"].value = (float(x) for x in c.angles)
         finally:

@@ -230,6 +230,36 @@ class Exhibit:
                 )
                 return
 
+    def stability_text(self) -> str:
+        """Where the running method's step stops being stable, for the step-size control
+        (markdown): the largest stable dt from :func:`dynamics.stability.stability_limit` for
+        the current parameters (the free body's at its current state), and whether the chosen
+        dt is inside it. Called when the method, step or parameters change, not per frame."""
+        from dynamics import stability
+
+        sim = self.sim
+        m = sim.method
+        if m.adaptive:
+            return f"<small>{m.name}: adaptive, the step follows rtol; no fixed limit</small>"
+        if m.backend == "exact":
+            return "<small>exact flow: any step</small>"
+        limit = stability.stability_limit(m.name, sim.system, self.state)
+        reason = stability.REASONS.get(m.name, "")
+        if limit is None:
+            return f"<small>Stable at any dt ({reason}).</small>"
+        if limit == 0.0:
+            return f"<small>⚠ Unstable at every dt: {reason}.</small>"
+        omega = stability.fastest_frequency(sim.system, self.state)
+        where = (
+            f"dt = {fmt(sim.dt)} s is {sim.dt / limit:.1%} of it"
+            if sim.dt <= limit
+            else f"⚠ dt = {fmt(sim.dt)} s is beyond it: expect the run to blow up"
+        )
+        return (
+            f"<small>**Stability limit dt < {fmt(limit)} s** (ω_max = {fmt(omega)} rad/s; "
+            f"{reason}); {where}.</small>"
+        )
+
     def _fail(self, message: str) -> None:
         self.paused = True
         self.failure = message

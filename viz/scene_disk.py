@@ -358,6 +358,14 @@ class DiskExhibit(Exhibit):
         return (tuple(o + (0.8, -5.0, 2.8)), tuple(o + (0.0, 0.0, 1.4)))
 
     # ------------------------------------------------------------------ readout
+    def stability_text(self) -> str:
+        if self.config.mode == "driven":
+            return (
+                "<small>Driven: the exact uniform rotation, no step. The method and dt apply "
+                "once the disk is released.</small>"
+            )
+        return super().stability_text()
+
     def readout(self) -> str:
         p, smp = self.params, self.sample
         moments, _ = dk.principal_axes(p)
