@@ -263,3 +263,37 @@ def test_uncompiled_source_gives_bit_identical_results():
     ]
     assert all(r.returncode == 0 for r in runs), [r.stderr for r in runs]
     assert runs[0].stdout == runs[1].stdout
+
+
+
+_EVERY_METHOD = """
+import dynamics
+from dynamics.disk import DiskParams
+systems = [dynamics.Cyclotron(), dynamics.Hoop(), dynamics.ReleasedDisk(DiskParams())]
+for system in systems:
+    for m in dynamics.methods_for(system.name):
+        if m.backend == "scipy":
+            continue
+        kw = {"rtol": 1e-6} if m.adaptive else ({} if m.backend == "exact" else {"dt": 1e-3})
+        dynamics.Simulation(system, m.name, reference=None, **kw).advance(2e-3)
+print("ok")
+"""
+
+
+def test_the_disk_cache_stops_growing_once_every_method_has_run(tmp_path):
+    """numba keys a cache entry of a kernel that takes a compiled function on that function's
+    dispatcher type, which is new in every process: with ``cache=True`` on such kernels each
+    process appended entries that no later process could hit, and a stale one could make saving
+    the index fail ("underlying object has vanished"). Those kernels are compiled per process
+    instead, so a second and third process on the same cache add nothing and still run."""
+    cache = tmp_path / "cache"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    sizes = []
+    for _ in range(3):
+        run = subprocess.run(
+            [sys.executable, "-c", _EVERY_METHOD], env=env, capture_output=True, text=True,
+            timeout=600,
+        )  # fmt: skip
+        assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr[-2000:]
+        sizes.append(sorted(str(f.relative_to(cache)) for f in cache.rglob("*.nbc")))
+    assert sizes[0] and sizes[1] == sizes[0] and sizes[2] == sizes[0]

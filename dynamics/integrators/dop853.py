@@ -36,7 +36,7 @@ def _rms(x):
     return math.sqrt(np.sum(x * x) / x.size)
 
 
-@njit(cache=True)
+@njit  # takes the right-hand side as an argument: not disk-cached (see kernels)
 def _initial_step(rhs, y0, f0, p, interval, rtol, atol, tmp, f1):
     """scipy's ``select_initial_step`` (one extra evaluation)."""
     d = y0.size

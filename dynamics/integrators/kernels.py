@@ -16,7 +16,10 @@ receive, so the step is called directly; every extra call layer that passes arra
 of ns per step here (reference counting), which is why the direct steps are the physics
 functions themselves.
 Functions that receive compiled functions as arguments are compiled once per process (about
-0.3-1 s each) rather than cached on disk.
+0.3-1 s each) and never cached on disk: numba keys such a cache entry on the argument's
+dispatcher type, which differs in every process, so ``cache=True`` only appended a new entry per
+process to an ever-growing index, and saving that index failed ("underlying object has
+vanished") once it held a type whose dispatcher was gone.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ YOSHIDA_W1 = 1.0 / (2.0 - _CBRT2)
 YOSHIDA_W0 = -_CBRT2 / (2.0 - _CBRT2)
 
 
-@njit(cache=True)
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
 def euler_step(rhs, y, p, h, work):
     """Explicit Euler, ``y += h f(y)``. First order; unstable on every undamped oscillation."""
     k = work[0]
@@ -53,7 +56,7 @@ def euler_step(rhs, y, p, h, work):
     return 1
 
 
-@njit(cache=True)
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
 def midpoint_step(rhs, y, p, h, work):
     """Implicit midpoint ``y1 = y + h f((y + y1)/2)`` by fixed-point iteration from Euler's guess.
 
@@ -85,7 +88,7 @@ def midpoint_step(rhs, y, p, h, work):
     return -1
 
 
-@njit(cache=True)
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
 def yoshida4_step(base, y, p, h, work):
     """Yoshida's fourth-order triple jump of a symmetric second-order ``base(y, p, h)`` step."""
     e1 = base(y, p, YOSHIDA_W1 * h)
@@ -116,7 +119,7 @@ def _report(status, e, k, i):
     status[2] = i
 
 
-@njit(cache=True)
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
 def run_direct(step, Y, p, h, n_steps, status):
     """Advance every row of ``Y`` (N, d) by ``n_steps`` direct steps of ``h``, in place.
 
@@ -145,7 +148,7 @@ def run_direct(step, Y, p, h, n_steps, status):
     return nfev
 
 
-@njit(cache=True)
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
 def run_composed(step, inner, Y, p, h, n_steps, status):
     """As :func:`run_direct` for a composed ``step(inner, y, p, h, work)``."""
     work = np.empty((3, Y.shape[1]))
