@@ -32,30 +32,9 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+from viz.chromium import CHROMIUM_ARGS, find_chromium
 
-_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/lib/chromium/chromium")
 REQUIRE_ENV = "MECHVIZ_REQUIRE_BROWSER"
-
-
-def find_chromium() -> str | None:
-    """Path of a usable Chromium executable (env ``MECHVIZ_CHROMIUM`` first), or ``None``."""
-    explicit = os.environ.get("MECHVIZ_CHROMIUM")
-    candidates = ((explicit,) if explicit else ()) + _CANDIDATES
-    for path in candidates:
-        if path and os.path.isfile(path) and os.access(path, os.X_OK):
-            return path
-    found = shutil.which("chromium")
-    return found
 
 
 def _playwright_available() -> bool:

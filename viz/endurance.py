@@ -53,20 +53,11 @@ from typing import Any
 
 import numpy as np
 
+from .chromium import CANDIDATES, CHROMIUM_ARGS, find_chromium
+
 DEFAULT_OUT = Path("docs/bench/endurance.json")
 TARGET_FPS = 59.0  # every window must reach this rate (the loop aims at 60)
 TARGET_RSS_SLOPE = 1.0  # MB/min, |linear trend| over the second half of the run
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/lib/chromium/chromium")
 _SIM_TIME = re.compile(r"t = ([0-9]+(?:\.[0-9]+)?) s\**\s*simulated")
 
 
@@ -75,22 +66,13 @@ class EnduranceUnavailable(RuntimeError):
 
 
 # --------------------------------------------------------------------------- browser
-def find_chromium() -> str | None:
-    """Path of a Chromium executable (env ``MECHVIZ_CHROMIUM`` first), or ``None``."""
-    explicit = os.environ.get("MECHVIZ_CHROMIUM")
-    for path in ((explicit,) if explicit else ()) + _CANDIDATES:
-        if path and os.path.isfile(path) and os.access(path, os.X_OK):
-            return path
-    return shutil.which("chromium")
-
-
 def check_browser() -> str:
     """Chromium's path; :class:`EnduranceUnavailable` with instructions if it cannot run."""
     exe = find_chromium()
     if exe is None:
         raise EnduranceUnavailable(
             "the endurance benchmark needs Chromium, and none was found (looked for "
-            f"$MECHVIZ_CHROMIUM, {', '.join(_CANDIDATES)} and chromium on PATH). Install "
+            f"$MECHVIZ_CHROMIUM, {', '.join(CANDIDATES)} and chromium on PATH). Install "
             "Debian's package (apt-get install chromium) or set MECHVIZ_CHROMIUM to its path; "
             "do not run `playwright install`."
         )
