@@ -213,6 +213,24 @@ def test_method_change_from_the_dropdown_switches_the_integrator_and_readout(app
     assert "Stormer-Verlet" in app.w["hoop.about"].content
 
 
+def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
+    w = app.w["hoop.rtol"]
+    assert w.value == "1e-9" and "1e-3" in w.options and "1e-13" in w.options
+    app.enqueue("app", {"op": "speed", "value": 10.0})  # 1/6 s per frame: several steps each
+    app.w["hoop.method"].value = "dop853"
+    w.value = "1e-6"  # fires the callback as a browser would
+    frames(app, 30)
+    ex = app.exhibits["hoop"]
+    assert ex.config.rtol == 1e-6 and ex.sim.rtol == 1e-6
+    loose_steps = ex.sim.steps
+    w.value = "1e-12"
+    frames(app, 30)
+    assert ex.sim.rtol == 1e-12 and ex.sim.steps > loose_steps  # tighter: more steps, same time
+    app.enqueue("hoop", {"op": "set", "rtol": 3e-7})  # a value off the decades (a demo's)
+    frames(app, 1)
+    assert w.value == "3e-7" and "3e-7" in w.options
+
+
 def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
     frames(app, 20)
     app.enqueue("app", "pause")

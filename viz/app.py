@@ -80,6 +80,20 @@ _warm_lock = threading.Lock()
 _warm: set[tuple[str, str]] = set()
 
 
+# --------------------------------------------------------------------------- GUI helpers
+def _rtol_label(rtol: float) -> str:
+    """``1e-09`` -> ``"1e-9"``; other values with three significant digits."""
+    return f"{rtol:.3g}".replace("e-0", "e-")
+
+
+def _rtol_options(current: float) -> tuple[str, ...]:
+    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-13, and the current value
+    if it is not one of them (set by a demo or the command line)."""
+    decades = tuple(f"1e-{k}" for k in range(3, 14))
+    label = _rtol_label(current)
+    return decades if label in decades else (*decades, label)
+
+
 # --------------------------------------------------------------------------- numba warm-up
 def warm_method(system_name: str, method: str) -> float:
     """Compile (once per process) what ``method`` needs on ``system_name``; returns seconds spent."""
@@ -227,6 +241,12 @@ class MechvizApp:
         scene.set_up_direction("+z")
         if not environment_map:
             scene.configure_environment_map(None)
+            # the map is also the scene's ambient light: without it, faces turned away from the
+            # default directional lights render black (the disk, seen edge-on to them)
+            scene.add_light_hemisphere(
+                "/lights/sky", sky_color=(255, 255, 255), ground_color=(110, 110, 120),
+                intensity=1.2,
+            )  # fmt: skip
         scene.add_grid(
             "/floor",
             width=20.0,
@@ -498,7 +518,13 @@ class MechvizApp:
             about = gui.add_markdown(self._method_text(ex.config.method))
             dt = gui.add_number("Step dt [s]", initial_value=float(ex.config.dt), step=0.0001)
             limit = gui.add_markdown(ex.stability_text())
-            rtol = gui.add_number("Tolerance rtol", initial_value=float(ex.config.rtol), step=1e-12)
+            # a dropdown of decades: a number input shows 1e-9 as 0.0000000
+            rtol = gui.add_dropdown(
+                "Tolerance rtol",
+                options=_rtol_options(ex.config.rtol),
+                initial_value=_rtol_label(ex.config.rtol),
+                hint="Relative (and absolute) tolerance of the adaptive methods",
+            )
             self.w[f"{key}.method"], self.w[f"{key}.about"] = method, about
             self.w[f"{key}.limit"] = limit
             self.w[f"{key}.dt"], self.w[f"{key}.rtol"] = dt, rtol
@@ -511,7 +537,7 @@ class MechvizApp:
 
             self._on(method, choose)
             self._on(dt, lambda v: self.enqueue(key, {"op": "set", "dt": v}))
-            self._on(rtol, lambda v: self.enqueue(key, {"op": "set", "rtol": v}))
+            self._on(rtol, lambda v: self.enqueue(key, {"op": "set", "rtol": float(v)}))
             if compare:
                 cmp_ = gui.add_dropdown(
                     "Compare with",
@@ -690,10 +716,13 @@ class MechvizApp:
                 h = self.w.get(f"{key}.params.{name}")
                 if h is not None and value is not None:
                     h.value = float(value)
+            h = self.w.get(f"{key}.rtol")
+            if h is not None:
+                h.options = _rtol_options(c.rtol)
+                h.value = _rtol_label(c.rtol)
             for field in (
                 "method",
                 "dt",
-                "rtol",
                 "beam",
                 "beam_size",
                 "mode",
