@@ -226,8 +226,7 @@ class MechvizApp:
         self.commands: queue.SimpleQueue = queue.SimpleQueue()
         self.messages: list[tuple[str, str]] = []  # every notification sent (title, body)
         self.frame_hooks: list[Callable[[MechvizApp], None]] = []
-        self.frame_ms: deque = deque(maxlen=600)
-        self.frame_log = FrameLog()  # start time and cost of the last frames (the bench reads it)
+        self.frame_log = FrameLog()  # start time and cost of the last frames (status line, bench)
         self._rtf_window: deque = deque(maxlen=240)
         self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
@@ -410,7 +409,6 @@ class MechvizApp:
         now = time.perf_counter()
         self._rtf_window.append((now, self.sim_time))
         cost_ms = 1e3 * (now - t0)
-        self.frame_ms.append(cost_ms)
         self.frame_log.add(t0, cost_ms, 1e3 * (time.thread_time() - c0))
 
     def _draw(self) -> None:
@@ -757,7 +755,7 @@ class MechvizApp:
         k = self.frame % self.GUI_CYCLE
         if force or k in self.STATUS_FRAMES:
             if force or not self._cost_text or self.frame % 60 == 0:  # median: once a second
-                ms = np.asarray(self.frame_ms)
+                _, _, ms, _ = self.frame_log.since(self.frame_log.count - 600)  # the last 10 s
                 self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
             self.w["status"].content = (
