@@ -265,7 +265,6 @@ def test_uncompiled_source_gives_bit_identical_results():
     assert runs[0].stdout == runs[1].stdout
 
 
-
 _EVERY_METHOD = """
 import dynamics
 from dynamics.disk import DiskParams

@@ -38,7 +38,6 @@ from __future__ import annotations
 import contextlib
 import datetime
 import gc
-import json
 import math
 import os
 import platform
@@ -52,6 +51,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from dynamics.files import write_json_atomically
 
 from .chromium import CANDIDATES, CHROMIUM_ARGS, find_chromium
 
@@ -263,21 +264,6 @@ def rss_trend(t_s: np.ndarray, rss_mb: np.ndarray) -> float | None:
 
 def _r(x: float, digits: int = 3) -> float:
     return round(float(x), digits)
-
-
-def _write_json(path: Path, data: dict) -> None:
-    """Write ``data`` to ``path`` atomically (a temporary file in the same folder, then rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-            f.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
 
 
 # --------------------------------------------------------------------------- the benchmark
@@ -518,7 +504,7 @@ def run_endurance(
         started=t_begin,
     )
     if out is not None:
-        _write_json(Path(out), result)
+        write_json_atomically(out, result, indent=1)
         result["written_to"] = str(out)
     return result
 

@@ -58,6 +58,7 @@ import numpy as np
 
 import dynamics
 from dynamics import cyclotron, disk, hoop
+from dynamics.files import write_files_atomically
 
 DEMO_DIR = Path(__file__).resolve().parents[1] / "assets" / "demos"
 EXHIBITS = ("cyclotron", "disk", "hoop")
@@ -931,38 +932,7 @@ def html_from_recording(data: bytes, *, dark_mode: bool = False) -> str:
     return page[:head_end] + inject + page[head_end:]
 
 
-# =========================================================================== atomic writing
-def write_files_atomically(out_dir: Path, files: dict[str, bytes]) -> None:
-    """Write every ``name -> bytes`` into ``out_dir`` so that readers see either the old files or
-    the new ones: each goes to a temporary name in the same folder and is fsynced, then all are
-    renamed into place in order (put the manifest last). On any error before the renames, the
-    temporary files are removed and the folder is as it was."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    temps: list[tuple[Path, Path]] = []
-    try:
-        for name, content in files.items():
-            final = out_dir / name
-            tmp = out_dir / f".{name}.{os.getpid()}.partial"
-            temps.append((tmp, final))
-            with open(tmp, "wb") as fh:
-                fh.write(content)
-                fh.flush()
-                os.fsync(fh.fileno())
-    except BaseException:
-        for tmp, _ in temps:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-        raise
-    for tmp, final in temps:
-        os.replace(tmp, final)
-    with contextlib.suppress(OSError):  # make the renames durable (POSIX)
-        fd = os.open(out_dir, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
+# =========================================================================== what a folder holds
 def existing_recording(out_dir: Path, name: str) -> str:
     """What ``out_dir`` holds for demo ``name``, for failure messages."""
     present = [s for s in SUFFIXES if (out_dir / f"{name}{s}").exists()]

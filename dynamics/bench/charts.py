@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
+from ..files import write_files_atomically
 from .sweeps import TARGETS
 
 OURS_STYLE = {"linestyle": "-", "marker": "o"}
@@ -25,6 +27,14 @@ def _plt():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _save(plt, fig, path: Path) -> None:
+    """Render ``fig`` to PNG and write it atomically (no half-written chart if interrupted)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    write_files_atomically(path.parent, {path.name: buf.getvalue()})
 
 
 def work_precision(result: dict, out: Path) -> list[Path]:
@@ -55,8 +65,7 @@ def work_precision(result: dict, out: Path) -> list[Path]:
                      f"{result['date']}, {result['mode']} run")  # fmt: skip
         fig.tight_layout()
         path = out / f"work_precision_{key}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        _save(plt, fig, path)
         files.append(path)
     return files
 
@@ -78,8 +87,7 @@ def long_run(result: dict, out: Path) -> Path:
                  "methods stay bounded")  # fmt: skip
     fig.tight_layout()
     path = out / "energy_long_run.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(plt, fig, path)
     return path
 
 
@@ -112,8 +120,7 @@ def stability(result: dict, out: Path) -> Path:
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     path = out / "stability.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(plt, fig, path)
     return path
 
 
@@ -134,8 +141,7 @@ def per_step(result: dict, out: Path) -> Path:
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
     path = out / "per_step.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(plt, fig, path)
     return path
 
 

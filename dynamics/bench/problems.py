@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..disk import DiskParams
+from ..files import write_json_atomically
 from ..simulation import Simulation
 from ..systems import Cyclotron, Hoop, ReleasedDisk
 
@@ -165,8 +166,7 @@ def compute_references(path: Path = REFERENCE_PATH, cross_check: bool = True) ->
                 "seconds": round(secs_r, 2),
             }
         out["problems"][key] = entry
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(out, indent=2) + "\n")
+    write_json_atomically(path, out, indent=2)
     return out
 
 

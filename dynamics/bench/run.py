@@ -195,10 +195,13 @@ def run_bench(
         from . import charts as _charts
 
         result["charts"] = _charts.all_charts(result, out)
-    (out / "results.json").write_text(json.dumps(result, indent=1, default=_json_default) + "\n")
+    from ..files import write_files_atomically
     from .report import markdown
 
-    (out / "tables.md").write_text(markdown(result))
+    results = json.dumps(result, indent=1, default=_json_default) + "\n"
+    write_files_atomically(
+        out, {"tables.md": markdown(result).encode(), "results.json": results.encode()}
+    )
     return result
 
 
