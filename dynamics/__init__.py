@@ -2,7 +2,9 @@
 
 Modules: :mod:`.cyclotron`, :mod:`.disk`, :mod:`.hoop` (one system each: parameters, equations of
 motion, invariants, exact and analytic results); :mod:`.integrators` (methods as data, compiled
-kernels, scipy behind the same interface); :mod:`.systems` and :mod:`.simulation` (the driver).
+kernels, scipy behind the same interface); :mod:`.systems` (the registry :data:`SYSTEMS`);
+:mod:`.simulation` (the driver); :mod:`.measure` (estimators of sampled motion, shared by the
+viewer and the recorder).
 This package never imports viser.
 """
 
@@ -11,13 +13,15 @@ from . import (
     cyclotron,
     disk,
     hoop,
+    measure,
 )
 from .integrators import METHODS, IntegrationError, Method, get_method, methods_for
 from .simulation import Sample, Simulation, Trajectory
-from .systems import Cyclotron, DrivenDisk, Hoop, ReleasedDisk
+from .systems import SYSTEMS, Cyclotron, DrivenDisk, Hoop, ReleasedDisk
 
 __all__ = [
     "METHODS",
+    "SYSTEMS",
     "Cyclotron",
     "DrivenDisk",
     "Hoop",
@@ -31,5 +35,6 @@ __all__ = [
     "disk",
     "get_method",
     "hoop",
+    "measure",
     "methods_for",
 ]

@@ -154,3 +154,6 @@ class DrivenDisk:
 
 
 System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk
+
+# Every system by the name the methods and the driver know it by (``Method.systems``).
+SYSTEMS: dict[str, type] = {s.name: s for s in (Cyclotron, Hoop, ReleasedDisk, DrivenDisk)}

@@ -17,7 +17,7 @@ import browser
 import numpy as np
 import pytest
 
-from viz import recording as rec
+from viz import record as rec
 
 pytestmark = pytest.mark.browser
 

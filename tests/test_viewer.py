@@ -27,9 +27,8 @@ viser = pytest.importorskip("viser")
 
 from viz import geometry as geo  # noqa: E402
 from viz.app import MechvizApp, measure_frame_cost, warm_up  # noqa: E402
-from viz.scene_cyclotron import CyclotronConfig, CyclotronExhibit  # noqa: E402
-from viz.scene_disk import LIFT, DiskExhibit, P  # noqa: E402
-from viz.scene_hoop import HoopConfig, HoopExhibit  # noqa: E402
+from viz.scene import CyclotronConfig, CyclotronExhibit, DiskExhibit, HoopConfig, HoopExhibit  # noqa: E402  # noqa: E402
+from viz.scene.disk import LIFT, P  # noqa: E402
 
 FRAME = 1.0 / 60.0
 
@@ -111,7 +110,7 @@ def test_charge_is_drawn_on_the_exact_helix_at_the_simulated_time(app):
     frames(app, 90)
     ex = app.exhibits["cyclotron"]
     p = ex.params
-    exact = cy.exact_solution(p, ex.initial_state(), ex.t)
+    exact = cy.exact_solution(p, ex.config.initial_state(), ex.t)
     drawn = ex.bodies.batched_positions[0]  # viser stores batched positions as float32
     np.testing.assert_allclose(drawn[:2], exact[:2], atol=1e-6)
     assert drawn[2] == pytest.approx(exact[2] % ex.config.height, abs=1e-6)
@@ -136,8 +135,8 @@ def test_driven_disk_pose_and_bearing_forces_equal_dynamics(app):
         np.testing.assert_allclose(
             arrows[k, 1] - arrows[k, 0], P @ force * ex.force_scale, atol=1e-5
         )
-    # the measured amplitude (dL/dt over a frame) agrees with m R omega^2 / 2
-    assert ex._measured_force == pytest.approx(dk.axle_force_amplitude(p), rel=1e-3)
+    # the measured amplitude (dL/dt of the sampled motion) agrees with m R omega^2 / 2
+    assert ex.measured()["bearing_force"] == pytest.approx(dk.axle_force_amplitude(p), rel=1e-3)
 
 
 def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
@@ -310,7 +309,7 @@ def test_diverging_euler_pauses_only_the_charge_and_reset_recovers(app):
 
 
 def test_a_step_beyond_the_stability_limit_pauses_the_hoop_with_the_step_named(server):
-    ex = HoopExhibit(server, HoopConfig.from_defaults(method="rk4", dt=0.9, amplitude=0.3))
+    ex = HoopExhibit(server, HoopConfig(method="rk4", dt=0.9, amplitude=0.3))
     for _ in range(400):
         ex.advance(0.5)
         if ex.paused:
@@ -353,7 +352,7 @@ def test_the_step_control_shows_the_stability_limit_theory_gives(app):
 
 # --------------------------------------------------------------------------- physics shown
 def test_beam_charges_of_different_speeds_return_together_after_one_period(server):
-    ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(beam=True, beam_size=8, vz=0.0))
+    ex = CyclotronExhibit(server, CyclotronConfig(beam=True, beam_size=8, vz=0.0))
     start = ex.beam.state[:, :2].copy()
     speeds = np.hypot(ex.beam.state[:, 3], ex.beam.state[:, 4])
     assert speeds.max() / speeds.min() > 5
@@ -368,17 +367,17 @@ def test_beam_charges_of_different_speeds_return_together_after_one_period(serve
 
 def test_hoop_mode_frequencies_are_measured_from_the_motion(server):
     for mode, k in (("mode 1", 0), ("mode 2", 1)):
-        ex = HoopExhibit(server, HoopConfig.from_defaults(mode=mode, amplitude=0.02))
+        ex = HoopExhibit(server, HoopConfig(mode=mode, amplitude=0.02))
         for _ in range(900):  # 15 s at 60 frames per second
             ex.advance(FRAME)
         freqs, _ = hp.normal_modes(ex.params)
-        measured = ex.measured_mode_frequencies()
+        measured = ex.measured()["mode_frequencies"]
         assert measured[k] == pytest.approx(freqs[k], rel=5e-3)
         assert measured[1 - k] is None  # the other mode is not excited
 
 
 def test_comparison_run_is_drawn_beside_with_its_own_method(server):
-    ex = HoopExhibit(server, HoopConfig.from_defaults(compare_method="verlet"))
+    ex = HoopExhibit(server, HoopConfig(compare_method="verlet"))
     for _ in range(30):
         ex.advance(FRAME)
     ex.draw()
@@ -388,7 +387,7 @@ def test_comparison_run_is_drawn_beside_with_its_own_method(server):
 
 
 def test_trails_stay_capped_over_a_long_run(server):
-    ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(trail_cap=120))
+    ex = CyclotronExhibit(server, CyclotronConfig(trail_cap=120))
     for _ in range(1000):
         ex.advance(0.05)
         ex.draw()

@@ -7,31 +7,19 @@ and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit
 
 API for other tools (the recorder, the bench)
 ---------------------------------------------
-Exhibits work without the GUI (:mod:`viz.exhibit` describes the common interface)::
+Exhibits work without the app (:mod:`viz.scene` holds them and describes the contract)::
 
-    from viz.scene_cyclotron import CyclotronExhibit, CyclotronConfig
-    from viz.scene_disk import DiskExhibit, DiskConfig
-    from viz.scene_hoop import HoopExhibit, HoopConfig
+    from viz.scene import CyclotronConfig, CyclotronExhibit
 
-    ex = CyclotronExhibit(server, CyclotronConfig.from_defaults(method="euler", dt=0.05,
-                          compare_method="boris"), origin=(0.0, 0.0, 0.0))
+    ex = CyclotronExhibit(server, CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
     ex.advance(1 / 30)                 # simulated seconds; a blow-up pauses it (ex.paused, ex.failure)
     with server.atomic():
         ex.draw()                      # handle assignments only
-    ex.apply({"op": "kick", "dv": 0.5})          # cyclotron: radial kick [m/s]
+    ex.apply({"op": "kick", "dv": 0.5})          # cyclotron: radial kick [m/s], the run goes on
     ex.apply({"op": "set", "method": "rk4", "dt": 0.02})   # any config field; restarts the run
     ex.apply({"op": "set", "params": {"field": 2.0}})      # ValueError naming the field if invalid
-    ex.apply({"op": "set", "mode": "released"})  # disk: "driven" / "released"
-    ex.apply({"op": "set", "mode": "mode 2", "amplitude": 1.2})   # hoop: "mode 1"/"mode 2"/"mix"/"custom"
     ex.apply("reset")
-    ex.sample        # dynamics.Sample of the main run (t, state (N, d), energy_error, error, ...)
-    ex.compare_sample, ex.t, ex.readout(), ex.chart_data(), ex.camera  # ((position), (look_at))
-
-Config fields: ``CyclotronConfig`` (method, dt, rtol, params{charge, mass, field}, speed, vz, beam,
-beam_size, beam_speeds, kick, compare_method, trail_cap, height), ``DiskConfig`` (mode, method,
-dt, rtol, params{disk_mass, radius, bead_mass, omega}, extra_spin, follow_cm), ``HoopConfig``
-(method, dt, rtol, params{hoop_mass, bead_mass, radius, gravity}, mode, amplitude, angles,
-compare_method, trail_cap). Defaults come from :data:`viz.defaults.DEFAULTS`.
+    ex.sample, ex.measured(), ex.readout(), ex.chart_data(), ex.camera
 
 The whole app, headless and without its loop thread::
 
@@ -62,65 +50,19 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-
-from .defaults import DEFAULTS
-from .exhibit import LOG_FLOOR, Exhibit
-from .scene_cyclotron import CyclotronConfig, CyclotronExhibit
-from .scene_disk import DiskConfig, DiskExhibit
-from .scene_hoop import MODES as HOOP_MODES
-from .scene_hoop import HoopConfig, HoopExhibit
+from . import warm
+from .live_record import add_record_toggle
+from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
+from .scene.panel import Panel
 
 ORIGINS = {"cyclotron": (-5.5, 0.0, 0.0), "disk": (0.0, 0.0, 0.0), "hoop": (5.5, 0.0, 0.0)}
 OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
-SYSTEM_OF = {"cyclotron": "cyclotron", "disk": "free-body", "hoop": "hoop"}
-_warm_lock = threading.Lock()
-_warm: set[tuple[str, str]] = set()
-
-
-# --------------------------------------------------------------------------- GUI helpers
-def _rtol_label(rtol: float) -> str:
-    """``1e-09`` -> ``"1e-9"``; other values with three significant digits."""
-    return f"{rtol:.3g}".replace("e-0", "e-")
-
-
-def _rtol_options(current: float) -> tuple[str, ...]:
-    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-13, and the current value
-    if it is not one of them (set by a demo or the command line)."""
-    decades = tuple(f"1e-{k}" for k in range(3, 14))
-    label = _rtol_label(current)
-    return decades if label in decades else (*decades, label)
+FPS = 60.0  # display rate of the simulation loop
 
 
 # --------------------------------------------------------------------------- numba warm-up
-def warm_method(system_name: str, method: str) -> float:
-    """Compile (once per process) what ``method`` needs on ``system_name``; returns seconds spent."""
-    key = (system_name, method)
-    if key in _warm:
-        return 0.0
-    t0 = time.perf_counter()
-    with _warm_lock:
-        if key in _warm:
-            return 0.0
-        system = {
-            "cyclotron": dynamics.Cyclotron(),
-            "hoop": dynamics.Hoop(),
-            "free-body": dynamics.ReleasedDisk(),
-        }[system_name]
-        m = dynamics.get_method(method)
-        if m.backend != "scipy":
-            kw: dict[str, Any] = {"rtol": 1e-6} if m.adaptive else {}
-            if not m.adaptive and m.backend != "exact":
-                kw["dt"] = 1e-3
-            s0 = system.default_state()
-            for state in (s0, np.tile(s0, (2, 1))):  # single and batched calls
-                dynamics.Simulation(system, method, state=state, reference=None, **kw).advance(2e-3)
-        _warm.add(key)
-    return time.perf_counter() - t0
-
-
 def warm_up(
     which: str = "defaults",
     configs: Mapping[str, Any] | None = None,
@@ -129,31 +71,16 @@ def warm_up(
     """Compile the kernels the exhibits start with (``"defaults"``) or every method (``"all"``).
 
     ``should_stop`` is polled between methods (Ctrl-C during start-up)."""
-    t0 = time.perf_counter()
-    needed: list[tuple[str, str]] = []
     if which == "all":
-        for key, system_name in SYSTEM_OF.items():
-            needed += [
-                (system_name, m.name)
-                for m in dynamics.methods_for(system_name)
-                if m.backend != "scipy"
-            ]
-            del key
-    else:
-        cfg = configs or {}
-        cyc = cfg.get("cyclotron") or CyclotronConfig.from_defaults()
-        disk = cfg.get("disk") or DiskConfig.from_defaults()
-        hoop = cfg.get("hoop") or HoopConfig.from_defaults()
-        needed += [("cyclotron", cyc.method), ("free-body", disk.method), ("hoop", hoop.method)]
-        needed += [("hoop", "dop853"), ("free-body", "dop853")]  # their error references
-        for system_name, m in (("cyclotron", cyc.compare_method), ("hoop", hoop.compare_method)):
-            if m:
-                needed.append((system_name, m))
-    for system_name, method in needed:
-        if should_stop is not None and should_stop():
-            break
-        warm_method(system_name, method)
-    return time.perf_counter() - t0
+        return warm.warm_all(warm.every_method(), should_stop)
+    cfg = configs or {}
+    needed: list[tuple[str, str]] = [("hoop", "dop853"), ("free-body", "dop853")]  # references
+    for key, cls in EXHIBITS.items():
+        c = cfg.get(key) or cls.Config()
+        needed.append((c.system_name, c.method))
+        if getattr(c, "compare_method", None):
+            needed.append((c.system_name, c.compare_method))
+    return warm.warm_all(needed, should_stop)
 
 
 # --------------------------------------------------------------------------- frame log
@@ -217,9 +144,9 @@ class MechvizApp:
                 server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server = server
         self.host = host
-        self.fps = float(fps or DEFAULTS["app"]["fps"])
+        self.fps = float(fps or FPS)
         self.frame_dt = 1.0 / self.fps
-        self.speed = float(DEFAULTS["app"]["speed"])
+        self.speed = 1.0  # simulated seconds per real second
         self.playing = True
         self.sim_time = 0.0  # simulated seconds the app has advanced (all exhibits together)
         self.frame = 0
@@ -260,23 +187,18 @@ class MechvizApp:
         history_len = round(CHART_SECONDS * self.fps / self._measure_every)
         self.exhibits: dict[str, Exhibit] = {
             key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
-            for key, cls in (
-                ("cyclotron", CyclotronExhibit),
-                ("disk", DiskExhibit),
-                ("hoop", HoopExhibit),
-            )
+            for key, cls in EXHIBITS.items()
         }
+        self.panels: dict[str, Panel] = {}
         server.initial_camera.position = OVERVIEW[0]
         server.initial_camera.look_at = OVERVIEW[1]
         with server.atomic():
             self._draw()
         self.gui = None
-        self.recorder = None  # the Record toggle's viz.recording.LiveRecorder (with the GUI)
+        self.recorder = None  # the Record toggle's viz.live_record.LiveRecorder (with the GUI)
         if gui:
             self._build_gui()
             self._update_gui(force=True)
-            from .recording import add_record_toggle
-
             self.recorder = add_record_toggle(self)
         if start_loop:
             self.start()
@@ -484,12 +406,10 @@ class MechvizApp:
             self.enqueue("app", {"op": "camera", "view": w["view"].value, "client": event.client})
 
         tabs = gui.add_tab_group()
-        with tabs.add_tab("Cyclotron", icon=viser.Icon.ATOM):
-            self._gui_cyclotron()
-        with tabs.add_tab("Disk", icon=viser.Icon.DISC):
-            self._gui_disk()
-        with tabs.add_tab("Hoop", icon=viser.Icon.CIRCLE):
-            self._gui_hoop()
+        for key, ex in self.exhibits.items():
+            with tabs.add_tab(ex.title.split()[0], icon=getattr(viser.Icon, ex.icon)):
+                panel = self.panels[key] = Panel(self, ex)
+                ex.build_panel(panel)
 
     def _on(self, widget, fn: Callable[[Any], None]) -> None:
         """on_update that ignores the loop's own widget syncs and passes the new value."""
@@ -499,244 +419,18 @@ class MechvizApp:
             if not self._syncing:
                 fn(widget.value)
 
-    def _param_inputs(self, key: str, labels: dict[str, str], step: float = 0.01) -> None:
-        ex = self.exhibits[key]
-        with self.gui.add_folder("Physical parameters"):
-            for name, label in labels.items():
-                value = ex.config.params[name]
-                h = self.gui.add_number(label, initial_value=float(value), step=step)
-                self.w[f"{key}.params.{name}"] = h
-                self._on(h, lambda v, n=name: self.enqueue(key, {"op": "set", "params": {n: v}}))
-
-    def _integrator_inputs(self, key: str, system_name: str, *, compare: bool) -> None:
-        gui, ex = self.gui, self.exhibits[key]
-        names = [m.name for m in dynamics.methods_for(system_name)]
-        with gui.add_folder("Integrator"):
-            method = gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
-            about = gui.add_markdown(self._method_text(ex.config.method))
-            dt = gui.add_number("Step dt [s]", initial_value=float(ex.config.dt), step=0.0001)
-            limit = gui.add_markdown(ex.stability_text())
-            # a dropdown of decades: a number input shows 1e-9 as 0.0000000
-            rtol = gui.add_dropdown(
-                "Tolerance rtol",
-                options=_rtol_options(ex.config.rtol),
-                initial_value=_rtol_label(ex.config.rtol),
-                hint="Relative (and absolute) tolerance of the adaptive methods",
-            )
-            self.w[f"{key}.method"], self.w[f"{key}.about"] = method, about
-            self.w[f"{key}.limit"] = limit
-            self.w[f"{key}.dt"], self.w[f"{key}.rtol"] = dt, rtol
-
-            def choose(v, field="method"):
-                # compile the method's kernels here, in the callback's thread, not in a frame
-                if v in names:
-                    warm_method(system_name, v)
-                self.enqueue(key, {"op": "set", field: v})
-
-            self._on(method, choose)
-            self._on(dt, lambda v: self.enqueue(key, {"op": "set", "dt": v}))
-            self._on(rtol, lambda v: self.enqueue(key, {"op": "set", "rtol": float(v)}))
-            if compare:
-                cmp_ = gui.add_dropdown(
-                    "Compare with",
-                    options=["none", *names],
-                    initial_value=ex.config.compare_method or "none",
-                )
-                self.w[f"{key}.compare_method"] = cmp_
-
-                def choose_cmp(v):
-                    if v != "none":
-                        warm_method(system_name, v)
-                    self.enqueue(key, {"op": "set", "compare_method": None if v == "none" else v})
-
-                self._on(cmp_, choose_cmp)
-            reset = gui.add_button(f"Reset {ex.title.lower()}", icon=self._viser.Icon.REFRESH)
-            reset.on_click(lambda _: self.enqueue(key, "reset"))
-
-    @staticmethod
-    def _method_text(name: str) -> str:
-        m = dynamics.get_method(name)
-        text = m.describe()
-        if m.stability:
-            text += f". Stability: {m.stability}"
-        return f"<small>{text}</small>"
-
-    def _chart(self, key: str, compare: bool) -> None:
-        viser = self._viser
-        series = [
-            viser.uplot.Series(label="t [s]"),
-            viser.uplot.Series(label="log10 |ΔE/E₀|", stroke="#d03030", width=1.5),
-            viser.uplot.Series(label="log10 error", stroke="#3060d0", width=1.5),
-        ]
-        if compare:
-            series += [
-                viser.uplot.Series(
-                    label="compare log10 |ΔE/E₀|", stroke="#e08080", width=1.0, dash=[4, 3]
-                ),
-                viser.uplot.Series(
-                    label="compare log10 error", stroke="#80a0e0", width=1.0, dash=[4, 3]
-                ),
-            ]
-        n = len(series)
-        self.w[f"{key}.chart"] = self.gui.add_uplot(
-            data=tuple(np.zeros(2) for _ in range(n)),
-            series=tuple(series),
-            scales={
-                "x": viser.uplot.Scale(time=False),
-                "y": viser.uplot.Scale(auto=False, range=(LOG_FLOOR, 2.0)),
-            },
-            aspect=1.6,
-        )
-
-    def _gui_cyclotron(self) -> None:
-        gui, key = self.gui, "cyclotron"
-        self.w[f"{key}.readout"] = gui.add_markdown("")
-        self._chart(key, compare=True)
-        self._param_inputs(
-            key, {"charge": "Charge q [C]", "mass": "Mass m [kg]", "field": "Field B [T]"}
-        )
-        self._integrator_inputs(key, "cyclotron", compare=True)
-        ex = self.exhibits[key]
-        with gui.add_folder("Kick and beam"):
-            strength = gui.add_slider(
-                "Kick dv [m/s]", min=-1.0, max=1.0, step=0.05, initial_value=ex.config.kick
-            )
-            kick = gui.add_button(
-                "Kick", hint="Radial velocity kick: the predicted circle moves at once"
-            )
-            beam = gui.add_checkbox(
-                "Beam", initial_value=ex.config.beam, hint="Many charges, a spread of speeds"
-            )
-            size = gui.add_slider(
-                "Beam size", min=2, max=200, step=1, initial_value=ex.config.beam_size
-            )
-        self.w.update({f"{key}.kick": strength, f"{key}.beam": beam, f"{key}.beam_size": size})
-        kick.on_click(lambda _: self.enqueue(key, {"op": "kick", "dv": float(strength.value)}))
-        self._on(beam, lambda v: self.enqueue(key, {"op": "set", "beam": bool(v)}))
-        self._on(size, lambda v: self.enqueue(key, {"op": "set", "beam_size": int(v)}))
-
-    def _gui_disk(self) -> None:
-        gui, key = self.gui, "disk"
-        ex = self.exhibits[key]
-        self.w[f"{key}.readout"] = gui.add_markdown("")
-        self._chart(key, compare=False)
-        with gui.add_folder("Motion"):
-            mode = gui.add_dropdown(
-                "Motion", options=("driven", "released"), initial_value=ex.config.mode
-            )
-            spin = gui.add_slider(
-                "Extra spin at release [rad/s]",
-                min=0.0,
-                max=0.5,
-                step=0.01,
-                initial_value=float(ex.config.extra_spin[2]),
-                hint="Spin about the disk normal added at release: seeds the tumble",
-            )
-            follow = gui.add_checkbox("Follow centre of mass", initial_value=ex.config.follow_cm)
-        self.w.update({f"{key}.mode": mode, f"{key}.spin": spin, f"{key}.follow_cm": follow})
-        self._on(mode, lambda v: self.enqueue(key, {"op": "set", "mode": v}))
-        self._on(
-            spin, lambda v: self.enqueue(key, {"op": "set", "extra_spin": (0.0, 0.0, float(v))})
-        )
-        self._on(follow, lambda v: self.enqueue(key, {"op": "set", "follow_cm": bool(v)}))
-        self._param_inputs(
-            key,
-            {
-                "disk_mass": "Disk mass M [kg]",
-                "radius": "Radius R [m]",
-                "bead_mass": "Bead mass m [kg]",
-                "omega": "Spin ω [rad/s]",
-            },
-        )
-        self._integrator_inputs(key, "free-body", compare=False)
-
-    def _gui_hoop(self) -> None:
-        gui, key = self.gui, "hoop"
-        ex = self.exhibits[key]
-        self.w[f"{key}.readout"] = gui.add_markdown("")
-        self._chart(key, compare=True)
-        with gui.add_folder("Initial condition"):
-            mode = gui.add_dropdown("Mode", options=HOOP_MODES, initial_value=ex.config.mode)
-            amp = gui.add_slider(
-                "Amplitude [rad]",
-                min=0.05,
-                max=2.5,
-                step=0.05,
-                initial_value=float(ex.config.amplitude),
-            )
-            th1 = gui.add_number(
-                "θ1 (custom) [rad]", initial_value=float(ex.config.angles[0]), step=0.01
-            )
-            th2 = gui.add_number(
-                "θ2 (custom) [rad]", initial_value=float(ex.config.angles[1]), step=0.01
-            )
-        self.w.update(
-            {f"{key}.mode": mode, f"{key}.amplitude": amp, f"{key}.th1": th1, f"{key}.th2": th2}
-        )
-        self._on(mode, lambda v: self.enqueue(key, {"op": "set", "mode": v}))
-        self._on(amp, lambda v: self.enqueue(key, {"op": "set", "amplitude": float(v)}))
-        self._on(
-            th1,
-            lambda v: self.enqueue(
-                key, {"op": "set", "mode": "custom", "angles": (float(v), float(th2.value))}
-            ),
-        )
-        self._on(
-            th2,
-            lambda v: self.enqueue(
-                key, {"op": "set", "mode": "custom", "angles": (float(th1.value), float(v))}
-            ),
-        )
-        self._param_inputs(
-            key,
-            {
-                "hoop_mass": "Hoop mass M [kg]",
-                "bead_mass": "Bead mass m [kg]",
-                "radius": "Radius a [m]",
-                "gravity": "Gravity g [m/s²]",
-            },
-        )
-        self._integrator_inputs(key, "hoop", compare=True)
-
     def _sync_play_button(self) -> None:
         b = self.w["play"]
         b.label = "Pause" if self.playing else "Play"
         b.icon = self._viser.Icon.PLAYER_PAUSE if self.playing else self._viser.Icon.PLAYER_PLAY
 
     def _sync_widgets(self, key: str) -> None:
-        """Make the widgets show the exhibit's actual config (after a change or a rejection)."""
+        """Make the widgets show the exhibit's actual config (after a change or a refusal)."""
         if self.gui is None:
             return
-        c = self.exhibits[key].config
         self._syncing = True
         try:
-            for name, value in c.params.items():
-                h = self.w.get(f"{key}.params.{name}")
-                if h is not None and value is not None:
-                    h.value = float(value)
-            h = self.w.get(f"{key}.rtol")
-            if h is not None:
-                h.options = _rtol_options(c.rtol)
-                h.value = _rtol_label(c.rtol)
-            for field in (
-                "method",
-                "dt",
-                "beam",
-                "beam_size",
-                "mode",
-                "follow_cm",
-                "amplitude",
-            ):
-                h = self.w.get(f"{key}.{field}")
-                if h is not None and hasattr(c, field):
-                    h.value = getattr(c, field)
-            h = self.w.get(f"{key}.compare_method")
-            if h is not None:
-                h.value = c.compare_method or "none"
-            self.w[f"{key}.about"].content = self._method_text(c.method)
-            self.w[f"{key}.limit"].content = self.exhibits[key].stability_text()
-            if key == "hoop":
-                self.w["hoop.th1"].value, self.w["hoop.th2"].value = (float(x) for x in c.angles)
+            self.panels[key].sync()
         finally:
             self._syncing = False
 
@@ -800,15 +494,15 @@ def measure_frame_cost(
     The app runs headless on a free port without its loop thread; each frame is what the live
     loop does (commands, one ``dynamics`` call per simulation, drawing inside ``server.atomic()``,
     staggered GUI readouts), timed with ``time.perf_counter``. The exhibits start from
-    :data:`viz.defaults.DEFAULTS` (trails on the charge and the bead); ``compare=True`` adds a
+    their configs' defaults (trails on the charge and the bead); ``compare=True`` adds a
     comparison run (and its trail) to the charge and the hoop. Returns median, p95, mean and max
     [ms] and the number of trail segments drawn at the end.
     """
     configs = {}
     if compare:
         configs = {
-            "cyclotron": CyclotronConfig.from_defaults(compare_method="boris"),
-            "hoop": HoopConfig.from_defaults(compare_method="rk4"),
+            "cyclotron": CyclotronConfig(compare_method="boris"),
+            "hoop": HoopConfig(compare_method="rk4"),
         }
     warm_up("defaults", configs)
     app = MechvizApp(port=0, configs=configs, start_loop=False)

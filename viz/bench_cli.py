@@ -29,7 +29,7 @@ def _viewer_measurements(quick: bool) -> dict:
     except Exception as exc:  # a measurement that breaks must not lose the whole benchmark
         out["frame_cost"] = f"failed ({exc.__class__.__name__}: {exc})"
     try:
-        from viz.recording import measure_record_speed
+        from viz.record import measure_record_speed
 
         out["record_speed"] = measure_record_speed(duration=5.0 if quick else 30.0)
     except (ImportError, AttributeError) as exc:
@@ -73,7 +73,11 @@ def _run(args: argparse.Namespace) -> int:
     from dynamics.bench import run_bench, summary
 
     viewer = _viewer_measurements(args.quick)
-    result = run_bench(quick=args.quick, out=args.out, extras={"viewer": viewer})
+    from viz.scene import bench_cases
+
+    result = run_bench(
+        quick=args.quick, out=args.out, extras={"viewer": viewer}, exhibit_cases=bench_cases()
+    )
     s = summary(result)
     if args.json:
         print(json.dumps(s, indent=1, default=str))

@@ -12,7 +12,7 @@ import sys
 
 from dynamics.cli import CliError, add_commands
 
-# view (viz.app), record and play (viz.recording), bench (viz.bench).
+# view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli).
 _COMMAND_MODULES = ("viz.app_cli", "viz.recording_cli", "viz.bench_cli")
 
 

@@ -37,12 +37,6 @@ def add_commands(sub) -> None:
         "--method", metavar="NAME", help="integration method (mechviz simulate --list-methods)"
     )
     p.add_argument("--dt", type=number, metavar="DT", help="step size [s] for fixed-step methods")
-    p.add_argument(
-        "--scene",
-        choices=("auto", "exhibit", "fallback"),
-        default="auto",
-        help="draw with the viewer's exhibits (auto: when available) or the recorder's own scene",
-    )
     p.set_defaults(func=run_record)
 
     q = sub.add_parser(
@@ -93,7 +87,7 @@ class ProgressBar:
 
 
 def run_record(args: argparse.Namespace) -> int:
-    from . import recording as rec
+    from . import record as rec
 
     if args.list:
         demos = rec.list_demos()
@@ -125,7 +119,7 @@ def run_record(args: argparse.Namespace) -> int:
         raise CliError(f"--out: {out} exists and is not a folder")
     for demo in demos:
         try:
-            res = rec.record(demo, out, progress=ProgressBar(demo.name), scene=args.scene)
+            res = rec.record(demo, out, progress=ProgressBar(demo.name))
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")

@@ -1,11 +1,12 @@
 """Model no more than a scene needs: the cheapest method and step for each viewer exhibit.
 
-For each exhibit (its default parameters and initial state as in ``viz/defaults.py``) and each
-candidate fixed-step method, the step is halved from one display frame (1/60 s) down until the
-largest on-screen position error over 10 minutes of simulated time, sampled every second
-against a tight reference, is below ``1e-3`` of the exhibit's size. The cheapest of the
-passing (method, step) pairs, by measured compute time per simulated second, is the default;
-its step must also lie below the method's stability limit (:mod:`dynamics.stability`).
+For each exhibit (its default parameters and initial state, given by the viewer, which owns them:
+``viz.scene.bench_cases``) and each candidate fixed-step method, the step is halved from one
+display frame (1/60 s) down until the largest on-screen position error over 10 minutes of
+simulated time, sampled every second against a tight reference, is below ``1e-3`` of the
+exhibit's size. The cheapest of the passing (method, step) pairs, by measured compute time per
+simulated second, is the default; its step must also lie below the method's stability limit
+(:mod:`dynamics.stability`).
 
 On-screen error, per exhibit:
 
@@ -26,7 +27,6 @@ import numpy as np
 from .. import cyclotron, disk, hoop, stability
 from ..integrators.base import IntegrationError
 from ..simulation import Simulation
-from ..systems import Cyclotron, Hoop, ReleasedDisk
 
 SPAN = 600.0  # 10 minutes of simulated time [s]
 SAMPLE = 1.0  # error sampled every second [s]
@@ -34,54 +34,50 @@ FRAME = 1.0 / 60.0
 TOLERANCE = 1e-3  # of the exhibit's size
 
 
-def _exhibits() -> dict:
-    cp = cyclotron.CyclotronParams(1.0, 1.0, 1.0)
-    hp = hoop.HoopParams(1.0, 0.5, 1.0, 9.81)
-    dp = disk.DiskParams(1.0, 1.0, 1.25, 2.0)
-    released = ReleasedDisk(dp, extra_spin=(0.0, 0.0, 0.02))
-    rim = np.array([[0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
-    reach = float(np.max(np.linalg.norm(rim - disk.centre_of_mass(dp), axis=1)))
-    _, frame = disk._principal_frame_cm(dp)
+def _exhibits(cases: dict) -> dict:
+    """``cases``: exhibit name -> ``{"system", "state", "state_note"}`` (the viewer's defaults);
+    adds each exhibit's on-screen error, size and candidate methods."""
+    out = {}
+    if "cyclotron" in cases:
+        c = cases["cyclotron"]
+        s0 = np.asarray(c["state"], float)
 
-    def charge_err(y, ref):
-        return float(np.linalg.norm(y[:3] - ref[:3]))
+        def charge_err(y, ref):
+            return float(np.linalg.norm(y[:3] - ref[:3]))
 
-    def hoop_err(y, ref):
-        c1, b1 = hoop.positions(hp, y)
-        c2, b2 = hoop.positions(hp, ref)
-        return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
-
-    def disk_err(y, ref):
-        r1 = disk.quaternion_to_matrix(y[3:7]) @ frame.T
-        r2 = disk.quaternion_to_matrix(ref[3:7]) @ frame.T
-        return float(np.linalg.norm(r1 - r2, 2) * reach)
-
-    return {
-        "cyclotron": {
-            "system": Cyclotron(cp),
-            "state": cyclotron.circular_orbit_state(cp, 1.0, (0.0, 0.0), 0.05),
-            "size": 2.0,
-            "error": charge_err,
+        out["cyclotron"] = {
+            **c, "size": 2.0 * cyclotron.larmor_radius(c["system"].params, s0), "error": charge_err,
             "methods": ("exact", "boris", "rk4", "yoshida4"),
-            "state_note": "speed 1 m/s, vz 0.05 m/s (viz/defaults.py)",
-        },
-        "hoop": {
-            "system": Hoop(hp),
-            "state": hoop.mode_state(hp, (0.25, 0.25)),
-            "size": 2.0 * hp.radius,
-            "error": hoop_err,
-            "methods": ("verlet", "rk4", "yoshida4"),
-            "state_note": "mode 'mix', amplitude 0.5: modes 1 and 2 at 0.25 rad each (viz/scene_hoop.py)",
-        },
-        "disk-released": {
-            "system": released,
-            "state": released.default_state(),
-            "size": 2.0 * dp.radius,
-            "error": disk_err,
+        }  # fmt: skip
+    if "hoop" in cases:
+        c = cases["hoop"]
+        hp = c["system"].params
+
+        def hoop_err(y, ref):
+            c1, b1 = hoop.positions(hp, y)
+            c2, b2 = hoop.positions(hp, ref)
+            return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
+
+        out["hoop"] = {
+            **c, "size": 2.0 * hp.radius, "error": hoop_err, "methods": ("verlet", "rk4", "yoshida4"),
+        }  # fmt: skip
+    if "disk-released" in cases:
+        c = cases["disk-released"]
+        dp = c["system"].params
+        rim = np.array([[0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+        reach = float(np.max(np.linalg.norm(rim * dp.radius - disk.centre_of_mass(dp), axis=1)))
+        _, frame = disk._principal_frame_cm(dp)
+
+        def disk_err(y, ref):
+            r1 = disk.quaternion_to_matrix(y[3:7]) @ frame.T
+            r2 = disk.quaternion_to_matrix(ref[3:7]) @ frame.T
+            return float(np.linalg.norm(r1 - r2, 2) * reach)
+
+        out["disk-released"] = {
+            **c, "size": 2.0 * dp.radius, "error": disk_err,
             "methods": ("splitting", "rk4", "yoshida4"),
-            "state_note": "omega 2 rad/s, extra spin (0, 0, 0.02) rad/s (viz/defaults.py)",
-        },
-    }
+        }  # fmt: skip
+    return out
 
 
 def _reference_path(ex: dict, times: np.ndarray) -> np.ndarray:
@@ -119,12 +115,13 @@ def _max_error(ex, method, dt, times, ref) -> tuple[float | None, float, int]:
     return worst, best, sim.steps
 
 
-def choose_defaults(quick: bool = False, progress=None) -> dict:
-    """Sweep each exhibit's candidate methods; return the table and the chosen defaults."""
+def choose_defaults(cases: dict, quick: bool = False, progress=None) -> dict:
+    """Sweep each exhibit's candidate methods (``cases``: see :func:`_exhibits`); return the
+    table and the chosen defaults."""
     out = {}
     times = np.arange(1, int(SPAN / SAMPLE) + 1) * SAMPLE
     divisors = (1, 2, 4, 8, 16, 32, 64, 128) if not quick else (1, 4, 16, 64)
-    for name, ex in _exhibits().items():
+    for name, ex in _exhibits(cases).items():
         ref = _reference_path(ex, times)
         budget = TOLERANCE * ex["size"]
         rows = []

@@ -100,9 +100,12 @@ def _compile_times(progress: Progress, settings: Settings) -> dict:
 
 def run_bench(
     *, quick: bool = False, out: str | Path = "docs/bench", extras: dict | None = None,
-    show_progress: bool | None = None, charts: bool = True,
+    show_progress: bool | None = None, charts: bool = True, exhibit_cases: dict | None = None,
 ) -> dict:  # fmt: skip
-    """Run everything; write ``out/results.json`` and charts; return the result dict."""
+    """Run everything; write ``out/results.json`` and charts; return the result dict.
+
+    ``exhibit_cases``: the viewer's exhibits as :func:`.exhibits.choose_defaults` takes them
+    (the viewer owns its defaults; ``mechviz bench`` passes them); ``None`` skips that part."""
     out = Path(out)
     settings = Settings.for_mode(quick)
     refs = load_references()
@@ -138,7 +141,7 @@ def run_bench(
     progress.set("per-step cost (numba and C)")
     per_step = experiments.per_step_costs(quick, progress)
     progress.set("exhibit defaults")
-    exhibit = exhibits.choose_defaults(quick)
+    exhibit = exhibits.choose_defaults(exhibit_cases, quick) if exhibit_cases else {}
     progress(3)
     progress.close()
 

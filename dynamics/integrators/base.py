@@ -53,6 +53,26 @@ class Method:
     def applies_to(self, system: str) -> bool:
         return system in self.systems
 
+    def step_options(self, dt: float | None, rtol: float | None) -> dict[str, float]:
+        """Of a step size ``dt`` [s] and a tolerance ``rtol``, the one this method takes, as
+        keyword arguments for :class:`dynamics.Simulation`: ``rtol`` when adaptive, ``dt`` when it
+        takes fixed steps, nothing for the closed-form flow (evaluated at the times asked for).
+        Callers that hold both settings (the viewer, the recorder) let the method choose."""
+        if self.adaptive:
+            return {} if rtol is None else {"rtol": rtol}
+        if self.backend == "exact":
+            return {}
+        return {} if dt is None else {"dt": dt}
+
+    def step_text(self, dt: float | None, rtol: float | None) -> str:
+        """The step setting in words: ``"dt = 0.01 s"``, ``"rtol = 1e-09"`` or ``"exact flow"``."""
+        opts = self.step_options(dt, rtol)
+        if "dt" in opts:
+            return f"dt = {opts['dt']:g} s"
+        if "rtol" in opts:
+            return f"rtol = {opts['rtol']:g}"
+        return "exact flow" if self.backend == "exact" else "adaptive"
+
     def describe(self) -> str:
         kind = "adaptive" if self.adaptive else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"

@@ -15,19 +15,18 @@ above the exhibit origin.
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections import deque
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 import dynamics
 from dynamics import disk as dk
+from dynamics import measure
 
-from . import geometry as geo
-from .defaults import DEFAULTS
-from .exhibit import Exhibit, check_method, fmt, make_simulation, positive
+from .. import geometry as geo
+from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 LIFT = np.array([0.0, 0.0, 0.4])
@@ -35,44 +34,33 @@ MODES = ("driven", "released")
 
 
 @dataclass(frozen=True)
-class DiskConfig:
-    """Settings of the disk exhibit (defaults: ``DEFAULTS["disk"]``)."""
+class DiskConfig(ExhibitConfig):
+    """Settings of the disk exhibit: ``mode`` "driven" (the exact uniform rotation; ``method``
+    is not used) or "released" (the free body, integrated by ``method``), ``extra_spin`` [rad/s]
+    added at release in the disk frame (seeds the tumble), ``follow_cm`` (a view option: draw
+    the released body in the frame moving with its centre of mass)."""
 
-    mode: str = "driven"
+    system_name: ClassVar[str] = "free-body"
+    Params: ClassVar[type] = dk.DiskParams
+
+    # RK4 at one step per frame: the cheapest method keeping the on-screen error below 1e-3 of
+    # the exhibit over 10 minutes (docs/bench/defaults.md)
     method: str = "rk4"
-    dt: float = 1 / 60
-    rtol: float = 1e-9
-    params: dict = field(default_factory=lambda: dict(DEFAULTS["disk"]["params"]))
+    params: dict = field(default_factory=lambda: default_params(dk.DiskParams(omega=2.0)))
+    mode: str = "driven"
     extra_spin: tuple = (0.0, 0.0, 0.02)
     follow_cm: bool = True
 
-    @classmethod
-    def from_defaults(cls, **overrides) -> DiskConfig:
-        d = {
-            k: v
-            for k, v in DEFAULTS["disk"].items()
-            if k in {f.name for f in dataclasses.fields(cls)}
-        }
-        d["params"] = dict(d["params"])
-        d.update(overrides)
-        return cls(**d)
-
     def physics(self) -> dk.DiskParams:
-        p = dk.DiskParams(**self.params)
+        p = super().physics()
         if not math.isfinite(p.omega) or p.omega == 0.0:
             raise ValueError(f"omega must be finite and nonzero, got {p.omega!r}")
         return p
 
-    def validate(self) -> None:
-        self.physics()
+    def _validate(self) -> None:
         if self.mode not in MODES:
             raise ValueError(f"mode must be one of {', '.join(MODES)}; got {self.mode!r}")
-        check_method("free-body", self.method)
-        positive("dt", self.dt)
-        if not 0.0 < float(self.rtol) < 1.0:
-            raise ValueError(f"rtol must be in (0, 1), got {self.rtol!r}")
-        if len(self.extra_spin) != 3 or not all(math.isfinite(float(x)) for x in self.extra_spin):
-            raise ValueError(f"extra_spin must be three finite numbers, got {self.extra_spin!r}")
+        finite_numbers("extra_spin", self.extra_spin, 3)
 
 
 def to_world(v) -> np.ndarray:
@@ -83,6 +71,7 @@ def to_world(v) -> np.ndarray:
 class DiskExhibit(Exhibit):
     key = "disk"
     title = "Spinning disk"
+    icon = "DISC"
     Config = DiskConfig
 
     def _build(self) -> None:
@@ -199,10 +188,11 @@ class DiskExhibit(Exhibit):
         c = self.config
         p = c.physics()
         if c.mode == "driven":
-            sim = make_simulation(dynamics.DrivenDisk(p), "exact", c.dt, c.rtol, None)
+            system = dynamics.DrivenDisk(p)
+            sim = self._make_simulation(system, "exact", system.default_state())
         else:
             system = dynamics.ReleasedDisk(p, tuple(float(x) for x in c.extra_spin))
-            sim = make_simulation(system, c.method, c.dt, c.rtol, system.default_state())
+            sim = self._make_simulation(system, c.method, system.default_state())
         self.params = p
         self.sim, self.compare = sim, None
         self._reset_common()
@@ -224,10 +214,8 @@ class DiskExhibit(Exhibit):
         L0 = np.linalg.norm(dk.angular_momentum(p, 0.0))
         self.omega_scale = 1.2 * p.radius / abs(p.omega)
         self.momentum_scale = 1.2 * p.radius / L0 if L0 > 0 else 0.0
-        self._L_prev = None
-        self._fb_samples: deque = deque()
-        self.frame_counter = 0
-        self._measured_force = None
+        # driven: (angle, omega) for the bearing force; released: body angular velocity
+        self.motion = Motion((2,) if driven else (3,))
         a, b = dk.axle_points(p)
         # Driven: forces and L are fixed in the body (dynamics gives them at t = 0, when the
         # disk frame is the space frame); a frame turns them with the sampled rotation R(t).
@@ -298,23 +286,22 @@ class DiskExhibit(Exhibit):
         L = dk.free_angular_momentum_space(moments, st)
         return omega, L, a + rot @ dk.centre_of_mass(p)
 
-    def _after_advance(self) -> None:
-        if self.config.mode != "driven":
-            return
-        p, t = self.params, self.sim.t
-        L = self.pose()[0] @ self._body_L
-        if self._L_prev is not None and t > self._L_prev[0]:
-            torque = (L - self._L_prev[1]) / (t - self._L_prev[0])  # dL/dt measured over a frame
-            # F_B = -(y x N) / 2R; |y x N| is the part of N across the axle
-            fb = math.hypot(torque[0], torque[2]) / (2.0 * p.radius)
-            self._fb_samples.append((t, fb))
-            horizon = t - 2 * math.pi / abs(p.omega)
-            while self._fb_samples and self._fb_samples[0][0] <= horizon:
-                self._fb_samples.popleft()
-            if self.frame_counter % 15 == 0 or self._measured_force is None:
-                self._measured_force = max(f for _, f in self._fb_samples)
-            self.frame_counter += 1
-        self._L_prev = (t, L)
+    def _observe(self) -> None:
+        st = self.state
+        self.motion.add(self.t, st[:2] if self.config.mode == "driven" else st[:3])
+
+    def growth_rate_theory(self) -> float:
+        """Linear growth rate [1/s] of the wobble from the release state (released only)."""
+        return measure.wobble_growth_rate_theory(self.sim.system.kernel_params(), self.sim.state0[0])
+
+    def measured(self) -> dict:
+        """Driven: the bearing force amplitude at B from dL/dt of the sampled motion
+        (:func:`dynamics.measure.bearing_force_amplitude`); released: the wobble's growth rate
+        (:func:`dynamics.measure.wobble_growth_rate`)."""
+        t, x = self.motion.arrays()
+        if self.config.mode == "driven":
+            return {"bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])}
+        return {"growth_rate": measure.wobble_growth_rate(t, x)}
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
@@ -384,17 +371,17 @@ class DiskExhibit(Exhibit):
         ]
         if self.config.mode == "driven":
             seed = 5.0 / 8.0 * p.disk_mass * p.radius * p.omega**2
-            meas = self._measured_force
+            meas = self.measured()["bearing_force"]
             net = float(np.linalg.norm(dk.net_bearing_force(p, smp.t)))
             lines += [
                 f"| bearing force amplitude \\|F_B\\| [N] | {fmt(self.force_amplitude)} "
-                f"| {fmt(meas) if meas else '—'} |",
+                f"| {fmt(meas)} |",
                 f"| seed: 5/8 M R ω² (bead 5M/4) [N] | {fmt(seed)} | |",
                 f"| \\|F_A + F_B\\| = (M+m) ω² ρ_cm [N] | {fmt(net)} | |",
             ]
             lines.append(
                 f"\nForce arrows: 1 m ↔ {1 / self.force_scale:.3g} N. Measured: "
-                "\\|ŷ × dL/dt\\| / 2R, with L(t) differenced over one frame."
+                "\\|ŷ × dL/dt\\| / 2R, with dL/dt from central differences of the sampled L(t)."
             )
         else:
             _, L, _ = self.vectors_space()
@@ -407,12 +394,35 @@ class DiskExhibit(Exhibit):
                 f"| error vs DOP853 reference | 0 | {err:.2e} |",
                 f"| \\|L\\| about CM [kg m²/s] | conserved | {fmt(float(np.linalg.norm(L)), 8)} |",
                 f"| axle · L̂ (tumble: ±1 flips) | — | {cos_axle:+.3f} |",
+                f"| wobble growth rate [1/s] | {fmt(self.growth_rate_theory())} "
+                f"| {fmt(self.measured()['growth_rate'])} |",
             ]
             lines.append(
                 "\nSpin about the intermediate principal axis is unstable: "
                 "the small extra spin grows into a tumble."
             )
-        lines.append(f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}.")
-        if self.failure:
-            lines.append(f"\n**Paused:** {self.failure}")
+        lines.append(self.work_line())
         return "\n".join(lines)
+
+    # ------------------------------------------------------------------ GUI
+    def build_panel(self, panel) -> None:
+        gui, c = panel.gui, self.config
+        panel.readout_and_chart(compare=False)
+        with gui.add_folder("Motion"):
+            mode = panel.put("mode", gui.add_dropdown("Motion", options=MODES, initial_value=c.mode))
+            spin = panel.put("spin", gui.add_slider(
+                "Extra spin at release [rad/s]", min=0.0, max=0.5, step=0.01,
+                initial_value=float(c.extra_spin[2]),
+                hint="Spin about the disk normal added at release: seeds the tumble",
+            ))  # fmt: skip
+            follow = panel.put(
+                "follow_cm", gui.add_checkbox("Follow centre of mass", initial_value=c.follow_cm)
+            )
+        panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
+        panel.on(spin, lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}))
+        panel.on(follow, lambda v: panel.send({"op": "set", "follow_cm": bool(v)}))
+        panel.param_inputs({
+            "disk_mass": "Disk mass M [kg]", "radius": "Radius R [m]",
+            "bead_mass": "Bead mass m [kg]", "omega": "Spin ω [rad/s]",
+        })  # fmt: skip
+        panel.integrator_inputs(compare=False)

@@ -6,77 +6,73 @@ world's x-z plane: ``(x, y)_plane -> (x, 0, y) + pivot`` with the pivot ``2a + 0
 exhibit origin. Beside the nonlinear motion the linear-theory motion from the same initial state
 (``dynamics.hoop.linear_solution``) is drawn as a faint ghost, so the difference at large amplitude
 shows. Both normal-mode frequencies are measured from the motion: the angles are projected on the
-mode shapes and the period of each modal coordinate is timed between its upward zero crossings.
+mode shapes and each modal coordinate is timed between its zero crossings (:mod:`dynamics.measure`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections import deque
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 import dynamics
 from dynamics import hoop as hp
+from dynamics import measure
 
-from . import geometry as geo
-from .defaults import DEFAULTS
-from .exhibit import Exhibit, check_method, fmt, make_simulation, positive
+from .. import geometry as geo
+from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt, positive
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
 
 
 @dataclass(frozen=True)
-class HoopConfig:
-    """Settings of the hoop exhibit (defaults: ``DEFAULTS["hoop"]``)."""
+class HoopConfig(ExhibitConfig):
+    """Settings of the hoop exhibit. The start: ``mode`` "mode 1" or "mode 2" (that normal mode
+    alone at ``amplitude`` [rad], its largest angle), "mix" (both at half of it) or "custom"
+    (``angles`` (theta1, theta2) [rad], at rest); ``state`` (theta1, theta2, theta1', theta2')
+    overrides them all. ``compare_method`` runs beside the main one with ``compare_dt`` /
+    ``compare_rtol`` if given; ``ghost`` draws linear theory from the same start."""
 
+    system_name: ClassVar[str] = "hoop"
+    Params: ClassVar[type] = hp.HoopParams
+
+    # RK4 at one step per frame: as cheap as it gets below 1e-3 over 10 minutes
+    # (docs/bench/defaults.md)
     method: str = "rk4"
-    dt: float = 1 / 60
-    rtol: float = 1e-9
-    params: dict = field(default_factory=lambda: dict(DEFAULTS["hoop"]["params"]))
+    params: dict = field(default_factory=lambda: default_params(hp.HoopParams()))
     mode: str = "mix"
     amplitude: float = 0.5
     angles: tuple = (0.4, -0.3)
+    state: tuple | None = None
     compare_method: str | None = None
+    compare_dt: float | None = None
+    compare_rtol: float | None = None
+    ghost: bool = True
     trail_cap: int = 240
 
-    @classmethod
-    def from_defaults(cls, **overrides) -> HoopConfig:
-        d = {
-            k: v
-            for k, v in DEFAULTS["hoop"].items()
-            if k in {f.name for f in dataclasses.fields(cls)}
-        }
-        d["params"] = dict(d["params"])
-        d.update(overrides)
-        return cls(**d)
-
-    def physics(self) -> hp.HoopParams:
-        return hp.HoopParams(**self.params)
-
-    def validate(self) -> None:
-        self.physics()
-        check_method("hoop", self.method)
-        check_method("hoop", self.compare_method, "compare_method")
-        positive("dt", self.dt)
-        if not 0.0 < float(self.rtol) < 1.0:
-            raise ValueError(f"rtol must be in (0, 1), got {self.rtol!r}")
+    def _validate(self) -> None:
         if self.mode not in MODES:
             raise ValueError(f"mode must be one of {', '.join(MODES)}; got {self.mode!r}")
-        a = float(self.amplitude)
-        if not (math.isfinite(a) and abs(a) < 3.0):
-            raise ValueError(
-                f"amplitude must be a finite angle below 3 rad, got {self.amplitude!r}"
-            )
-        if len(self.angles) != 2 or not all(
-            math.isfinite(float(x)) and abs(float(x)) < math.pi for x in self.angles
-        ):
+        (a,) = finite_numbers("amplitude", (self.amplitude,), 1)
+        if abs(a) >= 3.0:
+            raise ValueError(f"amplitude must be an angle below 3 rad, got {self.amplitude!r}")
+        if any(abs(x) >= math.pi for x in finite_numbers("angles", self.angles, 2)):
             raise ValueError(f"angles must be two angles in (-pi, pi) rad, got {self.angles!r}")
+        if self.state is not None:
+            finite_numbers("state", self.state, 4)
+        if self.compare_dt is not None:
+            positive("compare_dt", self.compare_dt)
+        if self.compare_rtol is not None and not 0 < positive("compare_rtol", self.compare_rtol) < 1:
+            raise ValueError(f"compare_rtol must be below 1, got {self.compare_rtol!r}")
+        if not (isinstance(self.trail_cap, int) and self.trail_cap >= 2):
+            raise ValueError(f"trail_cap must be a whole number of at least 2, got {self.trail_cap!r}")
 
     def initial_state(self) -> np.ndarray:
+        if self.state is not None:
+            return np.array(self.state, dtype=float)
         p, a = self.physics(), float(self.amplitude)
         if self.mode == "mode 1":
             return hp.mode_state(p, (a, 0.0))
@@ -87,31 +83,10 @@ class HoopConfig:
         return np.array([float(self.angles[0]), float(self.angles[1]), 0.0, 0.0])
 
 
-class _ZeroCrossings:
-    """Period of an oscillating coordinate from its upward zero crossings."""
-
-    def __init__(self) -> None:
-        self.times: deque = deque(maxlen=12)
-        self.prev: tuple[float, float] | None = None
-        self.peak = 0.0
-
-    def add(self, t: float, q: float) -> None:
-        self.peak = max(self.peak, abs(q))
-        if self.prev is not None:
-            t0, q0 = self.prev
-            if q0 < 0.0 <= q and q != q0:
-                self.times.append(t0 + (t - t0) * (-q0) / (q - q0))
-        self.prev = (t, q)
-
-    def frequency(self) -> float | None:
-        if len(self.times) < 2:
-            return None
-        return 2.0 * math.pi * (len(self.times) - 1) / (self.times[-1] - self.times[0])
-
-
 class HoopExhibit(Exhibit):
     key = "hoop"
     title = "Hoop with bead"
+    icon = "CIRCLE"
     Config = HoopConfig
     chart_series = ("energy", "error", "energy_compare", "error_compare")
 
@@ -173,12 +148,12 @@ class HoopExhibit(Exhibit):
         p = c.physics()
         system = dynamics.Hoop(p)
         s0 = c.initial_state()
-        sim = make_simulation(system, c.method, c.dt, c.rtol, s0)
-        cmp_ = (
-            make_simulation(system, c.compare_method, c.dt, c.rtol, s0)
-            if c.compare_method
-            else None
-        )
+        sim = self._make_simulation(system, c.method, s0)
+        cmp_ = None
+        if c.compare_method:
+            cmp_ = self._make_simulation(
+                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
+            )
         self.params = p
         self.sim, self.compare = sim, cmp_
         self._reset_common()
@@ -187,16 +162,14 @@ class HoopExhibit(Exhibit):
         self.trail.clear()
         self.cmp_trail.clear()
         self.cmp_label.visible = cmp_ is not None
-        scales = np.array([1.0, 1.0, 1.0 if cmp_ is not None else 0.0])
+        scales = np.array([1.0, 1.0 if c.ghost else 0.0, 1.0 if cmp_ is not None else 0.0])
         self.rings.batched_scales = scales
         self.beads.batched_scales = scales
         if cmp_ is not None:
             self.cmp_label.text = f"{c.compare_method} (blue)"
-        _, shapes = hp.normal_modes(p)
-        self._basis = shapes.T
-        self._to_modal = np.linalg.inv(self._basis)  # angles -> modal coordinates, once per run
-        self._crossings = [_ZeroCrossings(), _ZeroCrossings()]
-        self._after_advance()
+        self.shapes = hp.normal_modes(p)[1]
+        self.motion = Motion((2,))  # the angles
+        self._observe()
 
     # ------------------------------------------------------------------ geometry from dynamics
     def plane_to_local(self, xy) -> np.ndarray:
@@ -221,19 +194,24 @@ class HoopExhibit(Exhibit):
         return q, self.plane_to_local(centre), self.plane_to_local(bead)
 
     def ghost_state(self) -> np.ndarray:
-        return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t)
+        """Linear theory from the run's start (or last jump) at the current time."""
+        return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t - self.sim.t0)
 
     def modal_coordinates(self, state) -> np.ndarray:
-        return self._to_modal @ np.asarray(state, float)[:2]
+        return measure.modal_coordinates(np.asarray(state, float)[:2], self.shapes)
 
-    def _after_advance(self) -> None:
-        q = self.modal_coordinates(self.state)
-        for k in range(2):
-            self._crossings[k].add(self.t, float(q[k]))
+    def _observe(self) -> None:
+        self.motion.add(self.t, self.state[:2])
 
-    def measured_mode_frequencies(self) -> list[float | None]:
-        peak = max(c.peak for c in self._crossings)
-        return [c.frequency() if c.peak > 0.02 * peak else None for c in self._crossings]
+    def measured(self) -> dict:
+        """Both normal-mode frequencies from the sampled angles
+        (:func:`dynamics.measure.mode_frequencies`)."""
+        t, angles = self.motion.arrays()
+        return {"mode_frequencies": measure.mode_frequencies(t, angles, self.shapes)}
+
+    def initial_mode_amplitudes(self) -> np.ndarray:
+        """The start's coordinates on the two mode shapes [rad]."""
+        return self.modal_coordinates(self.sim.state0[0])
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
@@ -266,7 +244,7 @@ class HoopExhibit(Exhibit):
     def readout(self) -> str:
         p, smp, c = self.params, self.sample, self.config
         freqs, _ = hp.normal_modes(p)
-        meas = self.measured_mode_frequencies()
+        meas = self.measured()["mode_frequencies"]
         lines = [
             f"**t = {self.t:.2f} s** · {self.method_line(self.sim)} · {c.mode}",
             "",
@@ -286,7 +264,7 @@ class HoopExhibit(Exhibit):
             f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 | {err:.2e} |",
             "",
-            "Grey ghost: linear theory from the same start.",
+            "Grey ghost: linear theory from the same start." if c.ghost else "",
         ]
         cs = self.compare_sample
         if cs is not None:
@@ -294,7 +272,39 @@ class HoopExhibit(Exhibit):
                 f"\nComparison {self.method_line(self.compare)} (blue, right): |ΔE/E₀| = "
                 f"{float(np.max(np.abs(cs.energy_error))):.2e}"
             )
-        lines.append(f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}.")
-        if self.failure:
-            lines.append(f"\n**Paused:** {self.failure}")
+        lines.append(self.work_line())
         return "\n".join(lines)
+
+    # ------------------------------------------------------------------ GUI
+    def build_panel(self, panel) -> None:
+        gui, c = panel.gui, self.config
+        panel.readout_and_chart(compare=True)
+        with gui.add_folder("Initial condition"):
+            mode = panel.put("mode", gui.add_dropdown("Mode", options=MODES, initial_value=c.mode))
+            amp = panel.put("amplitude", gui.add_slider(
+                "Amplitude [rad]", min=0.05, max=2.5, step=0.05, initial_value=float(c.amplitude)
+            ))  # fmt: skip
+            th1 = panel.put(
+                "th1", gui.add_number("θ1 (custom) [rad]", initial_value=float(c.angles[0]), step=0.01)
+            )
+            th2 = panel.put(
+                "th2", gui.add_number("θ2 (custom) [rad]", initial_value=float(c.angles[1]), step=0.01)
+            )
+        panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
+        panel.on(amp, lambda v: panel.send({"op": "set", "amplitude": float(v)}))
+        panel.on(th1, lambda v: panel.send(
+            {"op": "set", "mode": "custom", "angles": (float(v), float(th2.value))}
+        ))  # fmt: skip
+        panel.on(th2, lambda v: panel.send(
+            {"op": "set", "mode": "custom", "angles": (float(th1.value), float(v))}
+        ))  # fmt: skip
+        panel.param_inputs({
+            "hoop_mass": "Hoop mass M [kg]", "bead_mass": "Bead mass m [kg]",
+            "radius": "Radius a [m]", "gravity": "Gravity g [m/s²]",
+        })  # fmt: skip
+        panel.integrator_inputs(compare=True)
+
+    def sync_panel(self, panel) -> None:
+        w = panel.w
+        w["hoop.th1"].value, w["hoop.th2"].value = (float(x) for x in self.config.angles)
+

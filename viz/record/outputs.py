@@ -1,0 +1,247 @@
+"""What a recording writes besides the scene: the traces as CSV, a chart, the manifest.
+
+``DEMO.csv`` holds one row per run, member and frame: ``run, member, t``, the state (names from
+:mod:`dynamics`), the energy, the relative energy error and the error against the exact
+solution or the tight reference (:class:`dynamics.Simulation`). ``DEMO.png`` charts the motion
+with the predictions marked, the energy error and the error. ``DEMO.json`` is the manifest.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import math
+import platform
+import time
+from importlib import metadata
+from typing import Any
+
+import msgspec
+import numpy as np
+
+import dynamics
+from dynamics import cyclotron, disk, hoop, measure
+
+from ..scene import EXHIBITS
+from .demo import Demo
+from .run import Traces
+
+
+def traces_csv(d: Demo, tr: Traces) -> bytes:
+    """The traces as CSV (long format, one row per run, member and frame)."""
+    names = list(dynamics.SYSTEMS[_system_name(d)].state_names)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["run", "member", "t", *names, "energy", "energy_error", "error"])
+    fmt = "{:.10g}".format
+    K = len(tr.t)
+    for label, S in tr.states.items():
+        err = tr.error[label]
+        for j in range(S.shape[1]):
+            for k in range(K):
+                w.writerow([
+                    label, j, fmt(tr.times[label][k]), *map(fmt, S[k, j]),
+                    fmt(tr.energy[label][k, j]), fmt(tr.energy_error[label][k, j]),
+                    "" if err is None else fmt(err[k, j]),
+                ])  # fmt: skip
+    if tr.ghost is not None:
+        for k in range(K):
+            w.writerow(["linear-theory", 0, fmt(tr.t[k]), *map(fmt, tr.ghost[k, 0]), "", "", ""])
+    return buf.getvalue().encode()
+
+
+def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
+    """Three panels: the motion with the predictions marked, the energy error, the error."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    p = d.config().physics()
+    main = tr.main
+    t = tr.times[main]
+    fig = Figure(figsize=(9, 9.5), dpi=100, layout="constrained")
+    ax1, ax2, ax3, ax4 = fig.subplots(4, 1, height_ratios=(3, 2, 2, 1.1))
+    ax2.sharex(ax1)
+    ax3.sharex(ax1)
+    ax4.axis("off")
+    S = tr.states[main]
+    colours = ["tab:blue", "tab:red", "tab:green"]
+    if d.exhibit == "cyclotron":
+        T = cyclotron.period(p)
+        for lbl, c in zip(tr.states, colours, strict=False):
+            X = tr.states[lbl]
+            for j in range(X.shape[1]):
+                ax1.plot(tr.times[lbl], X[:, j, 0], color=c, lw=1, alpha=0.8 if X.shape[1] == 1 else 0.5,
+                         label=f"x, {lbl}" if j == 0 else None)  # fmt: skip
+        _mark_periods(ax1, T, t[-1], "predicted period 2 pi m / |qB|")
+        for entry in tr.event_log:
+            ax1.axvline(
+                entry["t"], color="k", lw=1.5, label=f"{entry['action']} (dv = {entry['dv']:g} m/s)"
+            )
+            eff = entry["effects"][main]
+            cx = eff["predicted_centre"][0][0]
+            r = eff["predicted_radius"][0]
+            for yv in (cx - r, cx + r):
+                ax1.hlines(
+                    yv,
+                    entry["t"],
+                    t[-1],
+                    colors="tab:orange",
+                    linestyles=":",
+                    label="predicted x range after the kick" if yv == cx - r else None,
+                )
+        ax1.set_ylabel("x [m]")
+    elif d.exhibit == "disk" and d.motion == "driven":
+        F = measure.bearing_force(p, t, S[:, 0, 0], S[:, 0, 1])
+        ax1.plot(t, F[:, 0], color="tab:blue", label="F_B,x (from dL/dt)")
+        ax1.plot(t, F[:, 2], color="tab:red", label="F_B,z (from dL/dt)")
+        amp = disk.axle_force_amplitude(p)
+        for yv in (amp, -amp):
+            ax1.axhline(
+                yv,
+                color="k",
+                ls="--",
+                lw=1,
+                label="predicted amplitude 5/8 M R omega^2" if yv > 0 else None,
+            )
+        ax1.set_ylabel("bearing force at B [N]")
+    elif d.exhibit == "disk":
+        w = S[:, 0, :3]
+        perp = np.hypot(w[:, 0], w[:, 2])
+        ax1.semilogy(t, np.maximum(perp, 1e-16), color="tab:blue", label="|w_perp| (wobble)")
+        ax1.semilogy(t, np.abs(w[:, 1]), color="tab:green", label="|w_2| (about the axle)")
+        lam = measure.wobble_growth_rate_theory(disk.free_kernel_params(p), S[0, 0, :3])
+        grow = perp[0] * np.exp(lam * t)
+        keep = grow < 3 * abs(w[0, 1])
+        ax1.semilogy(t[keep], grow[keep], "k--", lw=1, label=f"predicted growth exp({lam:.3f} t)")
+        ax1.set_ylabel("angular velocity [rad/s]")
+    elif len(tr.states) > 1:  # hoop, two methods: the energy drift is the point
+        for lbl, c in zip(tr.states, colours, strict=False):
+            ax1.plot(tr.times[lbl], 100 * tr.energy_error[lbl][:, 0], color=c, lw=1, label=lbl)
+        ax1.axhline(0.0, color="k", ls="--", lw=0.8, label="exact: energy conserved")
+        ax1.set_ylabel("(E - E0) / |E0| [%]")
+    else:
+        freqs, _shapes = hoop.normal_modes(p)
+        for lbl, c in zip(tr.states, colours, strict=False):
+            X = tr.states[lbl]
+            ax1.plot(tr.times[lbl], X[:, 0, 0], color=c, lw=1, label=f"theta1 (hoop), {lbl}")
+            ax1.plot(
+                tr.times[lbl], X[:, 0, 1], color=c, lw=1, ls="-.", label=f"theta2 (bead), {lbl}"
+            )
+        if tr.ghost is not None:
+            ax1.plot(tr.t, tr.ghost[:, 0, 0], color="0.5", lw=1, ls="--", label="linear theory")
+        amps = measure.modal_coordinates(S[0, 0, :2], _shapes)
+        k = int(np.argmax(np.abs(amps)))
+        _mark_periods(ax1, 2 * math.pi / freqs[k], t[-1], f"predicted period of mode {k + 1} (linear)")
+        if k == 0 and abs(amps[1]) < 1e-12 and abs(amps[0]) > 0.2:
+            _mark_periods(ax1, hoop.mode1_period(p, abs(float(amps[0]))), t[-1],
+                          "predicted period, exact (finite amplitude)", color="tab:purple")  # fmt: skip
+        ax1.set_ylabel("angle [rad]")
+    ax1.legend(fontsize=7, loc="upper right")
+    for lbl, c in zip(tr.states, colours, strict=False):
+        E = np.abs(tr.energy_error[lbl]).max(axis=1)
+        ax2.semilogy(tr.times[lbl], np.maximum(E, 1e-17), color=c, lw=1, label=lbl)
+        if tr.error[lbl] is not None:
+            e = np.nanmax(tr.error[lbl], axis=1)
+            ax3.semilogy(tr.times[lbl], np.maximum(e, 1e-17), color=c, lw=1,
+                         label=f"{lbl} vs {tr.reference[lbl]}")  # fmt: skip
+    for fg in figs:
+        if fg["name"].startswith("final energy error") and fg["predicted"]:
+            ax2.axhline(abs(fg["predicted"]), color="k", ls="--", lw=1,
+                        label="predicted final, " + fg["name"].split(", ")[-1])  # fmt: skip
+    ax2.set_ylabel("|E - E0| / |E0|")
+    ax2.legend(fontsize=7)
+    ax3.set_ylabel("relative error")
+    ax3.set_xlabel("simulated time t [s]")
+    if ax3.lines:
+        ax3.legend(fontsize=7)
+    else:
+        ax3.text(0.5, 0.5, "no reference solution", ha="center", va="center",
+                 transform=ax3.transAxes)  # fmt: skip
+    lines = [
+        f"{f['name']}: {f['measured']:.6g}" + ("" if f["predicted"] is None else
+                                              f"  (predicted {f['predicted']:.6g})")
+        for f in figs if f["measured"] is not None
+    ]  # fmt: skip
+    fig.suptitle(f"{d.title}\n{step_text(tr)}", fontsize=11)
+    if lines:
+        ax4.text(0.0, 1.0, "measured against predicted\n" + "\n".join(lines[:7]),
+                 transform=ax4.transAxes, fontsize=8, va="top", family="monospace")  # fmt: skip
+    out = io.BytesIO()
+    fig.savefig(out, format="png")
+    return out.getvalue()
+
+
+def _mark_periods(ax, T, t_end, label, color="k"):
+    for i, tv in enumerate(np.arange(T, t_end + 1e-9, T)):
+        ax.axvline(tv, color=color, ls="--", lw=0.8, alpha=0.6, label=label if i == 0 else None)
+
+
+def step_text(tr: Traces) -> str:
+    """Each run's method and step, in words."""
+    return "; ".join(f"{label}: {r['title']}, {r['step']}" for label, r in tr.runs.items())
+
+
+def package_versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for dist in ("mechviz", "numpy", "scipy", "numba", "viser", "trimesh", "matplotlib"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def manifest(d: Demo, tr: Traces, figs: list[dict[str, Any]], *, wall: float) -> dict[str, Any]:
+    """The manifest: the demo, what ran (methods, steps, work), measured against predicted
+    figures, final errors and package versions."""
+    return {
+        "demo": d.name,
+        "title": d.title,
+        "description": d.description,
+        "exhibit": d.exhibit,
+        "motion": d.motion,
+        "parameters": dataclasses.asdict(d.config().physics()),
+        "initial": msgspec.to_builtins(d.initial),
+        "method": d.method,
+        "step": step_text(tr),
+        "dt": d.dt,
+        "rtol": d.rtol,
+        "runs": tr.runs,
+        "events": [{"t": e["t"], "action": e["action"], "dv": e["dv"]} for e in tr.event_log],
+        "duration": d.duration,
+        "fps": d.fps,
+        "frames": d.frames,
+        "speed": d.speed,
+        "simulated_time": float(tr.t[-1]),
+        "camera": msgspec.to_builtins(d.camera),
+        "figures": figs,
+        "final_errors": final_errors(tr),
+        "versions": package_versions(),
+        "recorded_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "record_seconds": round(wall, 3),
+        "demo_file": d.as_dict(),
+    }
+
+
+def final_errors(tr: Traces) -> dict[str, dict[str, Any]]:
+    out = {}
+    for label in tr.states:
+        E = tr.energy_error[label]
+        e = tr.error[label]
+        out[label] = {
+            "energy_error_final": float(np.max(np.abs(E[-1]))),
+            "energy_error_max": float(np.max(np.abs(E))),
+            "error_final": None if e is None else float(np.nanmax(e[-1])),
+            "error_max": None if e is None else float(np.nanmax(e)),
+            "error_against": tr.reference[label],
+            "steps": tr.steps[label],
+            "rhs_evaluations": tr.nfev[label],
+        }
+    return out
+
+
+def _system_name(d: Demo) -> str:
+    return "driven-disk" if d.motion == "driven" else EXHIBITS[d.exhibit].Config.system_name

@@ -1,0 +1,172 @@
+"""Running a demo headless: the viewer's own exhibit, one frame every ``1 / fps`` of playback.
+
+:func:`run_demo` builds the demo's exhibit (:meth:`viz.record.demo.Demo.config`) in a headless
+viser server with two scene serializers attached, advances it frame by frame (simulated time
+``speed / fps`` per frame), fires the scripted events at their times (a kick is a jump of the
+same runs, :meth:`dynamics.Simulation.jump`: time and counters go on), draws every frame, and
+keeps every run's samples as :class:`Traces`. Nothing here draws on its own: what a recording
+shows is what the viewer shows for the same settings.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+import dynamics
+
+from ..scene import EXHIBITS, Exhibit
+from .demo import Demo
+
+ProgressFn = Callable[[int, int], None]
+
+
+@dataclass
+class Traces:
+    """Samples of every run at every frame, by run label (the method's name, or
+    ``"<method> (compare)"`` when both runs use one method)."""
+
+    t: np.ndarray  # (K,) frame times (simulated)
+    times: dict[str, np.ndarray]  # label -> (K,) time of each sample (fixed step: last step <= t)
+    states: dict[str, np.ndarray]  # label -> (K, N, d)
+    energy: dict[str, np.ndarray]  # label -> (K, N)
+    energy_error: dict[str, np.ndarray]
+    error: dict[str, np.ndarray | None]
+    reference: dict[str, str | None]
+    steps: dict[str, int]
+    nfev: dict[str, int]
+    runs: dict[str, dict[str, Any]]  # label -> method, title, order, structure, step
+    ghost: np.ndarray | None  # (K, 1, d) linear theory (hoop)
+    event_log: list[dict[str, Any]] = field(default_factory=list)
+    measured: dict[str, Any] = field(default_factory=dict)  # the exhibit's readout figures
+
+    @property
+    def main(self) -> str:
+        return next(iter(self.states))
+
+
+@dataclass
+class Recorded:
+    """What one headless run produced: the ``.viser`` bytes, its HTML page, the traces."""
+
+    viser: bytes
+    html: bytes
+    traces: Traces
+
+
+def labels_for(ex: Exhibit) -> dict[str, str]:
+    """Run role (``main``/``compare``) -> label: the method's name, made unique."""
+    runs = ex.runs()
+    out = {"main": runs["main"].method.name}
+    if "compare" in runs:
+        name = runs["compare"].method.name
+        out["compare"] = name if name != out["main"] else f"{name} (compare)"
+    return out
+
+
+def build_exhibit(server, demo: Demo) -> Exhibit:
+    """The demo's exhibit, as the viewer would build it for these settings."""
+    return EXHIBITS[demo.exhibit](server, demo.config(), history_len=8)
+
+
+def run_demo(demo: Demo, progress: ProgressFn | None = None) -> Recorded:
+    """Run ``demo`` headless and record it (see the module docstring). Raises
+    :class:`dynamics.IntegrationError` if a run blows up."""
+    import viser
+
+    with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner even when quiet
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        ex = build_exhibit(server, demo)
+        position, look_at = ex.camera
+        cam = demo.camera
+        server.initial_camera.position = tuple(cam.position or position)
+        server.initial_camera.look_at = tuple(cam.look_at or look_at)
+        return _run(server, ex, demo, progress)
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
+
+
+def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None) -> Recorded:
+    labels = labels_for(ex)
+    runs = {labels[role]: sim for role, sim in ex.runs().items()}
+    K = demo.frames
+    t_frames = np.arange(K) / demo.fps * demo.speed
+    d = next(iter(runs.values())).state.shape[1]
+    times = {lbl: np.empty(K) for lbl in runs}
+    states = {lbl: np.empty((K, len(s.state), d)) for lbl, s in runs.items()}
+    energy = {lbl: np.empty((K, len(s.state))) for lbl, s in runs.items()}
+    eerr = {lbl: np.empty((K, len(s.state))) for lbl, s in runs.items()}
+    err: dict[str, np.ndarray | None] = {
+        lbl: np.full((K, len(s.state)), np.nan) for lbl, s in runs.items()
+    }
+    ghost = np.empty((K, 1, d)) if getattr(ex.config, "ghost", False) else None
+    pending = list(demo.events)
+    log: list[dict[str, Any]] = []
+    serializers = []
+    for k, t in enumerate(t_frames):
+        while pending and pending[0].t <= t + 1e-12:
+            ev = pending.pop(0)
+            ex.advance_to(ev.t)
+            _raise_if_failed(ex)
+            effects = ex.kick_effects(ev.dv)  # the only scripted action (the schema says so)
+            log.append({
+                "t": ev.t, "action": ev.action, "dv": ev.dv,
+                "effects": {labels[role]: e for role, e in effects.items()},
+            })  # fmt: skip
+        ex.advance_to(float(t))
+        _raise_if_failed(ex)
+        for lbl, sim in runs.items():
+            s = sim.sample()
+            times[lbl][k], states[lbl][k] = s.t, s.state
+            energy[lbl][k], eerr[lbl][k] = s.energy, s.energy_error
+            if s.error is not None:
+                err[lbl][k] = s.error
+        if ghost is not None:
+            ghost[k, 0] = ex.ghost_state()
+        for ser in serializers:
+            ser.insert_sleep(1.0 / demo.fps)  # frame k plays at t = k / fps
+        with server.atomic():
+            ex.draw()
+        if not serializers:
+            # Start after the first frame is drawn: the snapshot holds the whole scene at t = 0
+            # and every later frame only what changed. Two serializers, because each one
+            # serializes once: one for the .viser file, one for viser's own HTML page.
+            serializers = [server.get_scene_serializer(), server.get_scene_serializer()]
+        if progress is not None:
+            progress(k + 1, K)
+    for ser in serializers:
+        ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
+    data = serializers[0].serialize()
+    html = serializers[1].as_html().encode("utf-8")
+    for lbl in runs:
+        if np.all(np.isnan(err[lbl])):
+            err[lbl] = None
+    traces = Traces(
+        t_frames, times, states, energy, eerr, err,
+        {lbl: s.reference_kind for lbl, s in runs.items()},
+        {lbl: s.steps for lbl, s in runs.items()},
+        {lbl: s.nfev for lbl, s in runs.items()},
+        {lbl: _describe(s) for lbl, s in runs.items()},
+        ghost, log, ex.measured(),
+    )  # fmt: skip
+    return Recorded(data, html, traces)
+
+
+def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
+    m = sim.method
+    return {
+        "method": m.name, "title": m.title, "order": m.order,
+        "structure": list(m.structure), "step": sim.step_label(), "dt": sim.dt, "rtol": sim.rtol,
+    }  # fmt: skip
+
+
+def _raise_if_failed(ex: Exhibit) -> None:
+    if ex.failure_error is not None:
+        raise ex.failure_error

@@ -1,0 +1,371 @@
+"""Cyclotron: a charge in a uniform magnetic field along +z.
+
+Shows the field as arrows, the charge with a capped trail of its helix, its guiding centre and
+the circle theory predicts for its current energy (radius ``sqrt(2 m E_perp) / |qB|``). A radial
+kick (``dynamics.cyclotron.radial_kick``) changes the state at the current time without
+restarting the run, and the predicted circle moves at once. A beam of charges leaving the
+charge's start point in its direction, with a spread of speeds, advanced in one batched call,
+shows that every orbit has the same period. Coordinates are the dynamics' own, relative to the
+exhibit's origin; the height along B is drawn modulo ``config.height`` so the helix stays in
+view (the trail is broken where it wraps).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+import dynamics
+from dynamics import cyclotron as cy
+from dynamics import measure
+
+from .. import geometry as geo
+from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt, positive
+
+
+@dataclass(frozen=True)
+class CyclotronConfig(ExhibitConfig):
+    """Settings of the cyclotron exhibit.
+
+    The charge starts on the circle of transverse ``speed`` [m/s] about ``centre`` (x, y) [m] with
+    ``vz`` [m/s] along B, unless ``state`` gives the whole initial state (x, y, z, vx, vy, vz).
+    ``beam``: ``beam_size`` more charges from the same point in the same direction, at speeds
+    spread evenly over ``beam_speeds`` [m/s]. ``compare_method`` runs beside the main one, with
+    ``compare_dt`` / ``compare_rtol`` if given (else the main run's). ``kick`` [m/s] is the
+    radial kick the Kick button gives."""
+
+    system_name: ClassVar[str] = "cyclotron"
+    Params: ClassVar[type] = cy.CyclotronParams
+
+    method: str = "exact"
+    dt: float = 0.01
+    params: dict = field(default_factory=lambda: default_params(cy.CyclotronParams()))
+    speed: float = 1.0
+    vz: float = 0.05
+    centre: tuple = (0.0, 0.0)
+    state: tuple | None = None
+    beam: bool = False
+    beam_size: int = 16
+    beam_speeds: tuple = (0.25, 1.75)
+    kick: float = 0.5
+    compare_method: str | None = None
+    compare_dt: float | None = None
+    compare_rtol: float | None = None
+    trail_cap: int = 600
+    height: float = 2.0
+
+    def _validate(self) -> None:
+        positive("speed", self.speed)
+        finite_numbers("vz", (self.vz,), 1)
+        finite_numbers("centre", self.centre, 2)
+        if self.state is not None:
+            s = finite_numbers("state", self.state, 6)
+            if s[3] == 0.0 and s[4] == 0.0:
+                raise ValueError("state must have a transverse velocity (vx, vy not both 0)")
+        if not (isinstance(self.beam_size, int) and 1 <= self.beam_size <= 1000):
+            raise ValueError(f"beam_size must be a whole number from 1 to 1000, got {self.beam_size!r}")
+        lo, hi = (positive("beam_speeds", v) for v in finite_numbers("beam_speeds", self.beam_speeds, 2))
+        if lo > hi:
+            raise ValueError(f"beam_speeds must be (low, high), got {self.beam_speeds!r}")
+        finite_numbers("kick", (self.kick,), 1)
+        if self.compare_dt is not None:
+            positive("compare_dt", self.compare_dt)
+        if self.compare_rtol is not None and not 0 < positive("compare_rtol", self.compare_rtol) < 1:
+            raise ValueError(f"compare_rtol must be below 1, got {self.compare_rtol!r}")
+        positive("height", self.height)
+        if not (isinstance(self.trail_cap, int) and self.trail_cap >= 2):
+            raise ValueError(f"trail_cap must be a whole number of at least 2, got {self.trail_cap!r}")
+
+    def initial_state(self) -> np.ndarray:
+        if self.state is not None:
+            return np.array(self.state, dtype=float)
+        return cy.circular_orbit_state(self.physics(), self.speed, self.centre, self.vz)
+
+    def beam_states(self) -> np.ndarray:
+        """(beam_size, 6): every charge at the start point, moving the same way, at its speed."""
+        s0 = self.initial_state()
+        speeds = np.linspace(self.beam_speeds[0], self.beam_speeds[1], self.beam_size)
+        out = np.tile(s0, (self.beam_size, 1))
+        direction = s0[3:5] / math.hypot(s0[3], s0[4])
+        out[:, 3:5] = speeds[:, None] * direction
+        return out
+
+
+class CyclotronExhibit(Exhibit):
+    """The charge, its theory circle, optional comparison method and optional beam."""
+
+    key = "cyclotron"
+    title = "Cyclotron"
+    icon = "ATOM"
+    Config = CyclotronConfig
+    chart_series = ("energy", "error", "energy_compare", "error_compare")
+
+    # ------------------------------------------------------------------ scene (built once)
+    def _build(self) -> None:
+        s, r, H = self.scene, self.root, self.config.height
+        s.add_frame(r, show_axes=False, position=self.origin)
+        self.label = s.add_label(
+            f"{r}/label", "Cyclotron: charge in a uniform field B",
+            position=(0.0, 0.0, H + 0.5), anchor="bottom-center",
+        )  # fmt: skip
+        self.field_arrows = s.add_arrows(
+            f"{r}/field", self._field_points(1.0), colors=geo.FIELD,
+            shaft_radius=0.012, head_radius=0.045, head_length=0.12,
+        )  # fmt: skip
+        self.field_label = s.add_label(f"{r}/field_label", "B", position=(1.6, 1.6, H + 0.1))
+        # one batched node: instance 0 the charge, 1 the comparison run (scale 0 while there
+        # is none), 2 the guiding centre
+        ball = geo.sphere_mesh(0.07)
+        self.bodies = s.add_batched_meshes_simple(
+            f"{r}/charges", ball.vertices, ball.faces,
+            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)), batched_positions=np.zeros((3, 3)),
+            batched_scales=np.array([1.0, 0.0, 0.5]),
+            batched_colors=np.array([geo.CHARGE, geo.COMPARE, geo.CENTRE], np.uint8), lod="off",
+        )  # fmt: skip
+        self.ring = s.add_line_segments(
+            f"{r}/theory_circle", geo.circle_segments(1.0),
+            colors=np.array((255, 255, 255), np.uint8), thickness=1.5, thickness_units="screen",
+        )  # fmt: skip
+        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
+        self.compare_trail = geo.ChunkedTrail(
+            s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
+        )
+        self.beam_node = None
+        self._ring_radius = 1.0
+        self._body_positions = np.zeros((3, 3))
+
+    def _field_points(self, sign: float) -> np.ndarray:
+        H = self.config.height
+        a, b = (0.0, H) if sign > 0 else (H, 0.0)
+        return np.asarray(
+            [[[x, y, a], [x, y, b]] for x in (-1.6, 0.0, 1.6) for y in (-1.6, 0.0, 1.6)],
+            np.float32,
+        )
+
+    # ------------------------------------------------------------------ simulations
+    def _start(self) -> None:
+        c = self.config
+        p = c.physics()
+        system = dynamics.Cyclotron(p)
+        s0 = c.initial_state()
+        sim = self._make_simulation(system, c.method, s0)
+        cmp_ = None
+        if c.compare_method:
+            cmp_ = self._make_simulation(
+                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
+            )
+        beam = None
+        if c.beam:
+            beam = self._make_simulation(system, c.method, c.beam_states(), reference=None)
+        # --- nothing above touched the exhibit; install
+        self.params = p
+        self.sim, self.compare, self.beam = sim, cmp_, beam
+        self._reset_common()
+        self.trail.clear()
+        self.compare_trail.clear()
+        self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
+        self._rebuild_beam_node()
+        self.bodies.batched_scales = np.array([1.0, 1.0 if cmp_ is not None else 0.0, 0.5])
+        self.compare_trail.visible = cmp_ is not None
+        self._begin_segment()
+
+    def _begin_segment(self) -> None:
+        """Start the samples the estimators read: at the start, and again after a kick."""
+        p, st = self.params, self.state
+        self.theory_centre = cy.guiding_centre(p, st)
+        self.theory_radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
+        self.motion = Motion((2, 2))  # (x, y) and (vx, vy) of the charge
+        self.beam_motion = None
+        if self.beam is not None:
+            n = len(self.beam.state)
+            self.beam_motion = Motion((n, 2), maxlen=min(1800, max(64, 400_000 // n)))
+        self.trail.lift()
+        self.compare_trail.lift()
+        self._observe()
+
+    def _rebuild_beam_node(self) -> None:
+        if self.beam_node is not None:
+            self.beam_node.remove()
+            self.beam_node = None
+        if self.beam is None:
+            return
+        n = len(self.beam.state)
+        sphere = geo.sphere_mesh(0.045, 1)
+        t = np.linspace(0.0, 1.0, n)[:, None]
+        colors = ((1 - t) * np.array([255, 230, 60]) + t * np.array([255, 110, 20])).astype(np.uint8)
+        self.beam_node = self.scene.add_batched_meshes_simple(
+            f"{self.root}/beam", sphere.vertices, sphere.faces,
+            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
+            batched_positions=self._display(self.beam.state[:, :3]),
+            batched_colors=colors, lod="off",
+        )  # fmt: skip
+
+    def _extra_simulations(self):
+        return [self.beam] if self.beam is not None else []
+
+    def runs(self) -> dict[str, dynamics.Simulation]:
+        """With a beam on, a recording traces the beam as its main run."""
+        out = super().runs()
+        if self.beam is not None:
+            out["main"] = self.beam
+        return out
+
+    # ------------------------------------------------------------------ measurements
+    def _observe(self) -> None:
+        st = self.state
+        self.motion.add(self.t, (st[0:2], st[3:5]))
+        if self.beam_motion is not None:
+            self.beam_motion.add(self.beam.t, self.beam.state[:, 3:5])
+
+    def measured(self) -> dict:
+        """Gyrofrequency and circle of the charge since its start or last kick
+        (:func:`dynamics.measure.gyrofrequency`, :func:`dynamics.measure.fit_circle`), and each
+        beam member's gyrofrequency."""
+        t, x = self.motion.arrays()
+        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1])}
+        circle = measure.fit_circle(x[:, 0]) if out["gyrofrequency"] is not None else None
+        out["radius"] = None if circle is None else circle[1]
+        out["beam_gyrofrequencies"] = None
+        if self.beam_motion is not None:
+            tb, vb = self.beam_motion.arrays()
+            out["beam_gyrofrequencies"] = measure.gyrofrequency(tb, vb)
+        return out
+
+    # ------------------------------------------------------------------ commands
+    def _ops_hint(self) -> str:
+        return ", kick"
+
+    def _apply_op(self, op, args: dict) -> str:
+        if op != "kick":
+            return super()._apply_op(op, args)
+        dv = finite_numbers("dv", (args.get("dv", self.config.kick),), 1)[0]
+        self.kick_effects(dv)
+        centre, radius = self.theory_centre, self.theory_radius
+        return (
+            f"kick dv = {dv:g} m/s: new circle radius {radius:.4g} m "
+            f"about ({centre[0]:.3g}, {centre[1]:.3g})"
+        )
+
+    def kick_effects(self, dv: float) -> dict[str, dict]:
+        """Kick every run (and the beam) radially by ``dv`` [m/s] at the current time, without a
+        restart (:meth:`dynamics.Simulation.jump`); returns, by run, the state before and what
+        theory predicts: each member's new centre and radius and the shift ``|dv| / |Omega|``."""
+        p = self.params
+        out = {}
+        for role, sim in self.runs().items():
+            before = sim.state.copy()
+            kicked = [cy.radial_kick(p, s, dv) for s in before]
+            out[role] = {
+                "state_before": before.tolist(),
+                "predicted_centre": [k[1][:2].tolist() for k in kicked],
+                "predicted_radius": [k[2] for k in kicked],
+                "predicted_shift": abs(dv) / abs(cy.signed_gyrofrequency(p)),
+            }
+        for sim in self.simulations():
+            sim.jump(np.array([cy.radial_kick(p, s, dv)[0] for s in sim.state]))
+        self.revision += 1
+        self._sample = self._compare_sample = None
+        self._begin_segment()
+        return out
+
+    # ------------------------------------------------------------------ drawing
+    def _display(self, xyz: np.ndarray) -> np.ndarray:
+        out = np.array(xyz, dtype=float)
+        out[..., 2] = np.mod(out[..., 2], self.config.height)
+        return out
+
+    def display_position(self, state: np.ndarray) -> np.ndarray:
+        """Where a state's charge is drawn, relative to the exhibit origin."""
+        return self._display(np.asarray(state)[:3])
+
+    def _push_trail(self, trail: geo.ChunkedTrail, pos: np.ndarray) -> None:
+        last = trail.last_point
+        if last is not None and abs(pos[2] - last[2]) > 0.5 * self.config.height:
+            trail.lift()  # the displayed height wrapped round: no segment across the jump
+        trail.push(pos)
+        trail.draw()
+
+    def draw(self) -> None:
+        st = self.state
+        pos = self.display_position(st)
+        p = self.params
+        centre = cy.guiding_centre(p, st)
+        radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
+        cs = self.compare_state
+        cpos = self.display_position(cs) if cs is not None else pos
+        bodies = self._body_positions  # reused: viser copies what it is given
+        bodies[0], bodies[1] = pos, cpos
+        bodies[2] = centre[0], centre[1], pos[2]
+        self.bodies.batched_positions = bodies
+        self._push_trail(self.trail, pos)
+        if cs is not None:
+            self._push_trail(self.compare_trail, cpos)
+        if abs(radius - self._ring_radius) > 1e-4 * max(radius, 1e-9):
+            self.ring.points = geo.circle_segments(radius)
+            self._ring_radius = radius
+        self.ring.position = (centre[0], centre[1], pos[2])
+        if self.beam is not None and self.beam_node is not None:
+            self.beam_node.batched_positions = self._display(self.beam.state[:, :3])
+
+    @property
+    def camera(self):
+        o = self.origin
+        return (tuple(o + (0.0, -5.2, 3.6)), tuple(o + (0.0, 0.0, 0.8)))
+
+    # ------------------------------------------------------------------ readout
+    def readout(self) -> str:
+        p, smp = self.params, self.sample
+        w_th = cy.gyrofrequency(p)
+        m = self.measured()
+        w_me = m["gyrofrequency"]
+        lines = [
+            f"**t = {self.t:.2f} s** · {self.method_line(self.sim)}",
+            "",
+            "| quantity | theory | measured |",
+            "|---|---|---|",
+            f"| gyrofrequency \\|qB\\|/m [rad/s] | {fmt(w_th)} | {fmt(w_me)} |",
+            f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {fmt(2 * math.pi / w_me) if w_me else '—'} |",
+            f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.theory_radius)} | {fmt(m['radius'])} |",
+            f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
+            f"| error vs exact | 0 | {float(np.max(smp.error)) if smp.error is not None else 0.0:.2e} |",
+        ]
+        c = self.compare_sample
+        if c is not None:
+            lines.append(
+                f"\nComparison {self.method_line(self.compare)} (blue): |ΔE/E₀| = "
+                f"{float(np.max(np.abs(c.energy_error))):.2e}, error {float(np.max(c.error)):.2e}"
+            )
+        wb = m["beam_gyrofrequencies"]
+        if self.beam is not None:
+            lo, hi = self.config.beam_speeds
+            spread = "—" if wb is None else f"{fmt(wb.min())} to {fmt(wb.max())} rad/s"
+            lines.append(
+                f"\nBeam of {len(self.beam.state)} charges, speeds {lo:g}–{hi:g} m/s: "
+                f"ω from {spread} (same period for all)"
+            )
+        lines.append(self.work_line())
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------------ GUI
+    def build_panel(self, panel) -> None:
+        gui, c = panel.gui, self.config
+        panel.readout_and_chart(compare=True)
+        panel.param_inputs({"charge": "Charge q [C]", "mass": "Mass m [kg]", "field": "Field B [T]"})
+        panel.integrator_inputs(compare=True)
+        with gui.add_folder("Kick and beam"):
+            strength = panel.put("kick", gui.add_slider(
+                "Kick dv [m/s]", min=-1.0, max=1.0, step=0.05, initial_value=c.kick
+            ))  # fmt: skip
+            kick = gui.add_button("Kick", hint="Radial velocity kick: the predicted circle moves at once")
+            beam = panel.put("beam", gui.add_checkbox(
+                "Beam", initial_value=c.beam, hint="Many charges, a spread of speeds"
+            ))  # fmt: skip
+            size = panel.put("beam_size", gui.add_slider(
+                "Beam size", min=2, max=200, step=1, initial_value=c.beam_size
+            ))  # fmt: skip
+        kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
+        panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
+        panel.on(size, lambda v: panel.send({"op": "set", "beam_size": int(v)}))
