@@ -95,11 +95,6 @@ def energy(p: CyclotronParams, state: np.ndarray) -> np.ndarray:
     return 0.5 * p.mass * np.sum(s[..., 3:6] ** 2, axis=-1)
 
 
-def hamiltonian_polar(p: CyclotronParams, r: float, p_r: float, p_phi: float) -> float:
-    """``H = p_r^2/2m + (p_phi - qB r^2/2)^2 / (2 m r^2)`` [J] (the seed's H with qB -> -eB)."""
-    return p_r * p_r / (2.0 * p.mass) + effective_potential(p, r, p_phi)
-
-
 def effective_potential(p: CyclotronParams, r: float, p_phi: float) -> float:
     """``V_eff(r) = p_phi^2/(2 m r^2) - qB p_phi/(2m) + (qB)^2 r^2 / (8 m)`` [J]."""
     qb = p.charge * p.field

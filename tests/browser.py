@@ -1,8 +1,8 @@
 """Shared helper for tests (and the recorder) that drive headless Chromium through playwright.
 
 Debian's ``chromium`` package is used through ``executable_path``; ``playwright install`` is never
-run (it downloads a browser build and fails offline). The launch flags and the persistent-context
-launch follow ``VISER_NOTES.md`` section 7.
+run (it downloads a browser build and fails offline). The flags keep Chromium off the network
+(background services, component updates, sync) and away from the GPU the machines do not have.
 
 Stable API (the recording helper imports it too)::
 

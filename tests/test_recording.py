@@ -44,19 +44,6 @@ def test_every_builtin_demo_is_listed_with_a_short_run_here():
     assert len(rec.demo_names()) >= 10
 
 
-@pytest.fixture
-def server():
-    import contextlib
-
-    import viser
-
-    with contextlib.redirect_stdout(io.StringIO()):
-        srv = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    yield srv
-    with contextlib.redirect_stdout(io.StringIO()):
-        srv.stop()
-
-
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     out = tmp_path_factory.mktemp("demos")

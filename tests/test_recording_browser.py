@@ -1,9 +1,9 @@
 """Recordings in a real browser: each demo's DEMO.html, opened from file:// in headless Chromium,
 draws its scene (non-blank canvas) and shows viser's playback bar. The still of each demo taken
-here is saved to docs/img/demos/NAME.png for the README (docs/recording.md).
+here is saved to docs/img/demos/NAME.png for the README.
 
 One Chromium serves every demo (pages are reloaded, not relaunched). SwiftShader draws the first
-frame of a lit scene in 4-8 s on an idle machine (VISER_NOTES section 7), several times that
+frame of a lit scene in 4-8 s on an idle machine, several times that
 under load; locator clicks wait for animation frames, so the bar is driven with the mouse.
 """
 

@@ -1,5 +1,5 @@
 """Stability where methods fail: each test measures a method through the driver and asserts the
-closed-form prediction (issue 6; :mod:`dynamics.stability`). No timing is asserted anywhere.
+closed-form prediction (:mod:`dynamics.stability`). No timing is asserted anywhere.
 
 omega is the gyrofrequency (charge) or the higher normal-mode frequency (hoop); x = omega dt.
 """

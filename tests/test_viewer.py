@@ -45,18 +45,6 @@ def app():
     a.stop()
 
 
-@pytest.fixture
-def server():
-    import contextlib
-    import io
-
-    with contextlib.redirect_stdout(io.StringIO()):
-        s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    yield s
-    with contextlib.redirect_stdout(io.StringIO()):
-        s.stop()
-
-
 def frames(app, n: int) -> None:
     for _ in range(n):
         app.step_frame()

@@ -31,13 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     # Each of these modules registers its own subcommands and imports viser (or matplotlib)
     # only inside the command it runs, so `analyze` and `simulate` stay light.
     for module in _COMMAND_MODULES:
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name != module:
-                raise
-            continue  # not written yet
-        mod.add_commands(sub)
+        importlib.import_module(module).add_commands(sub)
     return parser
 
 

@@ -1,13 +1,13 @@
 """Endurance benchmark of the live viewer: frame rate and memory over minutes, browsers connected.
 
-Issue 4's target: the viewer holds 60 frames per second for 10 minutes with three browser clients
+The target: the viewer holds 60 frames per second for 10 minutes with three browser clients
 connected, with memory flat (trails capped). :func:`run_endurance` measures exactly that:
 
 1. The real viewer (:class:`viz.app.MechvizApp` with its 60 Hz loop thread, every exhibit at its
    defaults) runs in a **child process** bound to 127.0.0.1 on a free port. The child is the
    *server process* measured here; the browsers are driven from this (parent) process, so
-   playwright never shares a Python process, an interpreter lock or a heap with the loop
-   (``VISER_NOTES.md`` section 7).
+   playwright never shares a Python process, an interpreter lock or a heap with the loop (in one
+   process, playwright's event loop and the viewer's loop thread slow each other down).
 2. ``clients`` headless Chromium instances (Debian's ``/usr/bin/chromium`` through playwright, each
    with its own empty profile; ``playwright install`` is never run) open the page and wait until
    viser shows "Connected". After ``settle_s`` seconds the measurement starts and lasts ``seconds``.
@@ -536,7 +536,7 @@ def _summarize(data: dict, *, t0: float, t1: float, frames, seconds, clients, cl
         and len(page_checks) == clients
     )
     return {
-        "about": "mechviz endurance benchmark (issue 4): the live viewer's server loop with "
+        "about": "mechviz endurance benchmark: the live viewer's server loop with "
         "headless Chromium clients connected; see viz/endurance.py",
         "command": f"mechviz bench --endurance {seconds:g} --clients {clients}",
         "date": datetime.datetime.fromtimestamp(started, datetime.UTC).strftime(

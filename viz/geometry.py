@@ -45,26 +45,10 @@ def torus_mesh(major_radius: float, minor_radius: float) -> trimesh.Trimesh:
     )
 
 
-def rod_mesh(length: float, radius: float, sections: int = 16) -> trimesh.Trimesh:
-    """A cylinder along +z from ``z = 0`` to ``z = length``."""
-    rod = trimesh.creation.cylinder(radius=radius, height=length, sections=sections)
-    rod.apply_translation((0.0, 0.0, 0.5 * length))
-    return rod
-
-
 def rod_between(a, b, radius: float, sections: int = 16) -> trimesh.Trimesh:
     """A cylinder from point ``a`` to point ``b``."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     return trimesh.creation.cylinder(radius=radius, segment=np.stack([a, b]), sections=sections)
-
-
-def arrow_mesh(length: float, shaft_radius: float, head_radius: float, head_length: float):
-    """An arrow along +z from the origin, ``length`` long (head included)."""
-    shaft_len = max(length - head_length, 1e-6)
-    shaft = rod_mesh(shaft_len, shaft_radius)
-    head = trimesh.creation.cone(radius=head_radius, height=head_length, sections=16)
-    head.apply_translation((0.0, 0.0, shaft_len))
-    return trimesh.util.concatenate([shaft, head])
 
 
 def sphere_mesh(radius: float, subdivisions: int = 2) -> trimesh.Trimesh:
@@ -102,37 +86,11 @@ def quat_from_matrix(r: np.ndarray) -> np.ndarray:
     return np.array([q[0] / n, q[1] / n, q[2] / n, q[3] / n])
 
 
-def quat_to_matrix(q) -> np.ndarray:
-    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def quat_about_axis(axis, angle: float) -> np.ndarray:
     axis = np.asarray(axis, float)
     axis = axis / np.linalg.norm(axis)
     h = 0.5 * angle
     return np.concatenate([[math.cos(h)], math.sin(h) * axis])
-
-
-def quat_z_to(direction) -> np.ndarray:
-    """Quaternion turning +z onto ``direction`` (any non-zero vector)."""
-    d = np.asarray(direction, float)
-    n = np.linalg.norm(d)
-    if n == 0.0:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    d = d / n
-    c = d[2]
-    if c < -1.0 + 1e-12:
-        return np.array([0.0, 1.0, 0.0, 0.0])
-    axis = np.cross([0.0, 0.0, 1.0], d)
-    q = np.array([1.0 + c, axis[0], axis[1], axis[2]])
-    return q / np.linalg.norm(q)
 
 
 # ----------------------------------------------------------------------------- trail
@@ -142,7 +100,8 @@ class ChunkedTrail:
     Every ``chunk`` segments the open chunk is frozen (its node is never touched again) and a
     new node starts; the oldest chunk node is removed once the trail holds more than ``cap``
     segments. Each frame therefore rewrites at most one small node, which keeps live frames cheap
-    and recordings small (VISER_NOTES section 8). ``push(p)`` appends a point; ``lift()`` makes
+    and recordings small (a recording stores every message, so rewriting a whole long trail each
+    frame would store the trail once per frame). ``push(p)`` appends a point; ``lift()`` makes
     the next point start a new piece (no segment joins them, e.g. when a display coordinate wraps).
     Call :meth:`draw` once per frame (inside the caller's ``server.atomic()``).
 

@@ -95,10 +95,16 @@ class ExhibitConfig:
             m = getattr(self, fld)
             if m is not None and m not in names:
                 raise ValueError(f"{fld} must be one of {', '.join(names)}; got {m!r}")
-        positive("dt", self.dt)
-        rtol = positive("rtol", self.rtol)
-        if rtol >= 1.0:
-            raise ValueError(f"rtol must be below 1, got {self.rtol!r}")
+        # the step settings every run takes, and those of a comparison run where there is one
+        for name in ("dt", "compare_dt"):
+            if getattr(self, name, None) is not None:
+                positive(name, getattr(self, name))
+        for name in ("rtol", "compare_rtol"):
+            if getattr(self, name, None) is not None and positive(name, getattr(self, name)) >= 1:
+                raise ValueError(f"{name} must be below 1, got {getattr(self, name)!r}")
+        cap = getattr(self, "trail_cap", 2)
+        if not (isinstance(cap, int) and cap >= 2):
+            raise ValueError(f"trail_cap must be a whole number of at least 2, got {cap!r}")
         self._validate()
 
     def _validate(self) -> None:

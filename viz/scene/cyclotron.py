@@ -71,13 +71,7 @@ class CyclotronConfig(ExhibitConfig):
         if lo > hi:
             raise ValueError(f"beam_speeds must be (low, high), got {self.beam_speeds!r}")
         finite_numbers("kick", (self.kick,), 1)
-        if self.compare_dt is not None:
-            positive("compare_dt", self.compare_dt)
-        if self.compare_rtol is not None and not 0 < positive("compare_rtol", self.compare_rtol) < 1:
-            raise ValueError(f"compare_rtol must be below 1, got {self.compare_rtol!r}")
         positive("height", self.height)
-        if not (isinstance(self.trail_cap, int) and self.trail_cap >= 2):
-            raise ValueError(f"trail_cap must be a whole number of at least 2, got {self.trail_cap!r}")
 
     def initial_state(self) -> np.ndarray:
         if self.state is not None:
