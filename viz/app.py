@@ -55,7 +55,9 @@ from .live_record import add_record_toggle
 from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
 from .scene.panel import Panel
 
-ORIGINS = {"cyclotron": (-5.5, 0.0, 0.0), "disk": (0.0, 0.0, 0.0), "hoop": (5.5, 0.0, 0.0)}
+SPACING = 5.5  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
+ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
+VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
 OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
@@ -72,7 +74,8 @@ def warm_up(
 
     ``should_stop`` is polled between methods (Ctrl-C during start-up)."""
     if which == "all":
-        return warm.warm_all(warm.every_method(), should_stop)
+        systems = {cls.Config.system_name for cls in EXHIBITS.values()}
+        return warm.warm_all(warm.every_method(sorted(systems)), should_stop)
     cfg = configs or {}
     needed: list[tuple[str, str]] = [("hoop", "dop853"), ("free-body", "dop853")]  # references
     for key, cls in EXHIBITS.items():
@@ -287,7 +290,7 @@ class MechvizApp:
     def camera_preset(self, view: str):
         if view == "All":
             return OVERVIEW
-        key = {"Cyclotron": "cyclotron", "Disk": "disk", "Hoop": "hoop"}[view]
+        key = VIEWS[view]
         return self.exhibits[key].camera
 
     def _move_camera(self, client, view: str) -> None:
@@ -395,7 +398,7 @@ class MechvizApp:
                 hint="Simulated seconds per real second",
             )
             w["status"] = gui.add_markdown("t = 0 s")
-            w["view"] = gui.add_button_group("View", options=("All", "Cyclotron", "Disk", "Hoop"))
+            w["view"] = gui.add_button_group("View", options=("All", *VIEWS))
         w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
         w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
         w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))
@@ -407,7 +410,7 @@ class MechvizApp:
 
         tabs = gui.add_tab_group()
         for key, ex in self.exhibits.items():
-            with tabs.add_tab(ex.title.split()[0], icon=getattr(viser.Icon, ex.icon)):
+            with tabs.add_tab(ex.name, icon=getattr(viser.Icon, ex.icon)):
                 panel = self.panels[key] = Panel(self, ex)
                 ex.build_panel(panel)
 
@@ -440,8 +443,8 @@ class MechvizApp:
     # so its readout reuses that sample.
     GUI_CYCLE: ClassVar[int] = 12
     STATUS_FRAMES: ClassVar[tuple[int, ...]] = (0, 6)
-    EXHIBIT_FRAMES: ClassVar[dict[str, int]] = {"cyclotron": 2, "disk": 4, "hoop": 9}
-    MEASURE_PHASE: ClassVar[dict[str, int]] = {"cyclotron": 2, "disk": 1, "hoop": 0}
+    EXHIBIT_FRAMES: ClassVar[dict[str, int]] = dict(zip(EXHIBITS, (2, 4, 9), strict=True))
+    MEASURE_PHASE: ClassVar[dict[str, int]] = dict(zip(EXHIBITS, (2, 1, 0), strict=True))
 
     def _update_gui(self, force: bool = False) -> None:
         """Refresh the status line and the readouts and charts on their staggered frames (see

@@ -17,7 +17,6 @@ import dynamics
 
 _lock = threading.Lock()
 _done: set[tuple[str, str]] = set()
-SYSTEMS = ("cyclotron", "free-body", "hoop")
 
 
 def warm_method(system_name: str, method: str) -> float:
@@ -42,10 +41,10 @@ def warm_method(system_name: str, method: str) -> float:
     return time.perf_counter() - t0
 
 
-def every_method() -> list[tuple[str, str]]:
-    """``(system, method)`` for every compiled method of the viewer's systems."""
+def every_method(systems: Iterable[str]) -> list[tuple[str, str]]:
+    """``(system, method)`` for every compiled method of ``systems``."""
     return [
-        (s, m.name) for s in SYSTEMS for m in dynamics.methods_for(s) if m.backend != "scipy"
+        (s, m.name) for s in systems for m in dynamics.methods_for(s) if m.backend != "scipy"
     ]
 
 

@@ -219,13 +219,14 @@ class Motion:
 
 # =========================================================================== the exhibit
 class Exhibit:
-    """Base class: subclasses define ``Config``, ``key``, ``title``, ``icon`` and the hooks
-    ``_build`` (scene nodes, once), ``_start`` (simulations from the config), ``_observe``
+    """Base class: subclasses define ``Config``, ``key``, ``title``, ``name``, ``icon`` and the
+    hooks ``_build`` (scene nodes, once), ``_start`` (simulations from the config), ``_observe``
     (record the motion samples after each advance), ``draw``, ``readout``, ``measured``,
     ``_apply_op`` (own operations) and ``build_panel``."""
 
     key: ClassVar[str] = ""
     title: ClassVar[str] = ""
+    name: ClassVar[str] = ""  # one word: its tab and camera preset
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
     Config: ClassVar[type[ExhibitConfig]]
     chart_series: ClassVar[tuple[str, ...]] = ("energy", "error")

@@ -93,6 +93,7 @@ class CyclotronExhibit(Exhibit):
 
     key = "cyclotron"
     title = "Cyclotron"
+    name = "Cyclotron"
     icon = "ATOM"
     Config = CyclotronConfig
     chart_series = ("energy", "error", "energy_compare", "error_compare")

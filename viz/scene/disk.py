@@ -71,6 +71,7 @@ def to_world(v) -> np.ndarray:
 class DiskExhibit(Exhibit):
     key = "disk"
     title = "Spinning disk"
+    name = "Disk"
     icon = "DISC"
     Config = DiskConfig
 

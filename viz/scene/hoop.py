@@ -80,6 +80,7 @@ class HoopConfig(ExhibitConfig):
 class HoopExhibit(Exhibit):
     key = "hoop"
     title = "Hoop with bead"
+    name = "Hoop"
     icon = "CIRCLE"
     Config = HoopConfig
     chart_series = ("energy", "error", "energy_compare", "error_compare")
