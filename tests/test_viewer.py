@@ -364,6 +364,29 @@ def test_hoop_mode_frequencies_are_measured_from_the_motion(server):
         assert measured[1 - k] is None  # the other mode is not excited
 
 
+def test_a_new_hoop_start_keeps_the_clock_and_the_count_of_steps(server):
+    ex = HoopExhibit(server, HoopConfig(compare_method="verlet"))
+    for _ in range(60):
+        ex.advance(FRAME)
+    t, steps = ex.t, ex.sim.steps
+    ex.apply({"op": "set", "mode": "mode 2", "amplitude": 0.3})
+    assert ex.t == t and ex.sim.steps == steps and ex.compare.t == t
+    np.testing.assert_array_equal(ex.state, hp.mode_state(ex.params, (0.0, 0.3)))
+    np.testing.assert_array_equal(ex.ghost_state(), ex.state)  # linear theory from the new start
+    ex.advance(FRAME)
+    assert ex.t > t and ex.sample.error[0] < 1e-6  # the reference restarted at the new start
+
+
+def test_a_view_option_does_not_restart_the_released_disk(server):
+    ex = DiskExhibit(server)
+    ex.apply({"op": "set", "mode": "released"})
+    for _ in range(30):
+        ex.advance(FRAME)
+    sim, t = ex.sim, ex.t
+    ex.apply({"op": "set", "follow_cm": False})
+    assert ex.sim is sim and ex.t == t
+
+
 def test_comparison_run_is_drawn_beside_with_its_own_method(server):
     ex = HoopExhibit(server, HoopConfig(compare_method="verlet"))
     for _ in range(30):

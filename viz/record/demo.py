@@ -26,6 +26,7 @@ from typing import Any, Literal
 import msgspec
 
 import dynamics
+from dynamics import hoop
 
 from ..scene import EXHIBITS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
 
@@ -183,8 +184,6 @@ class Demo(_Struct):
                 elif a1 == a2:
                     kw.update(mode="mix", amplitude=2 * a1)
                 else:
-                    from dynamics import hoop
-
                     p = hoop.HoopParams(**kw["params"])
                     kw.update(mode="custom", state=tuple(hoop.mode_state(p, (a1, a2)).tolist()))
         return dataclasses.replace(base, **kw)

@@ -230,6 +230,11 @@ class Exhibit:
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
     Config: ClassVar[type[ExhibitConfig]]
     chart_series: ClassVar[tuple[str, ...]] = ("energy", "error")
+    # settings that change only how the exhibit is drawn: applied without touching the runs
+    view_fields: ClassVar[frozenset[str]] = frozenset()
+    # settings that only choose the start: applied as a jump of the running simulations to the
+    # new start, so the clock and the work counters go on (``_jump_to_start``)
+    start_fields: ClassVar[frozenset[str]] = frozenset()
 
     def __init__(
         self, server, config=None, *, origin=(0.0, 0.0, 0.0), history_len: int = 600
@@ -438,6 +443,20 @@ class Exhibit:
             raise ValueError(str(exc)) from None
         if new == self.config:
             return f"{self.title}: unchanged"
+        old = self.config
+        changed = {f.name for f in dataclasses.fields(new) if getattr(new, f.name) != getattr(old, f.name)}
+        described = f"{self.title}: " + ", ".join(f"{k} = {v}" for k, v in changes.items())
+        if changed <= self.view_fields:  # how it is drawn, not what moves: the run goes on
+            self.config = new
+            return described
+        if changed <= self.start_fields:  # a new start, applied now: time and counts go on
+            self.config = new
+            try:
+                self._jump_to_start()
+            except (ValueError, TypeError):
+                self.config = old
+                raise
+            return described
         # _start() builds every simulation before it touches the scene or the state, and
         # replaces (never mutates) the old ones, so restoring the attributes undoes it.
         snapshot = dict(self.__dict__)
@@ -448,7 +467,12 @@ class Exhibit:
             self.__dict__.clear()
             self.__dict__.update(snapshot)
             raise
-        return f"{self.title}: " + ", ".join(f"{k} = {v}" for k, v in changes.items())
+        return described
+
+    def _jump_to_start(self) -> None:
+        """Put every run at the configured start without restarting it
+        (:meth:`dynamics.Simulation.jump`), for exhibits that list ``start_fields``."""
+        raise NotImplementedError
 
     def reset(self) -> None:
         self.revision += 1

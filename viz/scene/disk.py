@@ -74,6 +74,7 @@ class DiskExhibit(Exhibit):
     name = "Disk"
     icon = "DISC"
     Config = DiskConfig
+    view_fields = frozenset({"follow_cm"})
 
     def _build(self) -> None:
         s, r = self.scene, self.root

@@ -84,6 +84,7 @@ class HoopExhibit(Exhibit):
     icon = "CIRCLE"
     Config = HoopConfig
     chart_series = ("energy", "error", "energy_compare", "error_compare")
+    start_fields = frozenset({"mode", "amplitude", "angles", "state"})
 
     def _build(self) -> None:
         s, r = self.scene, self.root
@@ -191,6 +192,17 @@ class HoopExhibit(Exhibit):
     def ghost_state(self) -> np.ndarray:
         """Linear theory from the run's start (or last jump) at the current time."""
         return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t - self.sim.t0)
+
+    def _jump_to_start(self) -> None:
+        s0 = self.config.initial_state()
+        for sim in self.simulations():
+            sim.jump(s0)
+        self.revision += 1
+        self._sample = self._compare_sample = None
+        self.trail.lift()
+        self.cmp_trail.lift()
+        self.motion.clear()
+        self._observe()
 
     def modal_coordinates(self, state) -> np.ndarray:
         return measure.modal_coordinates(np.asarray(state, float)[:2], self.shapes)
