@@ -224,23 +224,66 @@ def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
     frames(app, 1)
     ex = app.exhibits["cyclotron"]
     sim, state, t, config = ex.sim, ex.sample.state.copy(), ex.t, ex.config
-    app.w["cyclotron.params.mass"].value = -2.0
+    app.w["cyclotron.params.mass"].value = "-2"
     frames(app, 1)
     assert ex.sim is sim and ex.config == config and ex.t == t
     np.testing.assert_array_equal(ex.sample.state, state)
     _title, body = app.messages[-1]
-    assert "mass" in body and "positive" in body
-    assert app.w["cyclotron.params.mass"].value == 1.0  # the widget shows the value in use
+    assert body.startswith("Mass m [kg] must be positive")  # named as the panel labels it
+    assert app.w["cyclotron.params.mass"].value == "1"  # the widget shows the value in use
     app.enqueue("app", "play")
     frames(app, 2)
     assert ex.t > t
 
 
 def test_invalid_step_size_is_refused_with_the_field_named(app):
-    app.w["hoop.dt"].value = 0.0
+    app.w["hoop.dt"].value = "0"
     frames(app, 1)
-    assert "dt" in app.messages[-1][1]
+    assert app.messages[-1][1].startswith("Step dt [s] must be positive")
     assert app.exhibits["hoop"].config.dt == pytest.approx(1 / 60)
+    assert app.w["hoop.dt"].value == "0.0166667"
+
+
+@pytest.mark.parametrize(
+    ("typed", "applied"), [("2.5e-2", 0.025), ("2.5E-2", 0.025), ("0.001", 1e-3), ("1e-3", 1e-3)]
+)
+def test_a_step_typed_as_a_person_writes_it_is_applied(app, typed, applied):
+    app.w["hoop.dt"].value = typed
+    frames(app, 1)
+    assert app.exhibits["hoop"].config.dt == applied
+
+
+@pytest.mark.parametrize(
+    ("widget", "typed", "message"),
+    [
+        ("hoop.dt", "abc", "Step dt [s]: 'abc' is not a number"),
+        ("hoop.params.gravity", "1e400", "Gravity g [m/s²] must be a finite number"),
+        ("hoop.th1", "4", "θ1 (custom) [rad] must lie between -3.14 and 3.14"),
+        ("cyclotron.kick", 5.0, "Kick dv [m/s] must lie between -1 and 1"),
+        ("speed", 50.0, "Speed must lie between 0.1x and 10x"),
+    ],
+)
+def test_a_value_that_cannot_be_taken_is_refused_by_name_and_the_box_springs_back(
+    app, widget, typed, message
+):
+    before = app.w[widget].value
+    speed, configs = app.speed, {k: ex.config for k, ex in app.exhibits.items()}
+    app.w[widget].value = typed
+    frames(app, 2)
+    assert app.messages[-1][1].startswith(message), app.messages[-1]
+    assert app.w[widget].value == before
+    assert app.speed == speed and {k: ex.config for k, ex in app.exhibits.items()} == configs
+
+
+def test_real_time_factor_says_nothing_while_paused_and_starts_afresh_after_a_reset(app):
+    frames(app, 10)
+    app.enqueue("app", "pause")
+    app.enqueue("app", "reset")
+    frames(app, 3)
+    assert app.real_time_factor is None
+    app.enqueue("app", "play")
+    frames(app, 5)
+    assert app.real_time_factor > 0
 
 
 def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app):
@@ -274,7 +317,7 @@ def test_camera_presets_point_at_each_exhibit(app):
 
 # --------------------------------------------------------------------------- failures
 def test_diverging_euler_pauses_only_the_charge_and_reset_recovers(app):
-    app.w["cyclotron.dt"].value = 0.5
+    app.w["cyclotron.dt"].value = "0.5"
     app.w["cyclotron.method"].value = "euler"
     app.w["speed"].value = 10.0
     frames(app, 2)
@@ -375,6 +418,28 @@ def test_a_new_hoop_start_keeps_the_clock_and_the_count_of_steps(server):
     np.testing.assert_array_equal(ex.ghost_state(), ex.state)  # linear theory from the new start
     ex.advance(FRAME)
     assert ex.t > t and ex.sample.error[0] < 1e-6  # the reference restarted at the new start
+
+
+def test_the_released_disk_shows_its_principal_axes_about_the_centre_of_mass(server):
+    ex = DiskExhibit(server)
+    p = ex.params
+    mr2 = p.disk_mass * p.radius**2
+    about_a = dk.principal_axes(p)[0] / mr2
+    assert f"{about_a[0]:.3f} MR²" in ex.axes_labels[0].text  # driven: about A (0.654 MR²)
+    ex.apply({"op": "set", "mode": "released"})
+    moments, axes = dk.principal_axes_cm(p)
+    assert "about the centre of mass" in ex.readout()
+    assert all(f"{m / mr2:.3f} MR²" in h.text for m, h in zip(moments, ex.axes_labels, strict=True))
+    pts = ex.axes_node.points.astype(float)
+    np.testing.assert_allclose(pts[:, 0], np.tile(dk.centre_of_mass(p), (3, 1)), atol=1e-6)
+    np.testing.assert_allclose(pts[:, 1] - pts[:, 0], axes * 1.3 * p.radius, atol=1e-6)
+
+
+def test_the_seed_row_shows_only_for_the_seed_bead(server):
+    ex = DiskExhibit(server)
+    assert "5/8 M R ω²" in ex.readout()
+    ex.apply({"op": "set", "params": {"bead_mass": 0.5}})
+    assert "5/8" not in ex.readout()
 
 
 def test_a_view_option_does_not_restart_the_released_disk(server):

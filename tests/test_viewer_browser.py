@@ -107,10 +107,18 @@ def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
     box = page.get_by_role("textbox", name="Gravity g [m/s²]")
     box.fill("-3")
     box.press("Enter")
-    page.get_by_role("alert").filter(has_text="gravity must be positive").first.wait_for(
+    page.get_by_role("alert").filter(has_text="Gravity g [m/s²] must be positive").first.wait_for(
         timeout=15_000
     )
     assert app.exhibits["hoop"].sim is sim
+    # a step written in scientific notation reaches the server as typed
+    box = page.get_by_role("textbox", name="Step dt [s]")
+    box.fill("2.5e-2")
+    box.press("Enter")
+    deadline = time.monotonic() + 15
+    while app.exhibits["hoop"].config.dt != 0.025 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert app.exhibits["hoop"].config.dt == 0.025
 
 
 def test_readme_screenshot_with_environment_lighting(viewer):

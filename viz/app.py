@@ -62,6 +62,7 @@ OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
 FPS = 60.0  # display rate of the simulation loop
+SPEEDS = (0.1, 10.0)  # simulated seconds per real second: the speed control's range
 
 
 # --------------------------------------------------------------------------- numba warm-up
@@ -218,6 +219,10 @@ class MechvizApp:
 
     @property
     def real_time_factor(self) -> float | None:
+        """Simulated seconds per wall second over the last frames; ``None`` while paused or
+        until two frames have played since the last reset or speed change."""
+        if not self.playing:
+            return None
         w = self._rtf_window
         if len(w) < 2 or w[-1][0] - w[0][0] <= 0:
             return None
@@ -248,30 +253,40 @@ class MechvizApp:
                     ex.apply(command)
                     self._sync_widgets(target)
             except ValueError as exc:
-                self.notify(f"Invalid value ({target})", str(exc), color="red")
                 if target in self.exhibits:
+                    panel = self.panels.get(target)
+                    title = self.exhibits[target].title
+                    self.notify(f"Invalid value ({title})", panel.explain(str(exc)) if panel else str(exc))
                     self._sync_widgets(target)
+                else:
+                    self.notify("Invalid value", str(exc), color="red")
 
     def _apply_app(self, cmd: dict) -> None:
         op = cmd.get("op")
-        if op == "play":
-            self.playing = True
-        elif op == "pause":
-            self.playing = False
-        elif op == "toggle":
-            self.playing = not self.playing
+        if op in ("play", "pause", "toggle"):
+            playing = {"play": True, "pause": False, "toggle": not self.playing}[op]
+            if playing != self.playing:
+                self._rtf_window.clear()  # a pause is not a slow-down
+            self.playing = playing
         elif op == "step":
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
-            v = float(cmd["value"])
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"speed must be positive, got {cmd['value']!r}")
-            self.speed = v
+            v = cmd["value"]
+            lo, hi = SPEEDS
+            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+                if self.gui is not None:
+                    self._syncing = True
+                    self.w["speed"].value = self.speed  # the box shows the speed in force
+                    self._syncing = False
+                raise ValueError(f"Speed must lie between {lo:g}x and {hi:g}x, got {v!r}")
+            self.speed = float(v)
+            self._rtf_window.clear()
         elif op == "reset":
             for ex in self.exhibits.values():
                 ex.reset()
             self.sim_time = 0.0
+            self._rtf_window.clear()  # the clock went back: the old samples say nothing now
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
         else:
@@ -391,8 +406,8 @@ class MechvizApp:
             w["reset"] = gui.add_button("Reset all", icon=viser.Icon.REFRESH)
             w["speed"] = gui.add_slider(
                 "Speed",
-                min=0.1,
-                max=10.0,
+                min=SPEEDS[0],
+                max=SPEEDS[1],
                 step=0.1,
                 initial_value=self.speed,
                 hint="Simulated seconds per real second",

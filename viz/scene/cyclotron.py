@@ -351,16 +351,12 @@ class CyclotronExhibit(Exhibit):
         panel.param_inputs({"charge": "Charge q [C]", "mass": "Mass m [kg]", "field": "Field B [T]"})
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
-            strength = panel.put("kick", gui.add_slider(
-                "Kick dv [m/s]", min=-1.0, max=1.0, step=0.05, initial_value=c.kick
-            ))  # fmt: skip
+            strength = panel.slider("kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None)
             kick = gui.add_button("Kick", hint="Radial velocity kick: the predicted circle moves at once")
             beam = panel.put("beam", gui.add_checkbox(
                 "Beam", initial_value=c.beam, hint="Many charges, a spread of speeds"
             ))  # fmt: skip
-            size = panel.put("beam_size", gui.add_slider(
-                "Beam size", min=2, max=200, step=1, initial_value=c.beam_size
-            ))  # fmt: skip
+            panel.slider("beam_size", "Beam size", 2, 200, 1, c.beam_size,
+                         lambda v: panel.send({"op": "set", "beam_size": int(v)}))  # fmt: skip
         kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
-        panel.on(size, lambda v: panel.send({"op": "set", "beam_size": int(v)}))
