@@ -509,3 +509,19 @@ def test_view_command_prints_the_url_and_stops_cleanly_on_ctrl_c():
     assert proc.returncode == 0
     assert "Traceback" not in err and "Traceback" not in out
     assert "stopped" in out
+
+
+# --------------------------------------------------------------------------- themes
+def test_every_colour_of_the_scene_reads_on_the_light_and_the_dark_page():
+    for theme, background in geo.BACKGROUNDS.items():
+        for name, colour in geo.PALETTE.items():
+            assert geo.contrast(colour, background) >= 3.0, (theme, name, colour)
+
+
+def test_the_theme_switch_darkens_the_page_and_the_floor(app):
+    app.w["theme"].value = "dark"
+    frames(app, 1)
+    assert app.theme == "dark" and tuple(app.grid.plane_color) == geo.BACKGROUNDS["dark"]
+    app.enqueue("app", {"op": "theme", "value": "sepia"})
+    frames(app, 1)
+    assert app.theme == "dark" and "Theme must be one of light, dark" in app.messages[-1][1]

@@ -55,14 +55,19 @@ from .live_record import add_record_toggle
 from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
 from .scene.panel import Panel
 
-SPACING = 5.5  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
+SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
-OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
+OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
 FPS = 60.0  # display rate of the simulation loop
 SPEEDS = (0.1, 10.0)  # simulated seconds per real second: the speed control's range
+# The floor grid of each theme (plane, cells, sections): quiet against the theme's background.
+GRIDS = {
+    "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
+    "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
+}
 
 
 # --------------------------------------------------------------------------- numba warm-up
@@ -138,6 +143,7 @@ class MechvizApp:
         environment_map: bool = True,
         fps: float | None = None,
         quiet: bool = True,
+        theme: str = "light",
     ) -> None:
         import viser
 
@@ -177,7 +183,10 @@ class MechvizApp:
                 "/lights/sky", sky_color=(255, 255, 255), ground_color=(110, 110, 120),
                 intensity=1.2,
             )  # fmt: skip
-        scene.add_grid(
+        if theme not in GRIDS:
+            raise ValueError(f"theme must be one of {', '.join(GRIDS)}; got {theme!r}")
+        self.theme = theme
+        self.grid = scene.add_grid(
             "/floor",
             width=20.0,
             height=8.0,
@@ -185,6 +194,7 @@ class MechvizApp:
             section_size=1.0,
             position=(0.0, 0.0, 0.0),
         )
+        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
         cfg = dict(configs or {})
         # energies and errors (chart points, divergence checks) at CHART_RATE; poses every frame
         self._measure_every = max(1, round(self.fps / CHART_RATE))
@@ -289,12 +299,30 @@ class MechvizApp:
             self._rtf_window.clear()  # the clock went back: the old samples say nothing now
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
+        elif op == "theme":
+            if cmd.get("value") not in GRIDS:
+                raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}")
+            self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                f"app op must be play, pause, toggle, step, speed, reset or camera; got {op!r}"
+                f"app op must be play, pause, toggle, step, speed, reset, camera or theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
+
+    def _apply_theme(self, theme: str) -> None:
+        """Page and floor for ``theme``; the scene's palette reads on both (viz.geometry)."""
+        self.theme = theme
+        if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
+            self._syncing = True
+            self.w["theme"].value = theme
+            self._syncing = False
+        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        if self.gui is not None:
+            self.gui.configure_theme(
+                control_width="medium", show_logo=False, brand_color=(40, 110, 200),
+                dark_mode=theme == "dark",
+            )  # fmt: skip
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         self.messages.append((title, body))
@@ -391,9 +419,9 @@ class MechvizApp:
         viser = self._viser
         gui = self.server.gui
         self.gui = gui
-        gui.configure_theme(control_width="medium", show_logo=False, brand_color=(40, 110, 200))
         self.w: dict[str, Any] = {}
         w = self.w
+        self._apply_theme(self.theme)
         gui.add_markdown("**mechviz**: three systems of classical mechanics, integrated live.")
         with gui.add_folder("Simulation", expand_by_default=True) as folder:
             self.common_folder = folder
@@ -414,6 +442,11 @@ class MechvizApp:
             )
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS))
+            w["theme"] = gui.add_dropdown(
+                "Theme", options=tuple(GRIDS), initial_value=self.theme,
+                hint="Light or dark page; the scene's colours read on both (also on a projector)",
+            )  # fmt: skip
+        self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
         w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
         w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
         w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))

@@ -27,6 +27,10 @@ def add_commands(sub) -> None:
     p.add_argument(
         "--no-env-map", action="store_true", help="no environment lighting (faster software GL)"
     )
+    p.add_argument(
+        "--theme", choices=("light", "dark"), default="light",
+        help="page theme (default light; the panel switches it too)",
+    )  # fmt: skip
     p.set_defaults(func=_view)
 
 
@@ -60,7 +64,9 @@ def _view(args: argparse.Namespace) -> int:
         if interrupted.is_set():
             print("mechviz: interrupted", flush=True)
             return 130
-        app = MechvizApp(host=args.host, port=args.port, environment_map=not args.no_env_map)
+        app = MechvizApp(
+            host=args.host, port=args.port, environment_map=not args.no_env_map, theme=args.theme
+        )
         # The other methods compile while the viewer already runs, so a later switch of method
         # starts at once (measured: 60 fps held while they compile, a few late frames).
         background = threading.Thread(

@@ -122,7 +122,7 @@ class CyclotronExhibit(Exhibit):
         )  # fmt: skip
         self.ring = s.add_line_segments(
             f"{r}/theory_circle", geo.circle_segments(1.0),
-            colors=np.array((255, 255, 255), np.uint8), thickness=1.5, thickness_units="screen",
+            colors=np.array(geo.CENTRE, np.uint8), thickness=2.0, thickness_units="screen",
         )  # fmt: skip
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
@@ -190,7 +190,7 @@ class CyclotronExhibit(Exhibit):
         n = len(self.beam.state)
         sphere = geo.sphere_mesh(0.045, 1)
         t = np.linspace(0.0, 1.0, n)[:, None]
-        colors = ((1 - t) * np.array([255, 230, 60]) + t * np.array([255, 110, 20])).astype(np.uint8)
+        colors = ((1 - t) * np.array(geo.BEAM[0]) + t * np.array(geo.BEAM[1])).astype(np.uint8)
         self.beam_node = self.scene.add_batched_meshes_simple(
             f"{self.root}/beam", sphere.vertices, sphere.faces,
             batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),

@@ -155,7 +155,7 @@ class DiskExhibit(Exhibit):
             ring.apply_translation(LIFT + to_world(pt))
             self.bearings.append(
                 s.add_mesh_simple(
-                    f"{r}/bearing_{name}", ring.vertices, ring.faces, color=(70, 70, 70)
+                    f"{r}/bearing_{name}", ring.vertices, ring.faces, color=geo.AXLE
                 )
             )
             self.bearings.append(

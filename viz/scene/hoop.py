@@ -104,7 +104,7 @@ class HoopExhibit(Exhibit):
         beam = geo.rod_between((-0.9 * a, 0.25, zp + 0.08), (0.0, 0.25, zp + 0.08), 0.03)
         pin = geo.rod_between((0.0, 0.25, zp), (0.0, -0.1, zp), 0.02)
         stand = geo.trimesh.util.concatenate([post, beam, pin])
-        s.add_mesh_simple(f"{r}/stand", stand.vertices, stand.faces, color=(110, 110, 110))
+        s.add_mesh_simple(f"{r}/stand", stand.vertices, stand.faces, color=geo.STAND)
         s.add_icosphere(f"{r}/pivot", radius=0.05, color=geo.CENTRE, position=self.pivot_local)
         # one batched node per shape: instance 0 the hoop, 1 the linear-theory ghost, 2 the
         # comparison method (scale 0 while there is none)
@@ -116,13 +116,13 @@ class HoopExhibit(Exhibit):
         self.rings = s.add_batched_meshes_simple(
             f"{r}/rings", ring.vertices, ring.faces, batched_wxyzs=ident,
             batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=colors, batched_opacities=np.array([1.0, 0.3, 1.0]), lod="off",
+            batched_colors=colors, batched_opacities=np.array([1.0, 0.45, 1.0]), lod="off",
         )  # fmt: skip
         bead_colors = np.array([geo.BEAD, geo.GHOST, geo.COMPARE], np.uint8)
         self.beads = s.add_batched_meshes_simple(
             f"{r}/beads", bead.vertices, bead.faces, batched_wxyzs=ident,
             batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.35, 1.0]), lod="off",
+            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.5, 1.0]), lod="off",
         )  # fmt: skip
         self.cmp_label = s.add_label(
             f"{r}/compare_label",
