@@ -29,6 +29,7 @@ from viz import geometry as geo  # noqa: E402
 from viz.app import MechvizApp, measure_frame_cost, warm_up  # noqa: E402
 from viz.scene import CyclotronConfig, CyclotronExhibit, DiskExhibit, HoopConfig, HoopExhibit  # noqa: E402  # noqa: E402
 from viz.scene.disk import LIFT, P  # noqa: E402
+from viz.scene.panel import Panel  # noqa: E402
 
 FRAME = 1.0 / 60.0
 
@@ -36,6 +37,12 @@ FRAME = 1.0 / 60.0
 @pytest.fixture(scope="module", autouse=True)
 def _compiled():
     warm_up("defaults")
+
+
+@pytest.fixture(autouse=True)
+def _typing_at_once(monkeypatch):
+    """Number fields are read at once here (in the browser, after a pause in typing)."""
+    monkeypatch.setattr(Panel, "TYPING_PAUSE", 0.0)
 
 
 @pytest.fixture

@@ -17,6 +17,7 @@ scientific notation as it is typed.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -75,6 +76,7 @@ class Panel:
     """One exhibit's controls. ``w`` is the app's widget table, keyed ``"<exhibit>.<name>"``."""
 
     SYNCED = ("method", "dt", "beam", "beam_size", "kick", "mode", "follow_cm", "amplitude")
+    TYPING_PAUSE = 0.6  # s without a keystroke before a number field is read
 
     def __init__(self, app, exhibit) -> None:
         self.app = app
@@ -102,17 +104,33 @@ class Panel:
         self.app.enqueue("call", lambda app: app._sync_widgets(self.key))
 
     def number(self, name: str, label: str, value: float, apply, *, lo=None, hi=None, hint=None):
-        """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value."""
+        """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value.
+
+        The browser sends the box's text on every keystroke, and ``2.5e`` is on the way to
+        ``2.5e-2``: the text is read once typing has paused for ``TYPING_PAUSE`` seconds."""
         h = self.put(name, self.gui.add_text(label, initial_value=number_text(value), hint=hint))
         self.labels[name.split(".")[-1]] = label
+        pending: list[threading.Timer] = []
 
-        def on(v):
+        def read(v):
             try:
                 x = parse_number(label, v, lo, hi)
             except ValueError as exc:
                 self.refuse(str(exc))
                 return
             apply(x)
+
+        def on(v):
+            for timer in pending:
+                timer.cancel()
+            pending.clear()
+            if self.TYPING_PAUSE <= 0:
+                read(v)
+                return
+            timer = threading.Timer(self.TYPING_PAUSE, read, args=(v,))
+            timer.daemon = True
+            pending.append(timer)
+            timer.start()
 
         self.on(h, on)
         return h
