@@ -5,6 +5,8 @@ Nothing here times anything; the benchmark itself (``mechviz bench``) is not run
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -86,4 +88,6 @@ def test_bench_command_is_registered_with_its_flags():
 
     args = build_parser().parse_args(["bench", "--quick", "--json", "--out", "somewhere"])
     assert args.quick and args.json and args.out == "somewhere"
-    assert build_parser().parse_args(["bench"]).out == "docs/bench"
+    # The committed charts change only through `make bench-docs`, never by default.
+    default = Path(build_parser().parse_args(["bench"]).out).resolve()
+    assert not default.is_relative_to(Path(__file__).resolve().parents[1])

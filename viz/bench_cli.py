@@ -15,6 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
+from pathlib import Path
 
 
 def _viewer_measurements(quick: bool) -> dict:
@@ -111,7 +113,11 @@ def add_commands(sub) -> None:
     )
     p.add_argument("--quick", action="store_true", help="fewer points and repeats (< 2 min)")
     p.add_argument("--json", action="store_true", help="print a JSON summary (with 'ratios')")
-    p.add_argument("--out", default="docs/bench", help="output directory (default docs/bench)")
+    p.add_argument(
+        "--out",
+        default=str(Path(tempfile.gettempdir()) / "mechviz-bench"),
+        help="output directory (default TMP/mechviz-bench; `make bench-docs` writes docs/bench)",
+    )
     p.add_argument(
         "--endurance",
         type=float,
