@@ -23,6 +23,7 @@ from .integrators import kernels
 from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
 from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
 from .integrators.scipy_ivp import advance_scipy
+from .integrators.taylor import TaylorCarry, run_taylor
 from .systems import System
 
 DEFAULT_RTOL = 1e-9
@@ -121,6 +122,7 @@ class Simulation:
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
         self._has_exact = system.exact(self.state0, 0.0) is not None
+        self._carry: TaylorCarry | None = None
         self._reference: Simulation | None = None
         if reference == "auto" and not self._has_exact:
             self._reference = Simulation(
@@ -171,19 +173,25 @@ class Simulation:
                 if failure:
                     raise IntegrationError(m.name, self.step_label(), t_target, failure)
             else:
-                run_dop853(
-                    kernels.RHS[self.system.sys_id],
-                    self.state,
-                    self.p,
-                    self.t,
-                    t_target,
-                    self.rtol,
-                    self.atol,
-                    self._H,
-                    self._F,
-                    self._stats,
-                    self._status,
-                )
+                if m.kernel == "taylor":
+                    if self._carry is None:
+                        self._carry = TaylorCarry(*self.state.shape)
+                    run_taylor(self.system.sys_id, self.state, self.p, self.t, t_target,
+                               self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
+                else:
+                    run_dop853(
+                        kernels.RHS[self.system.sys_id],
+                        self.state,
+                        self.p,
+                        self.t,
+                        t_target,
+                        self.rtol,
+                        self.atol,
+                        self._H,
+                        self._F,
+                        self._stats,
+                        self._status,
+                    )
                 self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
                 if self._status[0] != kernels.OK:
                     reason = (

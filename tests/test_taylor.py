@@ -1,0 +1,113 @@
+"""Taylor's method: its series agree with the equations, converge at their order, and a sampled
+run takes the same steps as an unsampled one."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
+from dynamics.disk import DiskParams
+from dynamics.integrators import taylor
+from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+
+SYSTEMS = {
+    CYCLOTRON: Cyclotron(),
+    HOOP: Hoop(),
+    FREE_BODY: ReleasedDisk(DiskParams(), (0.3, 0.0, 0.2)),
+}
+STATES = {
+    CYCLOTRON: np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1]),
+    HOOP: np.array([0.9, -1.2, 0.7, -0.4]),
+    FREE_BODY: None,
+}
+
+
+def _series(sys_id, y, order):
+    system = SYSTEMS[sys_id]
+    A = np.zeros((taylor.N_ROWS, taylor.MAX_ORDER + 1))
+    A[: y.size, 0] = y
+    taylor._expand(sys_id, A, system.kernel_params(), order)
+    return A
+
+
+def _state(sys_id):
+    s = STATES[sys_id]
+    return SYSTEMS[sys_id].default_state() if s is None else s
+
+
+def _advance(sys_id, y, order, h):
+    A = _series(sys_id, y, order)
+    out = np.empty(y.size)
+    taylor._horner(A, y.size, order, h, out)
+    return out
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_first_coefficient_is_the_right_hand_side(sys_id):
+    """y^[1] = f(y): the expansion is written for the same equations as the compiled RHS."""
+    _, rhs = taylor.EXPANDS[sys_id]
+    y = _state(sys_id)
+    f = np.empty(y.size)
+    rhs(y, SYSTEMS[sys_id].kernel_params(), f)
+    A = _series(sys_id, y, 6)
+    np.testing.assert_allclose(A[: y.size, 1], f, rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+@pytest.mark.parametrize("order", [3, 5])
+def test_one_step_error_falls_as_h_to_the_order_plus_one(sys_id, order):
+    """The series truncated at order p differs from the converged series by O(h^(p+1)): fit the
+    slope of log(error) against log(h) (the order test, per step)."""
+    y = _state(sys_id)
+    hs = [0.2 / 2**k for k in range(5)]
+    errs = []
+    for h in hs:
+        exact = _advance(sys_id, y, 28, h)
+        errs.append(np.linalg.norm(_advance(sys_id, y, order, h) - exact) / np.linalg.norm(exact))
+    slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
+    assert abs(slope - (order + 1)) < 0.3, (slope, errs)
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_tight_tolerance_lands_on_the_dop853_reference(sys_id):
+    system = SYSTEMS[sys_id]
+    y0 = _state(sys_id)
+    T = 5.0
+    ref = Simulation(system, "dop853", rtol=1e-13, atol=1e-13, state=y0, reference=None)
+    ref.advance_to(T)
+    sim = Simulation(system, "taylor", rtol=1e-13, atol=1e-13, state=y0, reference=None)
+    sim.advance_to(T)
+    assert float(system.error(sim.state, ref.state)[0]) < 1e-11
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_sampling_does_not_add_steps(sys_id):
+    """The last step is carried to the next call: 200 samples take the steps of one run, and the
+    final state differs only by where the last step's polynomial is evaluated (round-off)."""
+    system = SYSTEMS[sys_id]
+    y0 = _state(sys_id)
+    one = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
+    one.advance_to(10.0)
+    many = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
+    many.run(10.0, n_samples=200)
+    assert many.steps == one.steps
+    np.testing.assert_allclose(many.state, one.state, rtol=1e-13, atol=1e-13)
+
+
+def test_a_state_changed_between_calls_starts_a_fresh_step():
+    system = SYSTEMS[HOOP]
+    sim = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=_state(HOOP), reference=None)
+    sim.advance_to(0.01)  # inside the first step
+    sim.state[0] = [0.1, 0.2, 0.0, 0.0]
+    sim.advance_to(1.0)
+    fresh = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=[0.1, 0.2, 0.0, 0.0],
+                       reference=None)  # fmt: skip
+    fresh.advance_to(0.99)
+    np.testing.assert_allclose(sim.state, fresh.state, rtol=1e-9, atol=1e-9)
+
+
+def test_order_follows_jorba_and_zou():
+    assert taylor.order_for(1e-9, 1e-9) == math.ceil(-math.log(1e-9) / 2 + 1) == 12
+    assert taylor.order_for(1e-12, 1e-12) == 15
+    assert taylor.order_for(1e-40, 1e-40) == taylor.MAX_ORDER
