@@ -136,6 +136,26 @@ class Simulation:
         self._track_error = reference is not None and (self._has_exact or reference == "auto")
 
     # ------------------------------------------------------------------ stepping
+    def restart(self, state: np.ndarray | None = None) -> None:
+        """Go back to ``t = 0`` with the same system, method and settings, from the initial state
+        or from ``state`` (same shape): counters, kept steps and the reference start afresh.
+        Costs a few microseconds, where building a new Simulation costs tens (the system's
+        parameters and energy are worked out again)."""
+        if state is not None:
+            s0 = np.asarray(state, dtype=np.float64).reshape(self.state0.shape)
+            if not np.all(np.isfinite(s0)):
+                raise ValueError("state must be finite")
+            self.state0 = s0.copy()
+            self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+        self.state = self.state0.copy()
+        self.t = self.clock = 0.0
+        self.steps = self.nfev = self.rejected = 0
+        self._H[:] = 0.0
+        self._stats[:] = 0
+        self._carry = None
+        if self._reference is not None:
+            self._reference.restart(state)
+
     def step_label(self) -> str:
         if self.method.adaptive:
             return f"rtol={self.rtol:g}, atol={self.atol:g}"

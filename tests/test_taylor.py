@@ -111,3 +111,18 @@ def test_order_follows_jorba_and_zou():
     assert taylor.order_for(1e-9, 1e-9) == math.ceil(-math.log(1e-9) / 2 + 1) == 12
     assert taylor.order_for(1e-12, 1e-12) == 15
     assert taylor.order_for(1e-40, 1e-40) == taylor.MAX_ORDER
+
+
+@pytest.mark.parametrize("method", ["taylor", "dop853", "rk4"])
+def test_restart_repeats_the_run_of_a_fresh_simulation(method):
+    system = SYSTEMS[HOOP]
+    kw = {"dt": 0.01} if method == "rk4" else {"rtol": 1e-9, "atol": 1e-9}
+    sim = Simulation(system, method, state=_state(HOOP), **kw)
+    sim.advance_to(3.0)
+    first = sim.state.copy(), sim.steps, sim.nfev
+    sim.restart()
+    assert sim.t == 0.0 and sim.steps == 0
+    sim.advance_to(3.0)
+    np.testing.assert_array_equal(sim.state, first[0])
+    assert (sim.steps, sim.nfev) == first[1:]
+    assert sim.sample().error[0] < 1e-6
