@@ -111,6 +111,7 @@ def test_order_follows_jorba_and_zou():
     assert taylor.order_for(1e-9, 1e-9) == math.ceil(-math.log(1e-9) / 2 + 1) == 12
     assert taylor.order_for(1e-12, 1e-12) == 15
     assert taylor.order_for(1e-40, 1e-40) == taylor.MAX_ORDER
+    assert taylor.order_for(1e-12, 1e-12, CYCLOTRON) == 29  # linear: ceil(ln(1e12) + 1)
 
 
 @pytest.mark.parametrize("method", ["taylor", "dop853", "rk4"])

@@ -11,7 +11,9 @@ the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solv
 
 Order and step follow Jorba and Zou, as heyoka does: ``p = ceil(-ln(tol)/2 + 1)`` for
 ``tol = min(rtol, atol)``, and ``h = rho / e^2 * exp(-0.7 / (p - 1))`` with ``rho`` the smaller of
-``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and ``s = max(atol, rtol |y^[0]|_inf) / tol``.
+``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and ``s = max(atol, rtol |y^[0]|_inf) / tol``;
+for a linear system, whose series cost grows only linearly with the order, ``ln(1/tol) + 1`` and
+``rho / e`` (:func:`cost_exponent`).
 There is no rejected step. The series is its own dense output: a state inside a step is the
 polynomial evaluated there. The last step before ``t1`` is kept (base time, length and
 coefficients), so a run sampled at many times takes the steps an unsampled run takes, and a
@@ -32,15 +34,29 @@ from .. import cyclotron, disk, hoop
 from .._jit import njit
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK
 
-MAX_ORDER = 30
-STEP_SAFETY = math.exp(-2.0)  # rho / e^2 (Jorba and Zou)
+MAX_ORDER = 40
+# The series' sums may be reassociated and contracted to fused multiply-adds (the order of the
+# terms of a Cauchy product is arbitrary); no other fast-math licence: inf and nan still
+# propagate, so a blow-up is still reported.
+SUMS = {"reassoc", "contract"}
 N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary functions
 
 
-def order_for(rtol: float, atol: float) -> int:
-    """The order Jorba and Zou choose for this tolerance: ``ceil(-ln(tol)/2 + 1)``, 2 ... 30."""
+def cost_exponent(sys_id: int) -> float:
+    """``a`` in the order ``ceil(-ln(tol)/a + 1)`` and the step ``rho e^-a``: 2 where a step's
+    series cost grows as the order squared (products: the hoop, the free body), 1 where it grows
+    linearly (a linear system: the charge). Jorba and Zou's argument: the error estimate is
+    ``(h / rho)^p = tol``, so the work over a span is ``cost(p) / h``; with ``h = rho x`` and
+    ``p = ln(1/tol) / ln(1/x)`` that is least at ``ln(1/x) = 2`` for ``cost ~ p^2`` and at
+    ``ln(1/x) = 1`` for ``cost ~ p``."""
+    return 1.0 if sys_id == CYCLOTRON else 2.0
+
+
+def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> int:
+    """The order for this tolerance: ``ceil(-ln(tol)/a + 1)`` (:func:`cost_exponent`), 2 ... 40."""
     tol = min(rtol, atol)
-    return int(min(MAX_ORDER, max(2, math.ceil(-math.log(tol) / 2.0 + 1.0))))
+    a = cost_exponent(sys_id)
+    return int(min(MAX_ORDER, max(2, math.ceil(-math.log(tol) / a + 1.0))))
 
 
 # --------------------------------------------------------------------------- expansions
@@ -64,7 +80,7 @@ def charge_expand(A, p, order):
         A[5, k + 1] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUMS)
 def free_body_expand(A, p, order):
     """Euler's equations and ``q' = q (0, w) / 2`` (:func:`dynamics.disk.free_derivatives`)."""
     i1, i2, i3 = p[0], p[1], p[2]
@@ -94,70 +110,91 @@ def free_body_expand(A, p, order):
         A[6, k + 1] = b3 * h
 
 
-@njit(cache=True, inline="always")
-def _sincos(A, U, S, C, k):
-    """Order ``k >= 1`` of ``S = sin u``, ``C = cos u`` from the series ``u`` in row ``U``."""
-    s = 0.0
-    c = 0.0
-    for j in range(1, k + 1):
-        ju = j * A[U, j]
-        s += ju * A[C, k - j]
-        c += ju * A[S, k - j]
-    A[S, k] = s / k
-    A[C, k] = -c / k
-
-
-@njit(cache=True)
+@njit(cache=True, fastmath=SUMS)
 def hoop_expand(A, p, order):
     """The hoop and bead (:func:`dynamics.hoop.acceleration`): with ``u = th1 - th2``,
     ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``, ``r2 = sin(u) w1^2 - (g/a) sin th2``,
     ``det = 2M + m - m cos(u)^2``, ``w1' = (r1 - m cos(u) r2) / det``,
-    ``w2' = ((2M + m) r2 - cos(u) r1) / det``."""
+    ``w2' = ((2M + m) r2 - cos(u) r1) / det``.
+
+    Per order three loops, each accumulating several independent sums (the sums are chains of
+    dependent additions; interleaving six of them keeps the floating-point units busy): the three
+    sine/cosine pairs; the squares ``w2^2``, ``w1^2``, ``cos(u)^2`` (over half the terms, by
+    symmetry); the products with ``sin u`` and ``cos u`` together with the quotient's sums.
+    """
     M, m, ga = p[0], p[1], p[3] / p[2]
     m11 = 2.0 * M + m
     mg = (M + m) * ga
     # rows 0-3: th1, th2, w1, w2
-    U, SU, CU, S1, C1, S2, C2, Q1, Q2, R1, R2, DET, A1, A2 = range(4, 18)
+    SU, CU, S1, C1, S2, C2, Q1, Q2, R1, R2, DET, A1, A2 = range(4, 17)
     for k in range(order):
-        A[U, k] = A[0, k] - A[1, k]
         if k == 0:
-            A[SU, 0] = math.sin(A[U, 0])
-            A[CU, 0] = math.cos(A[U, 0])
-            A[S1, 0] = math.sin(A[0, 0])
-            A[C1, 0] = math.cos(A[0, 0])
-            A[S2, 0] = math.sin(A[1, 0])
-            A[C2, 0] = math.cos(A[1, 0])
+            s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
+            s2, c2 = math.sin(A[1, 0]), math.cos(A[1, 0])
+            A[S1, 0], A[C1, 0], A[S2, 0], A[C2, 0] = s1, c1, s2, c2
+            A[SU, 0] = s1 * c2 - c1 * s2  # sin(th1 - th2): two library calls fewer per step
+            A[CU, 0] = c1 * c2 + s1 * s2
         else:
-            _sincos(A, U, SU, CU, k)
-            _sincos(A, 0, S1, C1, k)
-            _sincos(A, 1, S2, C2, k)
+            su = cu = s1 = c1 = s2 = c2 = 0.0
+            for j in range(1, k + 1):
+                t1 = j * A[0, j]
+                t2 = j * A[1, j]
+                tu = t1 - t2
+                i = k - j
+                su += tu * A[CU, i]
+                cu += tu * A[SU, i]
+                s1 += t1 * A[C1, i]
+                c1 += t1 * A[S1, i]
+                s2 += t2 * A[C2, i]
+                c2 += t2 * A[S2, i]
+            inv = 1.0 / k
+            A[SU, k] = su * inv
+            A[CU, k] = -cu * inv
+            A[S1, k] = s1 * inv
+            A[C1, k] = -c1 * inv
+            A[S2, k] = s2 * inv
+            A[C2, k] = -c2 * inv
+        # squares: (uu)^[k] = 2 sum_{j < k/2} u_j u_(k-j) (+ u_(k/2)^2 for even k)
         q1 = q2 = cc = 0.0
-        for j in range(k + 1):
-            q1 += A[3, j] * A[3, k - j]  # w2^2
-            q2 += A[2, j] * A[2, k - j]  # w1^2
-            cc += A[CU, j] * A[CU, k - j]  # cos(u)^2
+        for j in range((k + 1) // 2):
+            i = k - j
+            q1 += A[3, j] * A[3, i]
+            q2 += A[2, j] * A[2, i]
+            cc += A[CU, j] * A[CU, i]
+        q1 *= 2.0
+        q2 *= 2.0
+        cc *= 2.0
+        if k % 2 == 0:
+            h = k // 2
+            q1 += A[3, h] * A[3, h]
+            q2 += A[2, h] * A[2, h]
+            cc += A[CU, h] * A[CU, h]
         A[Q1, k] = q1
         A[Q2, k] = q2
-        s1 = s2 = 0.0
-        for j in range(k + 1):
-            s1 += A[SU, j] * A[Q1, k - j]
-            s2 += A[SU, j] * A[Q2, k - j]
+        A[DET, k] = (m11 if k == 0 else 0.0) - m * cc
+        # the terms j = 1 ... k that use only lower orders of Q, R and the quotients
+        s1 = s2 = n1 = n2 = d1 = d2 = 0.0
+        for j in range(1, k + 1):
+            i = k - j
+            su = A[SU, j]
+            cu = A[CU, j]
+            det = A[DET, j]
+            s1 += su * A[Q1, i]
+            s2 += su * A[Q2, i]
+            n1 += cu * A[R2, i]
+            n2 += cu * A[R1, i]
+            d1 += det * A[A1, i]
+            d2 += det * A[A2, i]
+        s1 += A[SU, 0] * q1
+        s2 += A[SU, 0] * q2
         r1 = -m * s1 - mg * A[S1, k]
         r2 = s2 - ga * A[S2, k]
         A[R1, k] = r1
         A[R2, k] = r2
-        A[DET, k] = (m11 if k == 0 else 0.0) - m * cc
-        n1 = n2 = 0.0
-        for j in range(k + 1):
-            n1 += A[CU, j] * A[R2, k - j]
-            n2 += A[CU, j] * A[R1, k - j]
-        n1 = r1 - m * n1
-        n2 = m11 * r2 - n2
-        for j in range(1, k + 1):
-            n1 -= A[DET, j] * A[A1, k - j]
-            n2 -= A[DET, j] * A[A2, k - j]
-        a1 = n1 / A[DET, 0]
-        a2 = n2 / A[DET, 0]
+        n1 += A[CU, 0] * r2
+        n2 += A[CU, 0] * r1
+        a1 = (r1 - m * n1 - d1) / A[DET, 0]
+        a2 = (m11 * r2 - n2 - d2) / A[DET, 0]
         A[A1, k] = a1
         A[A2, k] = a2
         inv = 1.0 / (k + 1)
@@ -219,7 +256,8 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, stats, status, 
     tol = min(rtol, atol)
     scale_r, scale_a = rtol / tol, atol / tol
     inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
-    factor = STEP_SAFETY * math.exp(-0.7 / (order - 1))
+    a = 1.0 if sys_id == CYCLOTRON else 2.0  # cost_exponent
+    factor = math.exp(-a - 0.7 / (order - 1))
     status[0] = OK
     for i in range(n):
         y = Y[i]
@@ -288,5 +326,5 @@ class TaylorCarry:
 
 def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> None:
     """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion."""
-    run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order_for(rtol, atol), stats, status,
+    run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order_for(rtol, atol, sys_id), stats, status,
                         carry.kept, carry.base, carry.span, carry.last)  # fmt: skip
