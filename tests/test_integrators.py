@@ -25,7 +25,8 @@ from dynamics.disk import DiskParams
 from dynamics.hoop import HoopParams
 
 # name -> (system, initial state, duration T, step sizes). The step sizes keep every method in
-# its asymptotic regime and above the round-off floor (PERF_NOTES section 6 on why that matters).
+# its asymptotic regime and above the round-off floor (outside that range a fitted slope means
+# nothing).
 PROBLEMS = {
     "cyclotron": (Cyclotron(), np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.1]), 2 * math.pi),
     "hoop": (Hoop(HoopParams()), np.array([0.5, -0.3, 0.0, 0.0]), 2.0),

@@ -50,7 +50,7 @@ def method_table(result: dict) -> str:
 
 def step_table(result: dict) -> str:
     lines = [
-        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | PERF_NOTES C |",
+        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | C, earlier measurement |",
         "|---|---|---|---|---|",
     ]
     for name, r in result["per_step"]["rows"].items():
