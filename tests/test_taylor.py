@@ -107,11 +107,25 @@ def test_a_state_changed_between_calls_starts_a_fresh_step():
     np.testing.assert_allclose(sim.state, fresh.state, rtol=1e-9, atol=1e-9)
 
 
-def test_order_follows_jorba_and_zou():
-    assert taylor.order_for(1e-9, 1e-9) == math.ceil(-math.log(1e-9) / 2 + 1) == 12
-    assert taylor.order_for(1e-12, 1e-12) == 15
-    assert taylor.order_for(1e-40, 1e-40) == taylor.MAX_ORDER
-    assert taylor.order_for(1e-12, 1e-12, CYCLOTRON) == 29  # linear: ceil(ln(1e12) + 1)
+def test_order_and_step_minimise_the_modelled_work():
+    """With a step cost of p^2 alone the choice is Jorba and Zou's (a = 2, p = ln(1/tol)/2 + 1);
+    a cost with constant and linear parts takes higher orders and longer steps, never beyond
+    rho / e."""
+    saved = taylor.STEP_COST[HOOP]
+    try:
+        taylor.STEP_COST[HOOP] = (0.0, 0.0, 1.0)
+        taylor.order_for.cache_clear()
+        p, a = taylor.order_for(1e-12, 1e-12, HOOP)
+        assert abs(p - (math.log(1e12) / 2 + 1)) <= 1.5 and abs(a - 2.0) < 0.25
+    finally:
+        taylor.STEP_COST[HOOP] = saved
+        taylor.order_for.cache_clear()
+    for sys_id in SYSTEMS:
+        for tol in (1e-3, 1e-9, 1e-14):
+            p, a = taylor.order_for(tol, tol, sys_id)
+            assert 3 <= p <= taylor.MAX_ORDER and 1.0 <= a <= 2.0
+            assert (p - 1) * a >= -math.log(tol) - 1e-9  # (h/rho)^(p-1) within tol
+    assert taylor.order_for(1e-12, 1e-12, CYCLOTRON)[0] > taylor.order_for(1e-12, 1e-12, HOOP)[0]
 
 
 @pytest.mark.parametrize("method", ["taylor", "dop853", "rk4"])
