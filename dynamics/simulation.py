@@ -152,7 +152,8 @@ class Simulation:
         self.steps = self.nfev = self.rejected = 0
         self._H[:] = 0.0
         self._stats[:] = 0
-        self._carry = None
+        if self._carry is not None:
+            self._carry.forget()
         if self._reference is not None:
             self._reference.restart(state)
 
