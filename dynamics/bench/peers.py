@@ -66,12 +66,15 @@ def versions() -> dict[str, str]:
 def _heyoka_system(problem: Problem):
     import heyoka as hy
 
+    from ..integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+
     p = problem.system.kernel_params()
-    if problem.key == "charge":
+    kind = problem.system.sys_id
+    if kind == CYCLOTRON:
         x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
         w = float(p[0])
         return [(x, vx), (y, vy), (z, vz), (vx, w * vy), (vy, -w * vx), (vz, 0.0 * vz)]
-    if problem.key == "hoop":
+    if kind == HOOP:
         th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
         M, m, ga = float(p[0]), float(p[1]), float(p[3] / p[2])
         s, c = hy.sin(th1 - th2), hy.cos(th1 - th2)
@@ -80,7 +83,7 @@ def _heyoka_system(problem: Problem):
         m11 = 2.0 * M + m
         det = m11 - m * c * c
         return [(th1, w1), (th2, w2), (w1, (r1 - m * c * r2) / det), (w2, (m11 * r2 - c * r1) / det)]
-    if problem.key == "disk":
+    if kind == FREE_BODY:
         w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
         i1, i2, i3 = (float(v) for v in p)
         return [
@@ -121,18 +124,19 @@ def heyoka_run(problem: Problem, tol: float, *, fp_type=None) -> PeerRun:
 
 
 # --------------------------------------------------------------------------- CyRK
-_CFUNCS: dict[str, object] = {}
+_CFUNCS: dict[int, object] = {}
 
 
-def _cyrk_rhs(key: str):
+def _cyrk_rhs(kind: int):
     """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
     import numba as nb
 
     from .. import cyclotron, disk, hoop
+    from ..integrators.kernels import CYCLOTRON, HOOP
 
-    if key in _CFUNCS:
-        return _CFUNCS[key]
-    if key == "charge":
+    if kind in _CFUNCS:
+        return _CFUNCS[kind]
+    if kind == CYCLOTRON:
         acc = cyclotron.acceleration
 
         def f(dy, t, y, args):
@@ -144,7 +148,7 @@ def _cyrk_rhs(key: str):
             dy[4] = b
             dy[5] = 0.0
 
-    elif key == "hoop":
+    elif kind == HOOP:
         acc = hoop.acceleration
 
         def f(dy, t, y, args):
@@ -169,7 +173,7 @@ def _cyrk_rhs(key: str):
         nb.types.CPointer(nb.types.float64),
     )
     cf = nb.cfunc(sig)(f)
-    _CFUNCS[key] = cf
+    _CFUNCS[kind] = cf
     return cf
 
 
@@ -177,7 +181,7 @@ def cyrk_run(problem: Problem, tol: float, method: str = "DOP853") -> PeerRun:
     """CyRK's ``nbsolve2_ivp`` with a compiled C callback."""
     from CyRK import nbsolve2_ivp
 
-    addr = _cyrk_rhs(problem.key).address
+    addr = _cyrk_rhs(problem.system.sys_id).address
     p = np.ascontiguousarray(problem.system.kernel_params(), dtype=np.float64)
     y0 = problem.y0
     span = (0.0, float(problem.t_end))

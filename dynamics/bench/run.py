@@ -19,7 +19,15 @@ from pathlib import Path
 from ..integrators.base import get_method
 from ..simulation import Simulation
 from . import exhibits, experiments
-from .problems import ADAPTIVE_OURS, ADAPTIVE_SCIPY, PROBLEMS, load_references, versions
+from .problems import (
+    ADAPTIVE_OURS,
+    ADAPTIVE_SCIPY,
+    PROBLEMS,
+    VARIANTS,
+    load_references,
+    variant_reference,
+    versions,
+)
 from .sweeps import (
     TARGETS,
     Settings,
@@ -137,8 +145,9 @@ def run_bench(
                 peer_names.append(name)
             else:
                 peer_skipped[name] = why[_peers.package_of(name)]
+    every = {**PROBLEMS, **VARIANTS}
     n_sweeps = sum(len(_fixed(pb, settings)) + len(ADAPTIVE_OURS) + len(settings.scipy_methods)
-                   + len(peer_names) for pb in PROBLEMS.values())  # fmt: skip
+                   + len(peer_names) for pb in every.values())  # fmt: skip
     total = len(PROBLEMS) + n_sweeps + 2 + (10 + 7 + len(experiments.STEP_CASES) + 3) * extra
     progress = Progress(total, show_progress)
     started = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
@@ -147,7 +156,7 @@ def run_bench(
 
     compile_s = _compile_times(progress, settings)
     points = []
-    for key, pb in PROBLEMS.items():
+    for key, pb in every.items():
         for m in _fixed(pb, settings):
             progress.set(f"{key}: {m}")
             points += sweep_fixed(pb, m, settings)
@@ -161,13 +170,13 @@ def run_bench(
             points += sweep_peer(pb, m, settings)
             progress()
         flag_outliers([p for p in points if p.problem == key], pb, settings)
-    ours = {m for pb in PROBLEMS.values() for m in pb.fixed} | set(ADAPTIVE_OURS)
+    ours = {m for pb in every.values() for m in pb.fixed} | set(ADAPTIVE_OURS)
     ratios = ratio_table(points, ours, set(ADAPTIVE_SCIPY))
     progress.set("ratios head to head")
-    retime_ratios(ratios, points, PROBLEMS, settings)
+    retime_ratios(ratios, points, every, settings)
     progress()
     progress.set("peers head to head")
-    peer_ratios = peer_table(points, ratios, peer_names, PROBLEMS, settings)
+    peer_ratios = peer_table(points, ratios, peer_names, every, settings)
     progress()
 
     long_run = stab = per_step = exhibit = None
@@ -182,7 +191,7 @@ def run_bench(
         exhibit = exhibits.choose_defaults(quick)
         progress(3)
     construction = _construction_costs()
-    first_answer = _first_answer() if extra else None
+    first_answer = _first_answer(2 if quick else 3) if extra else None
     progress.close()
 
     result = {
@@ -215,15 +224,32 @@ def run_bench(
             "peers_skipped": peer_skipped,
         },
         "problems": {
-            k: {
-                "title": pb.title,
-                "t_end": pb.t_end,
-                "state0": list(pb.state0),
-                "floor": pb.floor,
-                "reference": refs["problems"][k]["kind"],
-                "reference_cross_check": refs["problems"][k].get("radau_1e-12"),
-            }
-            for k, pb in PROBLEMS.items()
+            **{
+                k: {
+                    "title": pb.title,
+                    "t_end": pb.t_end,
+                    "state0": list(pb.state0),
+                    "floor": pb.floor,
+                    "reference": refs["problems"][k]["kind"],
+                    "reference_cross_check": {
+                        c: refs["problems"][k].get(c)
+                        for c in ("mpmath_25_digits", "dop853_1e-13", "radau_1e-12")
+                        if c in refs["problems"][k]
+                    },
+                }
+                for k, pb in PROBLEMS.items()
+            },
+            **{
+                k: {
+                    "title": pb.title,
+                    "t_end": pb.t_end,
+                    "state0": list(pb.state0),
+                    "floor": pb.floor,
+                    "reference": variant_reference(pb)[1],
+                    "untuned": True,
+                }
+                for k, pb in VARIANTS.items()
+            },
         },
         "compile_s": compile_s,
         "points": [p.to_json() for p in points],

@@ -64,7 +64,7 @@ class Settings:
     # Quarter-decades: the error an adaptive method reaches is not smooth in its tolerance (on
     # the hoop, DOP853 at 1e-10 misses 1e-9 by 6x and at 1e-11 beats it by 45x), so a coarse
     # grid charges every method, ours and scipy's alike, for accuracy it was not asked for.
-    tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 4) for k in range(12, 57))
+    tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 4) for k in range(12, 61))
     head_to_head_rounds: int = 9
     scipy_methods: tuple[str, ...] = ADAPTIVE_SCIPY
     skip_fixed: tuple[str, ...] = ()
@@ -79,7 +79,7 @@ class Settings:
             cap=0.25,
             energy_samples=10,
             half_steps=False,
-            tolerances=tuple(10.0 ** (-k / 2) for k in range(6, 29)),
+            tolerances=tuple(10.0 ** (-k / 2) for k in range(6, 31)),
             head_to_head_rounds=5,
             # The scipy options that can be fastest (full runs: RK45 and Radau never are).
             scipy_methods=("scipy-dop853", "scipy-lsoda", "odeint"),
