@@ -117,8 +117,8 @@ PROBLEMS: dict[str, Problem] = {
 
 # Cases the methods were not tuned on: other parameters, larger amplitudes, longer spans. Their
 # references are computed when the benchmark runs (heyoka in long double when installed, else
-# DOP853 at 1e-13, good to about 1e-12 only: their floor is then raised to 1e-11, see
-# :func:`reference_state`); nothing is stored.
+# DOP853 at 1e-13, good to about 1e-12 only, so that the 1e-12 figures of these cases are then
+# not resolved; the result records which, see :func:`variant_reference`); nothing is stored.
 VARIANTS: dict[str, Problem] = {
     "charge-untuned": Problem(
         "charge-untuned",
