@@ -35,6 +35,7 @@ from .integrators import kernels
 from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
 from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
 from .integrators.scipy_ivp import advance_scipy
+from .integrators.taylor import TaylorCarry, run_taylor
 from .systems import System
 
 DEFAULT_RTOL = 1e-9
@@ -144,6 +145,7 @@ class Simulation:
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
         self._has_exact = system.exact(self.state0, 0.0) is not None
+        self._carry: TaylorCarry | None = None
         self._reference: Simulation | None = None
         #: Why the error is not measured although a reference was asked for ("" otherwise).
         self.reference_note = ""
@@ -199,6 +201,8 @@ class Simulation:
         self.t0 = self.t
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
         self._has_exact = self.system.exact(self.state0, 0.0) is not None
+        if self._carry is not None:
+            self._carry.forget()  # a kept step and its series belong to the old state
         self._reference = None
         if self._reference_mode == "auto" and not self._has_exact:
             ref = Simulation(
@@ -212,6 +216,27 @@ class Simulation:
         )
 
     # ------------------------------------------------------------------ stepping
+    def restart(self, state: np.ndarray | None = None) -> None:
+        """Go back to ``t = 0`` with the same system, method and settings, from the initial state
+        or from ``state`` (same shape): counters, kept steps and the reference start afresh.
+        Costs a few microseconds, where building a new Simulation costs tens (the system's
+        parameters and energy are worked out again)."""
+        if state is not None:
+            s0 = np.asarray(state, dtype=np.float64).reshape(self.state0.shape)
+            if not np.all(np.isfinite(s0)):
+                raise ValueError("state must be finite")
+            self.state0 = s0.copy()
+            self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+        self.state = self.state0.copy()
+        self.t = self.clock = self.t0 = 0.0
+        self.steps = self.nfev = self.rejected = 0
+        self._H[:] = 0.0
+        self._stats[:] = 0
+        if self._carry is not None:
+            self._carry.forget()
+        if self._reference is not None:
+            self._reference.restart(state)
+
     def step_label(self) -> str:
         if self.method.adaptive:
             return f"rtol={self.rtol:g}, atol={self.atol:g}"
@@ -297,19 +322,18 @@ class Simulation:
             self.t = t_next
 
     def _dop853_to(self, t1: float) -> None:
-        run_dop853(
-            kernels.RHS[self.system.sys_id],
-            self.state,
-            self.p,
-            self.t,
-            t1,
-            self.rtol,
-            self.atol,
-            self._H,
-            self._F,
-            self._stats,
-            self._status,
-        )
+        """One chunk of the compiled adaptive method (DOP853, or Taylor's method with its kept
+        step) from ``t`` to ``t1``."""
+        if self.method.kernel == "taylor":
+            if self._carry is None:
+                self._carry = TaylorCarry(*self.state.shape)
+            run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
+                       self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
+        else:
+            run_dop853(
+                kernels.RHS[self.system.sys_id], self.state, self.p, self.t, t1,
+                self.rtol, self.atol, self._H, self._F, self._stats, self._status,
+            )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
             reason = (
