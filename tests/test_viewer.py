@@ -532,3 +532,15 @@ def test_the_theme_switch_darkens_the_page_and_the_floor(app):
     app.enqueue("app", {"op": "theme", "value": "sepia"})
     frames(app, 1)
     assert app.theme == "dark" and "Theme must be one of light, dark" in app.messages[-1][1]
+
+
+def test_a_ten_minute_chart_window_spreads_the_same_number_of_points_over_ten_minutes(app):
+    app.w["chart_window"].value = "10 min"
+    app.w["speed"].value = 10.0
+    frames(app, 2)
+    ex = app.exhibits["hoop"]
+    assert ex.chart_spacing == pytest.approx(600.0 / ex.history.maxlen)
+    for _ in range(30):  # 30 frames x 10/60 s = 5 s of simulated time per exhibit
+        app.step_frame()
+    t = ex.chart_data()[0]
+    assert len(t) >= 2 and np.diff(t).min() >= ex.chart_spacing - 1e-9

@@ -60,7 +60,10 @@ ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
 OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
-CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
+CHART_SECONDS = 10.0  # the charts show the last 10 s by default
+# The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
+# over the window, so a 10-minute window costs the browser no more than a 10-second one.
+CHART_WINDOWS = {"10 s": 10.0, "1 min": 60.0, "10 min": 600.0}
 FPS = 60.0  # display rate of the simulation loop
 SPEEDS = (0.1, 10.0)  # simulated seconds per real second: the speed control's range
 # The floor grid of each theme (plane, cells, sections): quiet against the theme's background.
@@ -198,7 +201,8 @@ class MechvizApp:
         cfg = dict(configs or {})
         # energies and errors (chart points, divergence checks) at CHART_RATE; poses every frame
         self._measure_every = max(1, round(self.fps / CHART_RATE))
-        history_len = round(CHART_SECONDS * self.fps / self._measure_every)
+        history_len = round(CHART_SECONDS * CHART_RATE)
+        self.chart_window = CHART_SECONDS
         self.exhibits: dict[str, Exhibit] = {
             key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
             for key, cls in EXHIBITS.items()
@@ -299,13 +303,22 @@ class MechvizApp:
             self._rtf_window.clear()  # the clock went back: the old samples say nothing now
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
+        elif op == "chart_window":
+            v = cmd.get("value")
+            if v not in CHART_WINDOWS.values():
+                raise ValueError(f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {v!r}")
+            self.chart_window = float(v)
+            for ex in self.exhibits.values():
+                ex.set_chart_window(self.chart_window)
+            self._shown.clear()
         elif op == "theme":
             if cmd.get("value") not in GRIDS:
                 raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}")
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                f"app op must be play, pause, toggle, step, speed, reset, camera or theme; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window or "
+                f"theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
@@ -442,11 +455,19 @@ class MechvizApp:
             )
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS))
+            w["chart_window"] = gui.add_dropdown(
+                "Chart window", options=tuple(CHART_WINDOWS), initial_value="10 s",
+                hint="How much of the past the energy and error charts show",
+            )  # fmt: skip
             w["theme"] = gui.add_dropdown(
                 "Theme", options=tuple(GRIDS), initial_value=self.theme,
                 hint="Light or dark page; the scene's colours read on both (also on a projector)",
             )  # fmt: skip
         self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
+        self._on(
+            w["chart_window"],
+            lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),
+        )
         w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
         w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
         w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))
