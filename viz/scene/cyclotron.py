@@ -336,11 +336,17 @@ class CyclotronExhibit(Exhibit):
         wb = m["beam_gyrofrequencies"]
         if self.beam is not None:
             lo, hi = self.config.beam_speeds
-            spread = "—" if wb is None else f"{fmt(wb.min())} to {fmt(wb.max())} rad/s"
-            lines.append(
-                f"\nBeam of {len(self.beam.state)} charges, speeds {lo:g}–{hi:g} m/s: "
-                f"ω from {spread} (same period for all)"
-            )
+            n = len(self.beam.state)
+            if wb is None:
+                periods = "periods: measured once the charges have turned half a radian"
+            else:
+                T = 2 * math.pi / np.asarray(wb)
+                periods = (
+                    f"measured periods {fmt(T.min(), 7)} to {fmt(T.max(), 7)} s, a spread of "
+                    f"{T.max() - T.min():.1e} s against theory's 0 (2πm/\\|qB\\| = "
+                    f"{fmt(2 * math.pi / w_th, 7)} s whatever the speed)"
+                )
+            lines.append(f"\nBeam of {n} charges, speeds {lo:g}–{hi:g} m/s: {periods}")
         lines.append(self.work_line())
         return "\n".join(lines)
 
