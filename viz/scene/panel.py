@@ -35,9 +35,10 @@ def rtol_label(rtol: float) -> str:
 
 
 def rtol_options(current: float) -> tuple[str, ...]:
-    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-13, and the current value
-    if it is not one of them (set by a demo or the command line)."""
-    decades = tuple(f"1e-{k}" for k in range(3, 14))
+    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-12 (the tightest a run is
+    still compared with the reference at), and the current value if it is not one of them (set
+    by a demo or the command line)."""
+    decades = tuple(f"1e-{k}" for k in range(3, 13))
     label = rtol_label(current)
     return decades if label in decades else (*decades, label)
 
@@ -163,13 +164,13 @@ class Panel:
         self.put("readout", self.gui.add_markdown(""))
         series = [
             viser.uplot.Series(label="t [s]"),
-            viser.uplot.Series(label="log10 |ΔE/E₀|", stroke="#d03030", width=1.5),
+            viser.uplot.Series(label="log10 |energy error|", stroke="#d03030", width=1.5),
             viser.uplot.Series(label="log10 error", stroke="#3060d0", width=1.5),
         ]
         if compare:
             series += [
                 viser.uplot.Series(
-                    label="compare log10 |ΔE/E₀|", stroke="#e08080", width=1.0, dash=[4, 3]
+                    label="compare log10 |energy error|", stroke="#e08080", width=1.0, dash=[4, 3]
                 ),
                 viser.uplot.Series(
                     label="compare log10 error", stroke="#80a0e0", width=1.0, dash=[4, 3]
