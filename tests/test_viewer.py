@@ -319,6 +319,12 @@ def test_camera_presets_point_at_each_exhibit(app):
         position, target = app.camera_preset(view)
         assert abs(target[0] - app.exhibits[key].origin[0]) < 2.0
         assert np.linalg.norm(np.subtract(position, target)) > 3.0
+        # slid to the camera's right, so the exhibit shows left of centre, clear of the panel
+        own_position, own_target = app.exhibits[key].camera
+        slide = np.subtract(target, own_target)
+        assert slide @ np.cross(np.subtract(own_target, own_position), (0, 0, 1)) > 0
+    position, target = app.camera_preset("Top")  # straight down on the orbit
+    assert position[2] - target[2] > 5.0 and np.hypot(*np.subtract(position, target)[:2]) < 0.1
     app.enqueue("app", {"op": "camera", "view": "Hoop"})  # no client: nothing to move, no error
     frames(app, 1)
 

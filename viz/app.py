@@ -58,6 +58,7 @@ from .scene.panel import Panel
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
+PANEL_SHIFT = 0.3  # of the viewing distance: a preset's sideways slide clear of the GUI panel
 OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
@@ -344,10 +345,20 @@ class MechvizApp:
                 client.add_notification(title, body, auto_close_seconds=8.0, color=color)
 
     def camera_preset(self, view: str):
+        """``(position, look_at)`` of a preset. An exhibit's own view is slid sideways by
+        ``PANEL_SHIFT`` of its distance, so the exhibit sits in the middle of the part of the
+        page left of the GUI panel (at 1280x800 the panel covers the right quarter); *Top*
+        looks straight down on the cyclotron's orbit."""
         if view == "All":
             return OVERVIEW
-        key = VIEWS[view]
-        return self.exhibits[key].camera
+        if view == "Top":  # looking down (+y up on the screen, +x right), slid clear of the panel
+            o = self.exhibits["cyclotron"].origin + (PANEL_SHIFT * 6.5, 0.0, 0.0)
+            return tuple(o + (0.0, -0.01, 6.5)), tuple(o)
+        position, target = (np.asarray(v, float) for v in self.exhibits[VIEWS[view]].camera)
+        forward = target - position
+        right = np.cross(forward, (0.0, 0.0, 1.0))  # the camera's right (+z up), in the floor
+        right *= PANEL_SHIFT * np.linalg.norm(forward) / max(np.linalg.norm(right), 1e-12)
+        return tuple(position + right), tuple(target + right)
 
     def _move_camera(self, client, view: str) -> None:
         position, target = self.camera_preset(view)
@@ -454,7 +465,7 @@ class MechvizApp:
                 hint="Simulated seconds per real second",
             )
             w["status"] = gui.add_markdown("t = 0 s")
-            w["view"] = gui.add_button_group("View", options=("All", *VIEWS))
+            w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["chart_window"] = gui.add_dropdown(
                 "Chart window", options=tuple(CHART_WINDOWS), initial_value="10 s",
                 hint="How much of the past the energy and error charts show",
