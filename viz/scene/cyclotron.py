@@ -324,13 +324,13 @@ class CyclotronExhibit(Exhibit):
             f"| gyrofrequency \\|qB\\|/m [rad/s] | {fmt(w_th)} | {fmt(w_me)} |",
             f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {fmt(2 * math.pi / w_me) if w_me else '—'} |",
             f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.theory_radius)} | {fmt(m['radius'])} |",
-            f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
+            f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs exact | 0 | {float(np.max(smp.error)) if smp.error is not None else 0.0:.2e} |",
         ]
         c = self.compare_sample
         if c is not None:
             lines.append(
-                f"\nComparison {self.method_line(self.compare)} (blue): |ΔE/E₀| = "
+                f"\nComparison {self.method_line(self.compare)} (blue): relative energy error "
                 f"{float(np.max(np.abs(c.energy_error))):.2e}, error {float(np.max(c.error)):.2e}"
             )
         wb = m["beam_gyrofrequencies"]

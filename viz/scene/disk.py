@@ -406,7 +406,7 @@ class DiskExhibit(Exhibit):
             cos_axle = float(axle @ L / max(np.linalg.norm(L), 1e-300))
             err = float(np.max(smp.error)) if smp.error is not None else 0.0
             lines += [
-                f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
+                f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
                 f"| error vs DOP853 reference | 0 | {err:.2e} |",
                 f"| \\|L\\| about CM [kg m²/s] | conserved | {fmt(float(np.linalg.norm(L)), 8)} |",
                 f"| axle · L̂ (tumble: ±1 flips) | — | {cos_axle:+.3f} |",

@@ -269,7 +269,7 @@ class HoopExhibit(Exhibit):
         kind = self.sim.reference_kind or "—"
         err = float(np.max(smp.error)) if smp.error is not None else 0.0
         lines += [
-            f"| energy error \\|ΔE/E₀\\| | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
+            f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 | {err:.2e} |",
             "",
             "Grey ghost: linear theory from the same start." if c.ghost else "",
@@ -277,7 +277,7 @@ class HoopExhibit(Exhibit):
         cs = self.compare_sample
         if cs is not None:
             lines.append(
-                f"\nComparison {self.method_line(self.compare)} (blue, right): |ΔE/E₀| = "
+                f"\nComparison {self.method_line(self.compare)} (blue, right): relative energy error "
                 f"{float(np.max(np.abs(cs.energy_error))):.2e}"
             )
         lines.append(self.work_line())
