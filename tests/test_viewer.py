@@ -25,6 +25,8 @@ from dynamics import hoop as hp
 
 viser = pytest.importorskip("viser")
 
+import screen  # noqa: E402  (tests/screen.py)
+
 from viz import geometry as geo  # noqa: E402
 from viz.app import MechvizApp, measure_frame_cost, warm_up  # noqa: E402
 from viz.scene import CyclotronConfig, CyclotronExhibit, DiskExhibit, HoopConfig, HoopExhibit  # noqa: E402  # noqa: E402
@@ -439,11 +441,12 @@ def test_the_released_disk_shows_its_principal_axes_about_the_centre_of_mass(ser
     p = ex.params
     mr2 = p.disk_mass * p.radius**2
     about_a = dk.principal_axes(p)[0] / mr2
-    assert f"{about_a[0]:.3f} MR²" in ex.axes_labels[0].text  # driven: about A (0.654 MR²)
+    assert f"I1 (red) {about_a[0]:.4g}" in ex.readout()  # driven: about A (0.654 MR²)
     ex.apply({"op": "set", "mode": "released"})
     moments, axes = dk.principal_axes_cm(p)
     assert "about the centre of mass" in ex.readout()
-    assert all(f"{m / mr2:.3f} MR²" in h.text for m, h in zip(moments, ex.axes_labels, strict=True))
+    assert all(f"I{k + 1} {c} {m / mr2:.4g}" in ex.readout()
+               for k, (m, c) in enumerate(zip(moments, ("(red)", "(green)", "(blue)"), strict=True)))
     pts = ex.axes_node.points.astype(float)
     np.testing.assert_allclose(pts[:, 0], np.tile(dk.centre_of_mass(p), (3, 1)), atol=1e-6)
     np.testing.assert_allclose(pts[:, 1] - pts[:, 0], axes * 1.3 * p.radius, atol=1e-6)
@@ -551,3 +554,39 @@ def test_a_ten_minute_chart_window_spreads_the_same_number_of_points_over_ten_mi
         app.step_frame()
     t = ex.chart_data()[0]
     assert len(t) >= 2 and np.diff(t).min() >= ex.chart_spacing - 1e-9
+
+
+# --------------------------------------------------------------------------- framing and labels
+PAGE = (1280, 800)
+PANEL_LEFT = 945  # px: where viser's GUI panel begins on a 1280-pixel-wide page
+
+
+def _on_screen_left_of_panel(app, view, key, *, centred=False) -> bool:
+    """The exhibit's box lies whole in the page left of the panel (and, ``centred``, its middle
+    in the middle third of that part)."""
+    lo, hi = app.exhibits[key].bounds
+    corners = [(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    pts = [screen.project(c, *app.camera_preset(view), *PAGE) for c in corners]
+    if not all(p is not None and 0 <= p[0] <= PANEL_LEFT and 0 <= p[1] <= PAGE[1] for p in pts):
+        return False
+    middle = (min(p[0] for p in pts) + max(p[0] for p in pts)) / 2
+    return not centred or PANEL_LEFT / 3 <= middle <= 2 * PANEL_LEFT / 3
+
+
+def test_the_first_view_and_each_preset_show_their_exhibits_whole_left_of_the_panel(app):
+    for key in app.exhibits:
+        assert _on_screen_left_of_panel(app, "All", key), key
+    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop"), ("Top", "cyclotron")):
+        assert _on_screen_left_of_panel(app, view, key, centred=True), view
+
+
+@pytest.mark.parametrize("mode", ["driven", "released"])
+def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
+    app.exhibits["disk"].apply({"op": "set", "mode": mode})
+    for _ in range(48):  # 3.2 s at 1x: a whole turn of the driven disk (omega = 2 rad/s)
+        for _ in range(4):
+            app.step_frame()
+        for view in ("All", "Cyclotron", "Disk", "Hoop", "Top"):
+            boxes = [b for b in screen.label_boxes(app.server, app.camera_preset(view), *PAGE)
+                     if b.x0 < PANEL_LEFT]  # fmt: skip
+            assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)

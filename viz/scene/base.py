@@ -528,6 +528,16 @@ class Exhibit:
     def camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         raise NotImplementedError
 
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box (low corner, high corner) [m] that holds what the exhibit draws, for
+        framing: subclasses give it relative to their origin in ``_extent``."""
+        lo, hi = self._extent()
+        return self.origin + np.asarray(lo, float), self.origin + np.asarray(hi, float)
+
+    def _extent(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
     def world(self, local) -> np.ndarray:
         return self.origin + np.asarray(local, dtype=float)
 

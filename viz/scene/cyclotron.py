@@ -305,6 +305,10 @@ class CyclotronExhibit(Exhibit):
         if self.beam is not None and self.beam_node is not None:
             self.beam_node.batched_positions = self._display(self.beam.state[:, :3])
 
+    def _extent(self):
+        H = self.config.height
+        return (-1.7, -1.7, 0.0), (1.7, 1.7, H + 0.3)
+
     @property
     def camera(self):
         o = self.origin

@@ -29,6 +29,7 @@ from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
+AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
 LIFT = np.array([0.0, 0.0, 0.4])
 MODES = ("driven", "released")
 
@@ -111,7 +112,12 @@ class DiskExhibit(Exhibit):
             head_radius=0.07,
             head_length=0.16,
         )
-        self.vector_labels = [s.add_label(f"{r}/vector_label_{n}", n) for n in ("ω", "L")]
+        # ω's label sits above its tip and L's hangs below its own: L's tip is always lower (it
+        # has a part across the axle), so the two never cover each other as L turns.
+        self.vector_labels = [
+            s.add_label(f"{r}/vector_label_ω", "ω", anchor="bottom-center"),
+            s.add_label(f"{r}/vector_label_L", "L", anchor="top-center"),
+        ]
         self._built_radius = None
         self._built_masses = None
         self._pose_cache = None  # (sim, t, config, (rotation, A)) of the last pose() call
@@ -141,9 +147,6 @@ class DiskExhibit(Exhibit):
             color=geo.CENTRE,
             position=dk.centre_of_mass(p),
         )
-        self.cm_label = s.add_label(
-            f"{body}/centre_of_mass/label", "CM", position=(0.0, 0.0, 0.08 * R)
-        )
         # axle (space-fixed in driven mode) and its two bearings
         a, b = dk.axle_points(p)
         ext = np.array([0.0, 0.25 * R, 0.0])
@@ -168,7 +171,9 @@ class DiskExhibit(Exhibit):
         # In driven motion the bearing forces and L turn with the body: their labels are body
         # children placed once (at t = 0 the disk frame is the space frame), so frames only
         # move the arrows themselves.
-        self.body_labels = [s.add_label(f"{body}/label_{n}", n) for n in ("F_A", "F_B", "L")]
+        # Of the vectors fixed in the turning body only L is labelled (the red arrows at the
+        # bearings are the forces, said in the readout): more moving text would overlap.
+        self.body_labels = [s.add_label(f"{body}/label_L", "L", anchor="top-center")]
         self._build_axes(p, self.config.mode)
 
     def _build_axes(self, p: dk.DiskParams, mode: str) -> None:
@@ -187,14 +192,11 @@ class DiskExhibit(Exhibit):
             head_radius=0.04 * R,
             head_length=0.1 * R,
         )
-        self.axes_labels = [
-            self.scene.add_label(
-                f"{body}/principal_axes/I{k + 1}",
-                f"I{k + 1} = {moments[k] / mr2:.3f} MR²",
-                position=origin + axes[k] * (length + 0.08 * R),
-            )
-            for k in range(3)
-        ]
+        # Unlabelled in the scene: text tied to turning axes piles up on screen. The readout lists
+        # each axis by its colour with its moment (axes_text).
+        self.axes_text = ", ".join(
+            f"I{k + 1} {name} {moments[k] / mr2:.4g}" for k, name in enumerate(AXIS_NAMES)
+        )
         self._built_masses = (p.disk_mass, p.bead_mass, R, mode)
 
     # ------------------------------------------------------------------ simulations
@@ -251,10 +253,10 @@ class DiskExhibit(Exhibit):
         )
         self._vector_points = np.zeros((2, 2, 3), np.float32)  # reused by every frame
         self._force_points = np.zeros((2, 2, 3), np.float32)
-        self.body_labels[0].position = a + dk.bearing_force_a(p, 0.0) * self.force_scale
-        self.body_labels[1].position = b + dk.bearing_force_b(p, 0.0) * self.force_scale
-        self.body_labels[2].position = a + dk.angular_momentum(p, 0.0) * self.momentum_scale
-        self.vector_labels[0].position = LIFT + to_world(a + p.omega * dk.AXLE * self.omega_scale)
+        self.body_labels[0].position = a + dk.angular_momentum(p, 0.0) * self.momentum_scale
+        self.vector_labels[0].position = (
+            LIFT + to_world(a + p.omega * dk.AXLE * self.omega_scale) + (0.0, 0.0, 0.1 * p.radius)
+        )
         self.vector_labels[1].visible = not driven
         self.body.position = LIFT  # A stays put while driven
         self._observe()
@@ -354,6 +356,10 @@ class DiskExhibit(Exhibit):
         f[1, 0], f[1, 1] = b, b + fb
         self.forces.points = f
 
+    def _extent(self):
+        R = self.params.radius
+        return (-1.4 * R, -1.4 * R, 0.0), (1.4 * R, 1.4 * R, LIFT[2] + 2.3 * R)
+
     @property
     def camera(self):
         o = self.origin
@@ -370,9 +376,7 @@ class DiskExhibit(Exhibit):
 
     def readout(self) -> str:
         p, smp = self.params, self.sample
-        moments, _, _ = principal_axes_for(p, self.config.mode)
         about = "A" if self.config.mode == "driven" else "the centre of mass"
-        mr2 = p.disk_mass * p.radius**2
         lines = [f"**t = {self.t:.2f} s** · {self.config.mode}"]
         lines.append(
             f"· {self.method_line(self.sim)}"
@@ -383,7 +387,7 @@ class DiskExhibit(Exhibit):
             "",
             "| quantity | theory | measured |",
             "|---|---|---|",
-            f"| principal moments about {about} [MR²] | {', '.join(f'{m / mr2:.4g}' for m in moments)} | — |",
+            f"| principal moments about {about} [MR²] | {self.axes_text} | — |",
         ]
         if self.config.mode == "driven":
             meas = self.measured()["bearing_force"]
@@ -396,7 +400,7 @@ class DiskExhibit(Exhibit):
                 lines.append("| (the seed's 5/8 M R ω², for its bead m = 5M/4) | | |")
             lines.append(f"| \\|F_A + F_B\\| = (M+m) ω² ρ_cm [N] | {fmt(net)} | |")
             lines.append(
-                f"\nForce arrows: 1 m ↔ {1 / self.force_scale:.3g} N. Measured: "
+                f"\nRed arrows at A and B: the bearing forces, 1 m ↔ {1 / self.force_scale:.3g} N. Measured: "
                 "\\|ŷ × dL/dt\\| / 2R, with dL/dt from central differences of the sampled L(t)."
             )
         else:

@@ -242,6 +242,11 @@ class HoopExhibit(Exhibit):
             self.cmp_trail.push(bead[2])
             self.cmp_trail.draw()
 
+    def _extent(self):
+        a = self.params.radius
+        right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
+        return (-1.1 * a, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
+
     @property
     def camera(self):
         o = self.origin + (0.5 * COMPARE_OFFSET if self.compare is not None else 0.0)

@@ -1,0 +1,96 @@
+"""Where the scene's labels land on the screen, computed from the scene graph and a camera.
+
+viser draws labels in WebGL, so the page holds no boxes to measure; this module projects each
+visible label's anchor through a pinhole camera (viser's: vertical field of view ``FOV``, +z up)
+onto a page of ``width`` x ``height`` pixels and gives it the box its text takes there (viser's
+screen-size labels are about ``CHAR_PX`` wide per character and ``LINE_PX`` tall, measured on
+the screenshots at 1280x800).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+FOV = 1.3089969389957472  # rad, viser's default vertical field of view (75 degrees)
+CHAR_PX = 6.5
+LINE_PX = 16.0
+
+
+def _rotate(wxyz, v) -> np.ndarray:
+    w, x, y, z = (float(c) for c in wxyz)
+    q = np.array([x, y, z])
+    v = np.asarray(v, float)
+    return v + 2.0 * np.cross(q, np.cross(q, v) + w * v)
+
+
+@dataclass(frozen=True)
+class Box:
+    name: str
+    text: str
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+
+    def overlaps(self, other: Box) -> bool:
+        return self.x0 < other.x1 and other.x0 < self.x1 and self.y0 < other.y1 and other.y0 < self.y1
+
+
+def world_point(handles: dict, name: str) -> tuple[np.ndarray, bool]:
+    """World position of node ``name`` and whether it and every ancestor are visible."""
+    parts = name.strip("/").split("/")
+    p, visible = np.zeros(3), True
+    chain = ["/" + "/".join(parts[: k + 1]) for k in range(len(parts))]
+    # compose from the node up: x_parent = R x_child + t
+    for path in reversed(chain):
+        h = handles.get(path)
+        if h is None:
+            continue
+        visible = visible and bool(getattr(h, "visible", True))
+        p = _rotate(getattr(h, "wxyz", (1.0, 0.0, 0.0, 0.0)), p) + np.asarray(h.position, float)
+    return p, visible
+
+
+def project(point, position, look_at, width: int, height: int) -> tuple[float, float] | None:
+    f = np.asarray(look_at, float) - np.asarray(position, float)
+    f /= np.linalg.norm(f)
+    r = np.cross(f, (0.0, 0.0, 1.0))
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    d = np.asarray(point, float) - np.asarray(position, float)
+    zc = d @ f
+    if zc <= 0:
+        return None
+    t = math.tan(FOV / 2)
+    nx = (d @ r) / (zc * t * width / height)
+    ny = (d @ u) / (zc * t)
+    return (nx + 1) / 2 * width, (1 - ny) / 2 * height
+
+
+def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Box]:
+    """Screen boxes of every visible, non-empty label for ``camera`` = (position, look_at)."""
+    handles = server.scene._handle_from_node_name
+    out = []
+    for name, h in handles.items():
+        if type(h).__name__ != "LabelHandle" or not h.text:
+            continue
+        p, visible = world_point(handles, name)
+        if not visible:
+            continue
+        xy = project(p, *camera, width, height)
+        if xy is None:
+            continue
+        w, hgt = CHAR_PX * len(h.text) + 6, LINE_PX
+        x, y = xy
+        vert, horiz = h.anchor.split("-")
+        x0 = {"left": x, "center": x - w / 2, "right": x - w}[horiz]
+        y0 = {"top": y, "center": y - hgt / 2, "bottom": y - hgt}[vert]
+        out.append(Box(name, h.text, x0, y0, x0 + w, y0 + hgt))
+    return out
+
+
+def overlapping(boxes: list[Box]) -> list[tuple[str, str]]:
+    return [(a.text, b.text) for i, a in enumerate(boxes) for b in boxes[i + 1 :] if a.overlaps(b)]
