@@ -53,6 +53,7 @@ import numpy as np
 from . import warm
 from .live_record import add_record_toggle
 from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
+from .scene.base import LOG_FLOOR
 from .scene.panel import Panel
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
@@ -72,6 +73,17 @@ GRIDS = {
     "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
     "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
 }
+
+
+def chart_scales(t0: float, t1: float) -> dict:
+    """uPlot scales of the energy/error charts: x the time span ``t0 .. t1`` [s], y log10 from
+    the round-off floor to 100."""
+    import viser.uplot as uplot
+
+    return {
+        "x": uplot.Scale(time=False, auto=False, range=(t0, t1)),
+        "y": uplot.Scale(auto=False, range=(LOG_FLOOR, 2.0)),
+    }
 
 
 # --------------------------------------------------------------------------- numba warm-up
@@ -172,6 +184,7 @@ class MechvizApp:
         self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
+        self._chart_ranges: dict[str, tuple[float, float, float]] = {}  # (t0, t1, window) [s]
         self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -554,7 +567,22 @@ class MechvizApp:
                 data = ex.chart_data()
                 if len(data[0]) >= 2:
                     chart.data = data[: len(chart.series)]
+                    self._frame_chart(key, chart, float(data[0][-1]))
             self._shown[key] = (ex.revision, ex.history.version)
+
+    def _frame_chart(self, key: str, chart, t: float) -> None:
+        """Give the chart an explicit time axis: the window ending a quarter window ahead of
+        ``t``, moved on once ``t`` passes its end. The browser's chart keeps the time range it
+        had when it was drawn; a chart drawn again (after a resize and a tab switch) would keep
+        a stale one and show no lines. Moving the range redraws the chart, so it moves in
+        steps of a quarter window, not every update."""
+        lo, hi, window = self._chart_ranges.get(key, (math.inf, -math.inf, 0.0))
+        if lo <= t <= hi and window == self.chart_window:
+            return
+        hi = t + 0.25 * self.chart_window
+        lo = hi - 1.25 * self.chart_window
+        self._chart_ranges[key] = (lo, hi, self.chart_window)
+        chart.scales = chart_scales(lo, hi)
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

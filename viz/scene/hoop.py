@@ -307,7 +307,7 @@ class HoopExhibit(Exhibit):
 
             for k in (0, 1):
                 panel.number(f"th{k + 1}", f"θ{k + 1} (custom) [rad]", c.angles[k], angle(k),
-                             lo=-3.14, hi=3.14)  # fmt: skip
+                             current=lambda k=k: self.config.angles[k], lo=-3.14, hi=3.14)  # fmt: skip
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
         panel.param_inputs({
             "hoop_mass": "Hoop mass M [kg]", "bead_mass": "Bead mass m [kg]",

@@ -77,7 +77,7 @@ class Panel:
     """One exhibit's controls. ``w`` is the app's widget table, keyed ``"<exhibit>.<name>"``."""
 
     SYNCED = ("method", "dt", "beam", "beam_size", "kick", "mode", "follow_cm", "amplitude")
-    TYPING_PAUSE = 0.6  # s without a keystroke before a number field is read
+    TYPING_PAUSE = 1.0  # s without a keystroke before a number field is read
 
     def __init__(self, app, exhibit) -> None:
         self.app = app
@@ -104,16 +104,22 @@ class Panel:
         self.app.notify(f"Invalid value ({self.exhibit.title})", message)
         self.app.enqueue("call", lambda app: app._sync_widgets(self.key))
 
-    def number(self, name: str, label: str, value: float, apply, *, lo=None, hi=None, hint=None):
+    def number(
+        self, name: str, label: str, value: float, apply, *, current=None, lo=None, hi=None, hint=None
+    ):
         """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value.
 
         The browser sends the box's text on every keystroke, and ``2.5e`` is on the way to
-        ``2.5e-2``: the text is read once typing has paused for ``TYPING_PAUSE`` seconds."""
+        ``2.5e-2``: the text is read once typing has paused for ``TYPING_PAUSE`` seconds.
+        ``current()`` gives the value in force: text that shows it (the browser echoing what the
+        app just wrote into the box) changes nothing."""
         h = self.put(name, self.gui.add_text(label, initial_value=number_text(value), hint=hint))
         self.labels[name.split(".")[-1]] = label
         pending: list[threading.Timer] = []
 
         def read(v):
+            if current is not None and str(v).strip() == number_text(current()):
+                return
             try:
                 x = parse_number(label, v, lo, hi)
             except ValueError as exc:
@@ -196,6 +202,7 @@ class Panel:
                 self.number(
                     f"params.{name}", label, value,
                     lambda x, n=name: self.send({"op": "set", "params": {n: x}}),
+                    current=lambda n=name: self.exhibit.config.params[n],
                 )  # fmt: skip
 
     def integrator_inputs(self, *, compare: bool) -> None:
@@ -207,7 +214,8 @@ class Panel:
                 "method", gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
             )
             self.put("about", gui.add_markdown(method_text(ex.config.method)))
-            self.number("dt", "Step dt [s]", ex.config.dt, lambda x: self.send({"op": "set", "dt": x}))
+            self.number("dt", "Step dt [s]", ex.config.dt, lambda x: self.send({"op": "set", "dt": x}),
+                        current=lambda: self.exhibit.config.dt)  # fmt: skip
             self.put("limit", gui.add_markdown(ex.stability_text()))
             # a dropdown of decades: a number input shows 1e-9 as 0.0000000
             rtol = self.put(
