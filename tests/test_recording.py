@@ -173,6 +173,12 @@ def _interrupt_at(frame):
     return progress
 
 
+def test_a_dark_recording_opens_on_the_dark_page(tmp_path):
+    res = rec.record(_short(), tmp_path, theme="dark")
+    assert "darkMode:true" in res.paths[".html"].read_text()
+    assert "darkMode:false" in rec.record(_short(), tmp_path / "light").paths[".html"].read_text()
+
+
 def test_interrupted_first_recording_leaves_nothing(tmp_path):
     out = tmp_path / "new"
     with pytest.raises(rec.RecordingFailed, match="interrupted; nothing was written") as info:

@@ -34,6 +34,10 @@ def add_commands(sub) -> None:
         "--method", metavar="NAME", help="integration method (mechviz simulate --list-methods)"
     )
     p.add_argument("--dt", type=number, metavar="DT", help="step size [s] for fixed-step methods")
+    p.add_argument(
+        "--theme", choices=("light", "dark"), default="light",
+        help="page of the .html (default light); the scene's colours read on both",
+    )  # fmt: skip
     p.set_defaults(func=run_record)
 
     _add_play(sub)
@@ -107,7 +111,7 @@ def run_record(args: argparse.Namespace) -> int:
         raise CliError(f"--out: {out} exists and is not a folder")
     for demo in demos:
         try:
-            res = rec.record(demo, out, progress=ProgressBar(demo.name))
+            res = rec.record(demo, out, progress=ProgressBar(demo.name), theme=args.theme)
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")

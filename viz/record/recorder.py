@@ -61,19 +61,23 @@ def existing_recording(out_dir: Path, name: str) -> str:
 
 
 def record(
-    demo: Demo | str, out_dir: str | os.PathLike, *, progress: ProgressFn | None = None
+    demo: Demo | str,
+    out_dir: str | os.PathLike,
+    *,
+    progress: ProgressFn | None = None,
+    theme: str = "light",
 ) -> RecordResult:
     """Record ``demo`` into ``out_dir`` (the five files of the module docstring).
 
     ``progress(frame, frames)`` is called after each frame. Raises :class:`RecordingFailed`
     (the cause chained) if a run blows up or anything fails before the files are in place;
     ``KeyboardInterrupt`` becomes ``RecordingFailed`` with ``interrupted`` set. Either way the
-    folder holds nothing new."""
+    folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark")."""
     d = load_demo(demo) if isinstance(demo, str) else demo
     out = Path(out_dir)
     t_start = time.perf_counter()
     try:
-        rec = run_demo(d, progress)
+        rec = run_demo(d, progress, theme=theme)
         tr = rec.traces
         figs = figures(d, tr)
         files = {

@@ -75,9 +75,12 @@ def build_exhibit(server, demo: Demo) -> Exhibit:
     return EXHIBITS[demo.exhibit](server, demo.config(), history_len=8)
 
 
-def run_demo(demo: Demo, progress: ProgressFn | None = None) -> Recorded:
-    """Run ``demo`` headless and record it (see the module docstring). Raises
-    :class:`dynamics.IntegrationError` if a run blows up."""
+def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "light") -> Recorded:
+    """Run ``demo`` headless and record it (see the module docstring); ``theme`` ("light" or
+    "dark") is the page of the ``.html``. Raises :class:`dynamics.IntegrationError` if a run
+    blows up."""
+    if theme not in ("light", "dark"):
+        raise ValueError(f"theme must be light or dark, got {theme!r}")
     import viser
 
     with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner even when quiet
@@ -89,13 +92,13 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None) -> Recorded:
         cam = demo.camera
         server.initial_camera.position = tuple(cam.position or position)
         server.initial_camera.look_at = tuple(cam.look_at or look_at)
-        return _run(server, ex, demo, progress)
+        return _run(server, ex, demo, progress, theme)
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
 
 
-def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None) -> Recorded:
+def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None, theme: str) -> Recorded:
     labels = labels_for(ex)
     runs = {labels[role]: sim for role, sim in ex.runs().items()}
     K = demo.frames
@@ -146,7 +149,7 @@ def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None) -> Record
     for ser in serializers:
         ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
     data = serializers[0].serialize()
-    html = serializers[1].as_html().encode("utf-8")
+    html = serializers[1].as_html(dark_mode=theme == "dark").encode("utf-8")
     for lbl in runs:
         if np.all(np.isnan(err[lbl])):
             err[lbl] = None
