@@ -590,3 +590,16 @@ def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
             boxes = [b for b in screen.label_boxes(app.server, app.camera_preset(view), *PAGE)
                      if b.x0 < PANEL_LEFT]  # fmt: skip
             assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
+
+
+def test_each_charge_of_a_beam_leaves_a_trail_on_its_own_circle(server):
+    ex = CyclotronExhibit(server, CyclotronConfig(beam=True, beam_size=6, vz=0.0))
+    for _ in range(400):  # a full period at 1/60 s per frame
+        ex.advance(1 / 60)
+        ex.draw()
+    seg = ex.beam_trails.node.points.reshape(6, ex.beam_trails.k - 1, 2, 3).astype(float)
+    p, s0 = ex.params, ex.beam.state0
+    for j in range(6):  # every sampled point of member j lies on member j's circle
+        centre = cy.guiding_centre(p, s0[j])
+        r = np.hypot(*(seg[j, :, 1, :2] - centre[:2]).T)
+        np.testing.assert_allclose(r, cy.larmor_radius(p, s0[j]), rtol=1e-5)

@@ -88,6 +88,43 @@ class CyclotronConfig(ExhibitConfig):
         return out
 
 
+class BeamTrails:
+    """The recent path of every charge of a beam, in one line-segments node: ``points`` per
+    charge, sampled every ``every`` frames, at most ``SEGMENTS`` segments in all (so a large
+    beam costs no more to send than a small one), broken where the drawn height wraps."""
+
+    SEGMENTS = 2400
+    EVERY = 4  # frames between samples: 80 samples at 60 fps span 5.3 s, most of a period at 1x
+
+    def __init__(self, scene, name: str, colors: np.ndarray, height: float) -> None:
+        n = len(colors)
+        self.k = int(max(8, min(80, self.SEGMENTS // n)))
+        self.height = height
+        self.points = np.full((n, self.k, 3), np.nan)
+        self.frames = 0
+        seg_colors = np.repeat(np.repeat(colors[:, None, None, :], self.k - 1, axis=1), 2, axis=2)
+        self.node = scene.add_line_segments(
+            name, np.zeros((n * (self.k - 1), 2, 3), np.float32),
+            colors=seg_colors.reshape(-1, 2, 3), thickness=1.5, thickness_units="screen",
+        )  # fmt: skip
+
+    def push(self, positions: np.ndarray) -> None:
+        """Sample the charges' drawn positions (n, 3) on every ``EVERY``-th call; redraw then."""
+        self.frames += 1
+        if (self.frames - 1) % self.EVERY:
+            return
+        self.points[:, :-1] = self.points[:, 1:]
+        self.points[:, -1] = positions
+        a, b = self.points[:, :-1], self.points[:, 1:]
+        # no segment from a point not yet sampled, nor across the height's wrap-around
+        cut = np.isnan(a).any(axis=-1) | (np.abs(b[..., 2] - a[..., 2]) > 0.5 * self.height)
+        seg = np.stack([np.where(cut[..., None], b, a), b], axis=2)
+        self.node.points = np.nan_to_num(seg).reshape(-1, 2, 3).astype(np.float32)
+
+    def remove(self) -> None:
+        self.node.remove()
+
+
 class CyclotronExhibit(Exhibit):
     """The charge, its theory circle, optional comparison method and optional beam."""
 
@@ -129,6 +166,7 @@ class CyclotronExhibit(Exhibit):
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
         )
         self.beam_node = None
+        self.beam_trails: BeamTrails | None = None
         self._ring_radius = 1.0
         self._body_positions = np.zeros((3, 3))
 
@@ -185,6 +223,9 @@ class CyclotronExhibit(Exhibit):
         if self.beam_node is not None:
             self.beam_node.remove()
             self.beam_node = None
+        if self.beam_trails is not None:
+            self.beam_trails.remove()
+            self.beam_trails = None
         if self.beam is None:
             return
         n = len(self.beam.state)
@@ -197,6 +238,7 @@ class CyclotronExhibit(Exhibit):
             batched_positions=self._display(self.beam.state[:, :3]),
             batched_colors=colors, lod="off",
         )  # fmt: skip
+        self.beam_trails = BeamTrails(self.scene, f"{self.root}/beam_trails", colors, self.config.height)
 
     def _extra_simulations(self):
         return [self.beam] if self.beam is not None else []
@@ -303,7 +345,9 @@ class CyclotronExhibit(Exhibit):
             self._ring_radius = radius
         self.ring.position = (centre[0], centre[1], pos[2])
         if self.beam is not None and self.beam_node is not None:
-            self.beam_node.batched_positions = self._display(self.beam.state[:, :3])
+            shown = self._display(self.beam.state[:, :3])
+            self.beam_node.batched_positions = shown
+            self.beam_trails.push(shown)
 
     def _extent(self):
         H = self.config.height
