@@ -603,3 +603,17 @@ def test_each_charge_of_a_beam_leaves_a_trail_on_its_own_circle(server):
         centre = cy.guiding_centre(p, s0[j])
         r = np.hypot(*(seg[j, :, 1, :2] - centre[:2]).T)
         np.testing.assert_allclose(r, cy.larmor_radius(p, s0[j]), rtol=1e-5)
+
+
+def test_presenting_one_exhibit_hides_the_others_and_enlarges_its_labels(app):
+    app.w["present"].value = "Hoop"
+    frames(app, 1)
+    scene = app.server.scene
+    assert app.presenting == "hoop"
+    assert scene.get_handle_by_name("/hoop").visible
+    assert not any(scene.get_handle_by_name(f"/{k}").visible for k in ("disk", "cyclotron"))
+    assert all(h.font_screen_scale > 1.0 for h in app.exhibits["hoop"].labels())
+    app.w["present"].value = "Off"
+    frames(app, 1)
+    assert all(scene.get_handle_by_name(f"/{k}").visible for k in app.exhibits)
+    assert all(h.font_screen_scale == 1.0 for ex in app.exhibits.values() for h in ex.labels())

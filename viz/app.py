@@ -59,6 +59,8 @@ from .scene.panel import Panel
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
+PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
+PRESENT_DISTANCE = 0.7  # presentation mode's camera distance, times the preset's
 PANEL_SHIFT = 0.3  # of the viewing distance: a preset's sideways slide clear of the GUI panel
 OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
@@ -184,6 +186,7 @@ class MechvizApp:
         self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
+        self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
         self._chart_ranges: dict[str, tuple[float, float, float]] = {}  # (t0, t1, window) [s]
         self._syncing = False
         self._stop = threading.Event()
@@ -325,14 +328,16 @@ class MechvizApp:
             for ex in self.exhibits.values():
                 ex.set_chart_window(self.chart_window)
             self._shown.clear()
+        elif op == "present":
+            self._present(cmd.get("value"), cmd.get("client"))
         elif op == "theme":
             if cmd.get("value") not in GRIDS:
                 raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}")
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window or "
-                f"theme; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window, "
+                f"present or theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
@@ -345,11 +350,19 @@ class MechvizApp:
             self.w["theme"].value = theme
             self._syncing = False
         self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        self._configure_page()
+
+    def _configure_page(self) -> None:
+        """The page's theme; while presenting, the panel minimized (its button brings it back)."""
         if self.gui is not None:
             self.gui.configure_theme(
                 control_width="medium", show_logo=False, brand_color=(40, 110, 200),
-                dark_mode=theme == "dark",
+                dark_mode=self.theme == "dark",
             )  # fmt: skip
+            if self.presenting:
+                self.gui.main_panel.minimize()
+            else:
+                self.gui.main_panel.expand()
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         self.messages.append((title, body))
@@ -372,6 +385,30 @@ class MechvizApp:
         right = np.cross(forward, (0.0, 0.0, 1.0))  # the camera's right (+z up), in the floor
         right *= PANEL_SHIFT * np.linalg.norm(forward) / max(np.linalg.norm(right), 1e-12)
         return tuple(position + right), tuple(target + right)
+
+    def _present(self, view, client=None) -> None:
+        """Presentation mode: ``view`` (an exhibit's preset name) alone on the page, framed in
+        the middle of it, labels ``PRESENT_TEXT`` times larger and the panel minimized (its
+        button opens it again); ``"Off"`` brings the three and the panel back."""
+        if view not in ("Off", *VIEWS):
+            raise ValueError(f"Present must be Off or one of {', '.join(VIEWS)}, got {view!r}")
+        self.presenting = None if view == "Off" else VIEWS[view]
+        scale = 1.0 if self.presenting is None else PRESENT_TEXT
+        for key, ex in self.exhibits.items():
+            ex.scene.get_handle_by_name(ex.root).visible = self.presenting in (None, key)
+            for h in ex.labels():
+                h.font_screen_scale = scale
+        self._configure_page()
+        if self.presenting is None:
+            self._move_camera(client, "All")
+        else:
+            # the exhibit in the page's middle, the camera a third closer than its preset
+            position, target = (np.asarray(v, float) for v in self.exhibits[self.presenting].camera)
+            position = tuple(target + PRESENT_DISTANCE * (position - target))
+            target = tuple(target)
+            for c in [client] if client is not None else list(self.server.get_clients().values()):
+                with c.atomic():
+                    c.camera.position, c.camera.look_at = position, target
 
     def _move_camera(self, client, view: str) -> None:
         position, target = self.camera_preset(view)
@@ -479,6 +516,10 @@ class MechvizApp:
             )
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
+            w["present"] = gui.add_dropdown(
+                "Present", options=("Off", *VIEWS), initial_value="Off",
+                hint="One exhibit alone, larger text, the panel collapsible: for a projector",
+            )  # fmt: skip
             w["chart_window"] = gui.add_dropdown(
                 "Chart window", options=tuple(CHART_WINDOWS), initial_value="10 s",
                 hint="How much of the past the energy and error charts show",
@@ -488,6 +529,11 @@ class MechvizApp:
                 hint="Light or dark page; the scene's colours read on both (also on a projector)",
             )  # fmt: skip
         self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
+
+        @w["present"].on_update
+        def _(event) -> None:
+            if not self._syncing:
+                self.enqueue("app", {"op": "present", "value": w["present"].value, "client": event.client})
         self._on(
             w["chart_window"],
             lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),

@@ -538,6 +538,12 @@ class Exhibit:
     def _extent(self):  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def labels(self) -> list:
+        """The exhibit's text labels in the scene (for presentation mode's larger text)."""
+        handles = self.scene._handle_from_node_name
+        return [h for name, h in handles.items()
+                if name.startswith(self.root + "/") and type(h).__name__ == "LabelHandle"]  # fmt: skip
+
     def world(self, local) -> np.ndarray:
         return self.origin + np.asarray(local, dtype=float)
 
