@@ -249,6 +249,7 @@ class Exhibit:
         self.failure_error: dynamics.IntegrationError | None = None  # the same, as an error
         self.events: list[tuple[str, str]] = []  # (title, body) for notifications
         self.revision = 0
+        self.steps_last_advance = 0  # steps the main run took in the last advance
         self.history = History(self.chart_series, maxlen=history_len)
         self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
         self._chart_t = 0.0  # time of the newest chart point
@@ -322,12 +323,14 @@ class Exhibit:
 
     def _advance(self, move, measure: bool) -> None:
         self.revision += 1
+        steps_before = self.sim.steps
         for sim in self.simulations():
             try:
                 move(sim)
             except dynamics.IntegrationError as exc:
                 self._fail(exc)
                 break
+        self.steps_last_advance = self.sim.steps - steps_before
         self._sample = None
         self._compare_sample = None
         if measure or self.paused:
@@ -548,7 +551,12 @@ class Exhibit:
         return self.origin + np.asarray(local, dtype=float)
 
     def method_line(self, sim: dynamics.Simulation) -> str:
-        return f"`{sim.method.name}` ({sim.step_label()})"
+        """The method and its step setting; for an adaptive main run also the steps it took over
+        the last advance (a frame, live): the tolerance shows there."""
+        line = f"`{sim.method.name}` ({sim.step_label()})"
+        if sim is self.sim and sim.method.adaptive:
+            line += f", {self.steps_last_advance} steps in the last frame"
+        return line
 
     def work_line(self) -> str:
         smp = self.sample
