@@ -103,6 +103,18 @@ def effective_potential(p: CyclotronParams, r: float, p_phi: float) -> float:
     return (p_phi - 0.5 * qb * r * r) ** 2 / (2.0 * p.mass * r * r)
 
 
+def radial_coordinates(p: CyclotronParams, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(r, p_r)``: distance from the field's axis [m] and radial momentum ``m dr/dt``
+    [kg m/s] of states (..., 6). With ``p_phi`` conserved the transverse energy splits as
+    ``E_perp = p_r^2 / 2m + V_eff(r)``: the radial motion of a particle in the well ``V_eff``."""
+    s = np.asarray(state, dtype=float)
+    x, y, vx, vy = s[..., 0], s[..., 1], s[..., 3], s[..., 4]
+    r = np.hypot(x, y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p_r = p.mass * np.where(r > 0, (x * vx + y * vy) / r, 0.0)
+    return r, p_r
+
+
 def effective_potential_minimum(p: CyclotronParams, p_phi: float) -> float:
     """Radius ``r0 = sqrt(2 |p_phi| / |qB|)`` [m] where ``V_eff`` is least for this ``p_phi``.
 

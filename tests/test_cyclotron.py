@@ -177,3 +177,17 @@ def test_small_kick_makes_the_distance_from_the_old_centre_oscillate_at_the_orbi
 def test_bad_parameters_are_rejected_naming_the_field(field, value, text):
     with pytest.raises(ValueError, match=rf"^{field} must be .*{text}|^{field} must be a {text}"):
         CyclotronParams(**{field: value})
+
+
+def test_the_radial_motion_stays_on_its_energy_level_in_the_effective_potential():
+    """E_perp = p_r^2/2m + V_eff(r) along the exact flow, for an orbit that encloses the axis
+    and one that does not (p_phi of either sign)."""
+    p = cyclotron.CyclotronParams(charge=1.3, mass=0.7, field=-0.9)
+    for centre in ((0.2, 0.1), (2.5, -1.0)):
+        s0 = cyclotron.circular_orbit_state(p, 1.1, centre, 0.3)
+        states = cyclotron.exact_solution(p, s0, np.linspace(0.0, 20.0, 400))
+        r, p_r = cyclotron.radial_coordinates(p, states)
+        p_phi = float(cyclotron.canonical_angular_momentum(p, s0))
+        e_perp = 0.5 * p.mass * (s0[3] ** 2 + s0[4] ** 2)
+        level = p_r**2 / (2 * p.mass) + cyclotron.effective_potential(p, r, p_phi)
+        np.testing.assert_allclose(level, e_perp, rtol=1e-12)

@@ -617,3 +617,17 @@ def test_presenting_one_exhibit_hides_the_others_and_enlarges_its_labels(app):
     frames(app, 1)
     assert all(scene.get_handle_by_name(f"/{k}").visible for k in app.exhibits)
     assert all(h.font_screen_scale == 1.0 for ex in app.exhibits.values() for h in ex.labels())
+
+
+def test_the_charge_moves_in_its_effective_potential_under_the_level_of_its_energy(server):
+    ex = CyclotronExhibit(server, CyclotronConfig(centre=(0.6, 0.0), vz=0.0))
+    for _ in range(200):
+        ex.advance(1 / 30)
+        w = ex.well()
+        i = int(np.flatnonzero(~np.isnan(w["point"]))[0])
+        assert w["point"][i] <= w["level"][i] * (1 + 1e-12)  # E_perp - V_eff = p_r^2/2m >= 0
+        assert w["r_min"] - 1e-9 <= w["x"][i] <= w["r_max"] + 1e-9
+    assert np.nanmin(w["V"]) == pytest.approx(np.nanmax(w["bottom"]), rel=1e-12)  # r0 at the bottom
+    p_phi = w["p_phi"]
+    ex.apply({"op": "kick", "dv": 0.5})
+    assert ex.well()["p_phi"] != pytest.approx(p_phi)  # a kick changes p_phi: a new well

@@ -608,6 +608,8 @@ class MechvizApp:
             if not force and shown == (ex.revision, ex.history.version):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
+            if key in self.panels:
+                ex.refresh_panel(self.panels[key])
             if force or shown is None or shown[1] != ex.history.version:
                 chart = self.w[f"{key}.chart"]
                 data = ex.chart_data()

@@ -524,6 +524,9 @@ class Exhibit:
     def build_panel(self, panel) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def refresh_panel(self, panel) -> None:
+        """Pictures of the exhibit's own in its panel, refreshed with the readout (5 Hz)."""
+
     def sync_panel(self, panel) -> None:
         """Widgets of the exhibit's own that :meth:`viz.scene.panel.Panel.sync` does not know."""
 
