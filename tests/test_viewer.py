@@ -631,3 +631,20 @@ def test_the_charge_moves_in_its_effective_potential_under_the_level_of_its_ener
     p_phi = w["p_phi"]
     ex.apply({"op": "kick", "dv": 0.5})
     assert ex.well()["p_phi"] != pytest.approx(p_phi)  # a kick changes p_phi: a new well
+
+
+@pytest.mark.parametrize(("amplitude", "stays"), [(0.02, True), (1.2, False)])
+def test_a_mode_2_start_stays_on_its_line_in_configuration_space_only_at_small_amplitude(
+    server, amplitude, stays
+):
+    ex = HoopExhibit(server, HoopConfig(mode="mode 2", amplitude=amplitude, method="rk4", dt=0.002))
+    cs = ex.config_space
+    line = cs.modes.points[1].astype(float)  # the drawn mode-2 direction, through the origin
+    u = (line[1] - line[0]) / np.linalg.norm(line[1] - line[0])
+    off = 0.0
+    for _ in range(240):  # 4 s, a few mode-2 periods
+        ex.advance(1 / 60)
+        ex.draw()
+        d = cs.point(ex.state[:2]) - cs.centre  # where the path is drawn, from the origin
+        off = max(off, np.linalg.norm(d - (d @ u) * u) / np.linalg.norm(line[1] - line[0]))
+    assert (off < 0.01) == stays, off

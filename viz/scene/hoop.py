@@ -27,6 +27,61 @@ from .panel import number_text
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
+# Configuration space, drawn as a square standing left of the stand: theta1 across, theta2 up.
+CONFIG_SIZE = 1.0  # m, the square's side
+CONFIG_CENTRE = np.array([-2.3, 0.0, 0.9])  # m from the exhibit origin (times the hoop radius in x)
+MODE_COLOURS = ((230, 60, 60), (60, 110, 240))  # mode 1 and mode 2 directions (geo.AXES_RGB)
+
+
+class ConfigurationSpace:
+    """The motion in the (theta1, theta2) plane: the run's path (bead colour) and linear
+    theory's (ghost), with the two mode-shape directions through the origin, (1, 1) for mode 1
+    and (m, -(M + m)) for mode 2 (:func:`dynamics.hoop.normal_modes`). A start on a mode line
+    stays on it at small amplitude; at large amplitude the path leaves it."""
+
+    def __init__(self, scene, root: str, centre: np.ndarray, cap: int) -> None:
+        self.scene, self.root, self.centre = scene, root, centre
+        half = 0.5 * CONFIG_SIZE
+        c = [(-half, 0, -half), (half, 0, -half), (half, 0, half), (-half, 0, half)]
+        frame = np.array([[c[k], c[(k + 1) % 4]] for k in range(4)], np.float32)
+        axes = np.array([[(-half, 0, 0), (half, 0, 0)], [(0, 0, -half), (0, 0, half)]], np.float32)
+        scene.add_line_segments(
+            f"{root}/frame", np.concatenate([frame, axes]) + centre.astype(np.float32),
+            colors=np.array(geo.AXLE, np.uint8), thickness=1.0, thickness_units="screen",
+        )  # fmt: skip
+        self.modes = scene.add_line_segments(
+            f"{root}/modes", np.zeros((2, 2, 3), np.float32),
+            colors=np.repeat(np.array(MODE_COLOURS, np.uint8)[:, None, :], 2, axis=1),
+            thickness=2.0, thickness_units="screen",
+        )  # fmt: skip
+        self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
+        self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
+        self.scale = 1.0
+
+    def start(self, shapes: np.ndarray, angles0: np.ndarray, ghost: bool) -> None:
+        """New axes for a new start: the square spans +-1.25 times the start's largest angle
+        (at least 0.05 rad); the mode lines are clipped to the square."""
+        reach = max(0.05, 1.25 * float(np.abs(angles0).max()))
+        self.scale = 0.5 * CONFIG_SIZE / reach
+        lines = []
+        for shape in shapes:
+            u = np.asarray(shape, float) / np.abs(shape).max()  # reaches the square's edge
+            lines.append([self.point(-reach * u), self.point(reach * u)])
+        self.modes.points = np.asarray(lines, np.float32)
+        self.path.clear()
+        self.ghost.clear()
+        self.ghost.visible = ghost
+
+    def point(self, angles) -> np.ndarray:
+        th = np.asarray(angles, float)
+        return self.centre + self.scale * np.array([th[0], 0.0, th[1]])
+
+    def push(self, angles, ghost_angles) -> None:
+        self.path.push(self.point(angles))
+        self.path.draw()
+        if self.ghost.visible:
+            self.ghost.push(self.point(ghost_angles))
+            self.ghost.draw()
 
 
 @dataclass(frozen=True)
@@ -135,6 +190,10 @@ class HoopExhibit(Exhibit):
             self.trail.clear()
             self.cmp_trail.clear()
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.config.trail_cap)
+        if not hasattr(self, "config_space"):
+            self.config_space = ConfigurationSpace(
+                s, f"{r}/configuration_space", CONFIG_CENTRE * (a, 1.0, 1.0), cap=1200
+            )
         self.cmp_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
         )
@@ -166,6 +225,7 @@ class HoopExhibit(Exhibit):
             self.cmp_label.text = f"{c.compare_method} (blue)"
         self.shapes = hp.normal_modes(p)[1]
         self.motion = Motion((2,))  # the angles
+        self.config_space.start(self.shapes, s0[:2], c.ghost)
         self._observe()
 
     # ------------------------------------------------------------------ geometry from dynamics
@@ -198,6 +258,7 @@ class HoopExhibit(Exhibit):
         s0 = self.config.initial_state()
         for sim in self.simulations():
             sim.jump(s0)
+        self.config_space.start(self.shapes, s0[:2], self.config.ghost)
         self.revision += 1
         self._sample = self._compare_sample = None
         self.trail.lift()
@@ -238,6 +299,7 @@ class HoopExhibit(Exhibit):
         self.beads.batched_positions = bead
         self.trail.push(bead[0])
         self.trail.draw()
+        self.config_space.push(states[0, :2], states[1, :2])
         if c is not None:
             self.cmp_trail.push(bead[2])
             self.cmp_trail.draw()
@@ -245,7 +307,8 @@ class HoopExhibit(Exhibit):
     def _extent(self):
         a = self.params.radius
         right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
-        return (-1.1 * a, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
+        left = CONFIG_CENTRE[0] * a - 0.5 * CONFIG_SIZE
+        return (left, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
 
     @property
     def camera(self):
