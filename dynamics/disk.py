@@ -293,6 +293,33 @@ def free_angular_momentum_space(moments: np.ndarray, state: np.ndarray) -> np.nd
     return np.einsum("...ij,...j->...i", quaternion_to_matrix(s[..., 3:7]), body)
 
 
+def poinsot(moments: np.ndarray, state: np.ndarray) -> dict[str, np.ndarray | float]:
+    """Poinsot's construction for a torque-free state (7,): the inertia ellipsoid about the
+    centre of mass, ``x^T I x = 1`` (semi-axes ``1/sqrt(I_i)`` along the principal axes),
+    carried with the body, rolls without slipping on the invariable plane, normal to the fixed
+    ``L`` at the distance ``sqrt(2T)/|L|`` from the centre. The contact point is
+    ``w / sqrt(2T)``: on the ellipsoid, where its normal ``I w = L`` is along the plane's.
+
+    Returns ``semi_axes`` (3,) [1/sqrt(kg m^2)], ``rotation`` (principal frame -> space),
+    ``contact_body`` and ``contact_space`` (3,), ``normal`` (unit, space), ``distance``; the
+    contact traces the polhode on the ellipsoid (body frame) and the herpolhode on the plane.
+    """
+    s = np.asarray(state, dtype=float)
+    w = s[:3]
+    rot = quaternion_to_matrix(s[3:7])
+    two_t = float(np.sum(moments * w * w))
+    L = rot @ (moments * w)
+    contact_body = w / math.sqrt(two_t)
+    return {
+        "semi_axes": 1.0 / np.sqrt(moments),
+        "rotation": rot,
+        "contact_body": contact_body,
+        "contact_space": rot @ contact_body,
+        "normal": L / np.linalg.norm(L),
+        "distance": math.sqrt(two_t) / float(np.linalg.norm(L)),
+    }
+
+
 # --------------------------------------------------------------------------- compiled pieces
 @njit(cache=True)
 def free_derivatives(w1, w2, w3, q0, q1, q2, q3, i1, i2, i3):

@@ -188,3 +188,26 @@ def test_released_disk_rk4_matches_the_tight_reference():
 def test_bad_parameters_are_rejected_naming_the_field(field, value):
     with pytest.raises(ValueError, match=rf"^{field} must be"):
         DiskParams(**{field: value})
+
+
+def test_poinsot_the_ellipsoid_touches_the_invariable_plane_where_its_normal_is_along_l():
+    """Poinsot: the contact point w/sqrt(2T) lies on the inertia ellipsoid and on the plane
+    normal to L at sqrt(2T)/|L|, and the ellipsoid's normal there (I x) is parallel to L, at
+    every moment of a tumble."""
+    p = DiskParams(omega=2.0)
+    system = ReleasedDisk(p, extra_spin=(0.01, 0.0, 0.05))
+    moments = system.kernel_params()
+    sim = Simulation(system, "dop853", rtol=1e-10, reference=None)
+    plane = None
+    for t in np.linspace(0.5, 20.0, 40):
+        sim.advance_to(float(t))
+        pc = disk.poinsot(moments, sim.state[0])
+        x = pc["contact_body"]
+        assert x @ (moments * x) == pytest.approx(1.0, rel=1e-12)  # on the ellipsoid
+        assert pc["contact_space"] @ pc["normal"] == pytest.approx(pc["distance"], rel=1e-12)
+        n_body = moments * x / np.linalg.norm(moments * x)
+        np.testing.assert_allclose(pc["rotation"] @ n_body, pc["normal"], atol=1e-12)
+        if plane is None:
+            plane = (pc["normal"], pc["distance"])
+        np.testing.assert_allclose(pc["normal"], plane[0], atol=1e-8)  # the plane is fixed
+        assert pc["distance"] == pytest.approx(plane[1], rel=1e-8)

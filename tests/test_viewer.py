@@ -648,3 +648,23 @@ def test_a_mode_2_start_stays_on_its_line_in_configuration_space_only_at_small_a
         d = cs.point(ex.state[:2]) - cs.centre  # where the path is drawn, from the origin
         off = max(off, np.linalg.norm(d - (d @ u) * u) / np.linalg.norm(line[1] - line[0]))
     assert (off < 0.01) == stays, off
+
+
+def test_the_released_disk_draws_poinsot_with_the_contact_point_on_the_invariable_plane(server):
+    ex = DiskExhibit(server)
+    ex.apply({"op": "set", "mode": "released", "extra_spin": (0.0, 0.0, 0.2)})
+    pc_view = ex.poinsot
+    assert pc_view.frame.visible and pc_view.plane_frame.visible
+    for _ in range(120):
+        ex.advance(1 / 30)
+        ex.draw()
+    pc = dk.poinsot(ex.sim.system.kernel_params(), ex.state)
+    plane_normal = P @ pc["normal"]
+    centre = np.asarray(pc_view.frame.position, float)
+    plane_at = np.asarray(pc_view.plane_frame.position, float)
+    assert (plane_at - centre) @ plane_normal == pytest.approx(pc["distance"] * pc_view.scale, rel=1e-6)
+    # the contact point, drawn on the ellipsoid, lies in the plane
+    contact = centre + P @ pc["contact_space"] * pc_view.scale
+    assert (contact - plane_at) @ plane_normal == pytest.approx(0.0, abs=1e-6)
+    ex.apply({"op": "set", "mode": "driven"})
+    assert not pc_view.frame.visible and not pc_view.plane_frame.visible

@@ -74,6 +74,70 @@ def principal_axes_for(p: dk.DiskParams, mode: str) -> tuple[np.ndarray, np.ndar
     return moments, axes, dk.centre_of_mass(p)
 
 
+class PoinsotPicture:
+    """Poinsot's construction for the released disk (:func:`dynamics.disk.poinsot`), drawn at
+    the centre of mass: the inertia ellipsoid turning with the body, the invariable plane fixed
+    in space (normal to L), the polhode traced on the ellipsoid and the herpolhode on the plane.
+    Lengths are 1/sqrt(kg m^2) times ``scale`` [m], chosen so the longest semi-axis is 0.6 R."""
+
+    def __init__(self, scene, root: str) -> None:
+        self.scene, self.root = scene, root
+        self.frame = scene.add_frame(f"{root}/poinsot", show_axes=False, visible=False)
+        self.plane_frame = scene.add_frame(f"{root}/invariable_plane", show_axes=False, visible=False)
+        self.ellipsoid = None
+        self.polhode = geo.ChunkedTrail(scene, f"{root}/poinsot/polhode", geo.CENTRE, cap=900)
+        self.herpolhode = geo.ChunkedTrail(
+            scene, f"{root}/invariable_plane/herpolhode", geo.MOMENTUM, cap=900
+        )
+        self.scale = 1.0
+
+    def start(self, moments: np.ndarray, radius: float, shown: bool) -> None:
+        semi = 1.0 / np.sqrt(moments)
+        self.scale = 0.6 * radius / float(semi.max())
+        if self.ellipsoid is not None:
+            self.ellipsoid.remove()
+        mesh = geo.sphere_mesh(1.0, 3)
+        mesh.apply_scale(semi * self.scale)
+        self.ellipsoid = self.scene.add_mesh_simple(
+            f"{self.root}/poinsot/ellipsoid", mesh.vertices, mesh.faces, color=geo.CENTRE,
+            opacity=0.35,
+        )  # fmt: skip
+        plane = geo.disk_mesh(0.9 * radius, 0.004 * radius)
+        self.scene.add_mesh_simple(
+            f"{self.root}/invariable_plane/plane", plane.vertices, plane.faces,
+            color=geo.MOMENTUM, opacity=0.25,
+        )  # fmt: skip
+        self.polhode.clear()
+        self.herpolhode.clear()
+        self.frame.visible = self.plane_frame.visible = shown
+
+    def draw(self, pc: dict, cm_world: np.ndarray) -> None:
+        """``pc`` from :func:`dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
+        relative to the exhibit origin)."""
+        self.frame.position = cm_world
+        self.frame.wxyz = geo.quat_from_matrix(P @ pc["rotation"])
+        n = to_world(pc["normal"])
+        turn = _z_onto(n)  # the plane's own z along n; the plane sits at its distance along n
+        offset = n * pc["distance"] * self.scale
+        self.plane_frame.wxyz = geo.quat_from_matrix(turn)
+        self.plane_frame.position = cm_world + offset
+        self.polhode.push(pc["contact_body"] * self.scale)
+        self.polhode.draw()
+        # the herpolhode in the plane's own coordinates (the plane is fixed while L is)
+        self.herpolhode.push(turn.T @ (to_world(pc["contact_space"]) * self.scale - offset))
+        self.herpolhode.draw()
+
+
+def _z_onto(n: np.ndarray) -> np.ndarray:
+    """A rotation matrix taking +z onto the unit vector ``n`` (Rodrigues' formula)."""
+    z = np.array([0.0, 0.0, 1.0])
+    v, c = np.cross(z, n), float(z @ n)
+    if c < -1.0 + 1e-12:
+        return np.diag([1.0, -1.0, -1.0])
+    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + vx + vx @ vx / (1.0 + c)
+
+
 def to_world(v) -> np.ndarray:
     """Disk/space-frame vector(s) (..., 3) -> world vector(s), relative to the exhibit origin."""
     return np.asarray(v, float) @ P.T
@@ -90,6 +154,7 @@ class DiskExhibit(Exhibit):
     def _build(self) -> None:
         s, r = self.scene, self.root
         s.add_frame(r, show_axes=False, position=self.origin)
+        self.poinsot = PoinsotPicture(s, r)
         self.label = s.add_label(
             f"{r}/label",
             "Spinning disk with a bead",
@@ -258,6 +323,7 @@ class DiskExhibit(Exhibit):
             LIFT + to_world(a + p.omega * dk.AXLE * self.omega_scale) + (0.0, 0.0, 0.1 * p.radius)
         )
         self.vector_labels[1].visible = not driven
+        self.poinsot.start(dk.free_kernel_params(p), p.radius, shown=not driven)
         self.body.position = LIFT  # A stays put while driven
         self._observe()
 
@@ -337,6 +403,7 @@ class DiskExhibit(Exhibit):
         self.vectors.points = pts
         for h, tip in zip(self.vector_labels, tips, strict=True):  # both move with the tumble
             h.position = tip
+        self.poinsot.draw(dk.poinsot(self.sim.system.kernel_params(), self.state), b0)
 
     def _draw_driven(self) -> None:
         """The uniform rotation about the axle: A stays put and omega is fixed; L and the
