@@ -12,8 +12,9 @@ import sys
 
 from dynamics.cli import CliError, add_commands
 
-# view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli).
-_COMMAND_MODULES = ("viz.app_cli", "viz.recording_cli", "viz.bench_cli")
+# view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli),
+# video (viz.video_cli).
+_COMMAND_MODULES = ("viz.app_cli", "viz.recording_cli", "viz.bench_cli", "viz.video_cli")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -37,6 +37,9 @@ def add_commands(sub) -> None:
         "--method", metavar="NAME", help="integration method (mechviz simulate --list-methods)"
     )
     p.add_argument("--dt", type=number, metavar="DT", help="step size [s] for fixed-step methods")
+    from .video_cli import add_record_options
+
+    add_record_options(p)  # --video, --size
     p.set_defaults(func=run_record)
 
     q = sub.add_parser(
@@ -117,6 +120,10 @@ def run_record(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out: {out} exists and is not a folder")
+    if args.video or args.size:
+        from .video_cli import check_record_options, film_record
+
+        check_record_options(args, demos)
     for demo in demos:
         try:
             res = rec.record(demo, out, progress=ProgressBar(demo.name))
@@ -126,6 +133,8 @@ def run_record(args: argparse.Namespace) -> int:
             print(f"mechviz: error: {exc}", file=sys.stderr)
             return 130 if getattr(exc, "interrupted", False) else 1
         _report(res)
+        if args.video and (status := film_record(res, args)):
+            return status
     return 0
 
 
