@@ -417,6 +417,10 @@ class _Mp4Writer:
     def close(self) -> None:
         self.gen.close()
 
+    def abort(self) -> None:
+        with contextlib.suppress(Exception):
+            self.gen.close()  # ffmpeg exits; the caller removes the partial file
+
 
 class _GifWriter:
     """Frames share one palette (half from the first frame, half a uniform colour cube), so
@@ -438,6 +442,9 @@ class _GifWriter:
             self.palette = Image.new("P", (1, 1))
             self.palette.putpalette(first + cube)
         self.frames.append(img.quantize(palette=self.palette, dither=Image.Dither.NONE))
+
+    def abort(self) -> None:
+        self.frames.clear()
 
     def close(self) -> None:
         first, *rest = self.frames
@@ -492,6 +499,7 @@ def write_video(
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
     overlay = Overlay(clip, size)
     render = encode = 0.0
+    writer = None
     try:
         writer = (_Mp4Writer if fmt == "mp4" else _GifWriter)(tmp, size, clip.fps)
         t0 = time.perf_counter()
@@ -509,6 +517,7 @@ def write_video(
             frames.close()
         t1 = time.perf_counter()
         writer.close()
+        writer = None
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         encode += time.perf_counter() - t1
@@ -520,6 +529,8 @@ def write_video(
             raise
         raise VideoError(f"encoding {path.name} failed: {exc}") from None
     finally:
+        if writer is not None:
+            writer.abort()
         with contextlib.suppress(OSError):
             tmp.unlink()
     return VideoResult(path, clip.frames, clip.fps, size, path.stat().st_size, render, encode)
