@@ -1,10 +1,11 @@
 # mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
-# against accuracy. Each target creates .venv and installs the project (editable) on first use.
+# against accuracy, `make readme-gif` films the README's GIF. Each target creates .venv and
+# installs the project (editable) on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench lint clean
+.PHONY: run test bench readme-gif lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +28,13 @@ test: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench
+
+# The GIF in the README's "Use it in class": the radial-kick demo filmed in headless Chromium.
+README_GIF := docs/img/radial-kick.gif
+readme-gif: $(VENV)/.installed-test
+	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(BIN)/mechviz record radial-kick --out "$$tmp" --duration 8 --fps 10 --video gif --size 640x360 && \
+	cp "$$tmp/radial-kick.gif" $(README_GIF).partial && mv $(README_GIF).partial $(README_GIF)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache
