@@ -461,11 +461,13 @@ class VideoResult:
     fps: int
     size: tuple[int, int]
     bytes: int
-    render_seconds: float  # loading the page and drawing every frame
+    load_seconds: float  # starting Chromium, loading the page, drawing the first frame
+    render_seconds: float  # drawing the other frames
     encode_seconds: float  # overlay and encoder (includes writing the file)
 
     @property
     def ms_per_frame(self) -> float:
+        """Drawing, overlay and encoding per frame, page load not included."""
         return 1000 * (self.render_seconds + self.encode_seconds) / self.frames
 
 
@@ -498,7 +500,7 @@ def write_video(
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
     overlay = Overlay(clip, size)
-    render = encode = 0.0
+    load = render = encode = 0.0
     writer = None
     try:
         writer = (_Mp4Writer if fmt == "mp4" else _GifWriter)(tmp, size, clip.fps)
@@ -507,7 +509,10 @@ def write_video(
         try:
             for k, frame in enumerate(frames):
                 t1 = time.perf_counter()
-                render += t1 - t0
+                if k == 0:
+                    load = t1 - t0
+                else:
+                    render += t1 - t0
                 writer.add(overlay.apply(frame, k, clip.fps))
                 t0 = time.perf_counter()
                 encode += t0 - t1
@@ -533,13 +538,13 @@ def write_video(
             writer.abort()
         with contextlib.suppress(OSError):
             tmp.unlink()
-    return VideoResult(path, clip.frames, clip.fps, size, path.stat().st_size, render, encode)
+    return VideoResult(path, clip.frames, clip.fps, size, path.stat().st_size, load, render, encode)
 
 
 def measure(demo: str = "helix", duration: float = 4.0, fps: int = 30,
             size: tuple[int, int] = (640, 360)) -> dict[str, Any]:  # fmt: skip
     """Record ``demo`` for ``duration`` s and film it as MP4 and GIF in a temporary folder:
-    ms per frame (drawing, overlay + encoding), file sizes. Prints nothing."""
+    seconds to load the page, ms per frame (drawing; overlay + encoding), file sizes."""
     from . import record as rec
 
     out: dict[str, Any] = {"demo": demo, "duration_s": duration, "fps": fps, "size": list(size)}
@@ -550,7 +555,8 @@ def measure(demo: str = "helix", duration: float = 4.0, fps: int = 30,
             v = write_video(clip, Path(tmp) / f"{demo}.{fmt}", size=size)
             out[fmt] = {
                 "frames": v.frames,
-                "render_ms_per_frame": round(1000 * v.render_seconds / v.frames, 1),
+                "load_s": round(v.load_seconds, 2),
+                "render_ms_per_frame": round(1000 * v.render_seconds / (v.frames - 1), 1),
                 "encode_ms_per_frame": round(1000 * v.encode_seconds / v.frames, 1),
                 "mb": round(v.bytes / 1e6, 3),
             }

@@ -87,8 +87,9 @@ def _film(clip: video.Clip, path: Path, fmt: str, size, flags: dict[str, str]) -
     print(
         f"{path}: {res.frames} frames, {res.fps} fps, {res.frames / res.fps:g} s, "
         f"{res.size[0]}x{res.size[1]}, {res.bytes / 1e6:.2f} MB "
-        f"({res.ms_per_frame:.0f} ms per frame: {1000 * res.render_seconds / res.frames:.0f} "
-        f"drawing, {1000 * res.encode_seconds / res.frames:.0f} overlay and encoding)"
+        f"(page loaded in {res.load_seconds:.1f} s, then {res.ms_per_frame:.0f} ms per frame: "
+        f"{1000 * res.render_seconds / res.frames:.0f} drawing, "
+        f"{1000 * res.encode_seconds / res.frames:.0f} overlay and encoding)"
     )
     return 0
 
