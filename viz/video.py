@@ -30,6 +30,7 @@ import re
 import shutil
 import tempfile
 import time
+import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -424,11 +425,12 @@ class _Mp4Writer:
 
 class _GifWriter:
     """Frames share one palette (half from the first frame, half a uniform colour cube), so
-    Pillow stores only the part of each frame that changed."""
+    Pillow stores only the part of each frame that changed. Until the file is written, frames
+    are kept as compressed palette indices (a 960x540 frame of a mostly blank scene: ~10 kB)."""
 
     def __init__(self, path: Path, size: tuple[int, int], fps: int):
-        self.path, self.fps = path, fps
-        self.frames: list = []
+        self.path, self.size, self.fps = path, size, fps
+        self.frames: list[bytes] = []
         self.palette = None
 
     def add(self, frame: np.ndarray) -> None:
@@ -441,15 +443,26 @@ class _GifWriter:
                     for c in (r * 63, g * 63, b * 63)]  # fmt: skip
             self.palette = Image.new("P", (1, 1))
             self.palette.putpalette(first + cube)
-        self.frames.append(img.quantize(palette=self.palette, dither=Image.Dither.NONE))
+        indices = img.quantize(palette=self.palette, dither=Image.Dither.NONE).tobytes()
+        self.frames.append(zlib.compress(indices, 1))
+
+    def _images(self) -> Iterator:
+        from PIL import Image
+
+        colours = self.palette.getpalette()
+        for data in self.frames:
+            img = Image.frombytes("P", self.size, zlib.decompress(data))
+            img.putpalette(colours)
+            yield img
 
     def abort(self) -> None:
         self.frames.clear()
 
     def close(self) -> None:
-        first, *rest = self.frames
+        images = self._images()
+        first = next(images)
         first.save(
-            self.path, format="GIF", save_all=True, append_images=rest, loop=0,
+            self.path, format="GIF", save_all=True, append_images=images, loop=0,
             duration=gif_delays_ms(len(self.frames), self.fps), optimize=False,
         )  # fmt: skip
 
