@@ -25,6 +25,7 @@ import contextlib
 import io
 import itertools
 import json
+import logging
 import os
 import re
 import shutil
@@ -407,7 +408,7 @@ class _Mp4Writer:
 
         self.gen = imageio_ffmpeg.write_frames(
             str(path), size, fps=fps, codec="libx264", pix_fmt_in="rgb24",
-            pix_fmt_out="yuv420p", quality=None, macro_block_size=2,
+            pix_fmt_out="yuv420p", quality=None, macro_block_size=2, ffmpeg_log_level="error",
             output_params=["-crf", "20", "-preset", "medium", "-movflags", "+faststart", "-f", "mp4"],
         )  # fmt: skip
         self.gen.send(None)
@@ -419,8 +420,14 @@ class _Mp4Writer:
         self.gen.close()
 
     def abort(self) -> None:
-        with contextlib.suppress(Exception):
-            self.gen.close()  # ffmpeg exits; the caller removes the partial file
+        log = logging.getLogger("imageio_ffmpeg")
+        level = log.level
+        log.setLevel(logging.ERROR)  # "no frames have been written": we know, and remove it
+        try:
+            with contextlib.suppress(Exception):
+                self.gen.close()  # ffmpeg exits; the caller removes the partial file
+        finally:
+            log.setLevel(level)
 
 
 class _GifWriter:

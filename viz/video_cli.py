@@ -10,7 +10,10 @@ flag; a failure with status 1; Ctrl-C with 130. No half-written video is ever le
 from __future__ import annotations
 
 import argparse
+import logging
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from dynamics.cli import CliError
@@ -74,16 +77,27 @@ def _film(clip: video.Clip, path: Path, fmt: str, size, flags: dict[str, str]) -
         raise CliError(str(exc)) from None
     except ValueError as exc:
         raise _flag_error(exc, flags) from None
+    # Ctrl-C reaches Chromium and playwright's driver too (one process group), which may fail
+    # before Python sees the KeyboardInterrupt: remember it, so either way it reads as one.
+    interrupted = threading.Event()
+
+    def on_sigint(signum, frame):
+        interrupted.set()
+        signal.default_int_handler(signum, frame)
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
     try:
         res = video.write_video(clip, path, fmt=fmt, size=size, progress=_progress(path.name))
-    except video.VideoError as exc:
+    except (video.VideoError, KeyboardInterrupt) as exc:
         _end_line()
+        if interrupted.is_set() or isinstance(exc, KeyboardInterrupt):
+            logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # the driver's closed pipe
+            print(f"mechviz: interrupted; {path} was not written", file=sys.stderr)
+            return 130
         print(f"mechviz: error: {exc}; {path} was not written", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        _end_line()
-        print(f"mechviz: interrupted; {path} was not written", file=sys.stderr)
-        return 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
     print(
         f"{path}: {res.frames} frames, {res.fps} fps, {res.frames / res.fps:g} s, "
         f"{res.size[0]}x{res.size[1]}, {res.bytes / 1e6:.2f} MB "
