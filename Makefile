@@ -1,11 +1,12 @@
 # mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
-# against accuracy, `make readme-gif` films the README's GIF. Each target creates .venv and
-# installs the project (editable) on first use.
+# against accuracy (into a temporary folder). `make screenshots`, `make bench-docs` and
+# `make readme-gif` refresh the pictures and tables committed under docs/; nothing else writes
+# there. Each target creates .venv and installs the project (editable) on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench readme-gif lint clean
+.PHONY: run test bench bench-docs screenshots readme-gif lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +29,13 @@ test: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench
+
+bench-docs: $(VENV)/.installed-test
+	$(BIN)/mechviz bench --out docs/bench
+
+screenshots: $(VENV)/.installed-test
+	MECHVIZ_WRITE_DOCS=1 MECHVIZ_ALL_DEMOS=1 $(BIN)/python -m pytest -q \
+		tests/test_viewer_browser.py tests/test_recording_browser.py
 
 # The GIF in the README's "Use it in class": the radial-kick demo filmed in headless Chromium.
 README_GIF := docs/img/radial-kick.gif

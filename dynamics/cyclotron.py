@@ -11,6 +11,8 @@ Units and conventions (SI throughout)
 - Symmetric gauge ``A = (B/2)(-y, x, 0)``, so the Lagrangian is
   ``L = m v^2/2 + (qB/2)(x vy - y vx)`` and the canonical angular momentum about the z axis,
   ``p_phi = m (x vy - y vx) + (q B / 2)(x^2 + y^2)``, is conserved.
+- Energy error: the energy is all kinetic, ``m |v|^2 / 2``, so the relative energy error is
+  ``(E - E0) / E0`` (the energy floor is 0, at rest).
 
 Relation to the seed: its Lagrangian (1.1), ``m v^2/2 - (eB/2)(x y' - x' y)``, is ours with
 ``q B = -e B``: the seed's charge +e turns anticlockwise, which here is a negative charge (or a
@@ -53,7 +55,7 @@ def signed_gyrofrequency(p: CyclotronParams) -> float:
 
 
 def gyrofrequency(p: CyclotronParams) -> float:
-    """Orbital angular frequency ``omega = |q| B / m`` [rad/s], independent of energy (seed 1b)."""
+    """Orbital angular frequency ``omega = |qB| / m`` [rad/s], independent of energy (seed 1b)."""
     return abs(signed_gyrofrequency(p))
 
 
@@ -63,7 +65,7 @@ def period(p: CyclotronParams) -> float:
 
 
 def orbit_radius(p: CyclotronParams, kinetic_energy: float) -> float:
-    """Radius of the circular orbit with transverse kinetic energy ``E`` [J]: ``sqrt(2 m E)/(|q| B)``."""
+    """Radius of the circular orbit with transverse kinetic energy ``E`` [J]: ``sqrt(2 m E)/|qB|``."""
     e = _v.finite("kinetic_energy", kinetic_energy)
     if e < 0.0:
         raise ValueError(f"kinetic_energy must be non-negative, got {e}")
@@ -102,7 +104,12 @@ def effective_potential(p: CyclotronParams, r: float, p_phi: float) -> float:
 
 
 def effective_potential_minimum(p: CyclotronParams, p_phi: float) -> float:
-    """Radius ``r0 = sqrt(2 |p_phi| / |qB|)`` [m] of the circular orbit with this ``p_phi``.
+    """Radius ``r0 = sqrt(2 |p_phi| / |qB|)`` [m] where ``V_eff`` is least for this ``p_phi``.
+
+    Since ``p_phi = (qB/2)(R^2 - rho^2)`` for an orbit of radius ``rho`` whose centre is ``R``
+    from the z axis, ``r0^2 = |R^2 - rho^2| = r_min r_max``: the geometric mean of the orbit's
+    closest and farthest distances from the axis. It is the orbit's own radius only for an orbit
+    centred on the axis (``R = 0``).
 
     The seed writes ``sqrt(2 p_theta / eB)`` and restricts itself to ``p_theta > 0`` (orbits that
     enclose the origin); ``V_eff`` has the same minimum for either sign, hence the modulus.

@@ -26,6 +26,9 @@ the centre of mass [rad/s] and the unit quaternion (scalar first) that turns pri
 vectors into space vectors. For the seed's disk the principal moments about the centre of mass are
 ``(1/4, 29/36, 19/18) M R^2`` along x, y, z: the spin axis y is the *intermediate* axis, so the
 released disk tumbles (the tennis-racket instability).
+
+Energy error: with gravity left out the energy is all rotational (``sum I_i w_i^2 / 2``, driven or
+released), so the relative energy error is ``(E - E0) / E0`` (the energy floor is 0, at rest).
 """
 
 from __future__ import annotations

@@ -10,6 +10,9 @@ Units and conventions (SI throughout)
   centre (as in the seed). Both increase anticlockwise (towards +x from straight down).
 - State ``(theta1, theta2, omega1, omega2)`` with ``omega_i = d theta_i / dt`` [rad/s].
 - Hoop centre ``a (sin theta1, -cos theta1)``; bead at the centre plus ``a (sin theta2, -cos theta2)``.
+- Energy: the potential's zero is at the pivot's height, so the energy hanging at rest is
+  ``-(M + 2m) g a``; the relative energy error divides by the energy above that floor,
+  ``(E - E0) / (E0 + (M + 2m) g a)``, the energy that oscillates.
 
 Lagrangian (hoop inertia about the pivot ``2 M a^2``, parallel-axis theorem)::
 

@@ -132,6 +132,8 @@ def wobble_growth_rate(t: np.ndarray, w_body: np.ndarray) -> float | None:
     slope of ``log |w_perp|`` while the wobble lies between 3x its start and 3 % of the spin.
     ``None`` with fewer than four samples in that stretch."""
     w = np.asarray(w_body, float)
+    if len(w) < 4:
+        return None
     perp = np.hypot(w[:, 0], w[:, 2])
     spin = abs(w[0, 1])
     lo, hi = 3 * max(perp[0], 1e-12), 0.03 * spin

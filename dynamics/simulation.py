@@ -2,8 +2,20 @@
 
 The driver owns time, the step size or tolerance, the evaluation and step counters and the
 reference against which the error is measured: the exact solution where the system has one for
-this initial state, otherwise a DOP853 run at ``rtol = atol = 1e-12`` advanced in lock-step.
-The viewer and the recorder stream exactly what :meth:`Simulation.sample` returns.
+this initial state, otherwise a DOP853 run at ``rtol = atol = 1e-14`` advanced in lock-step
+(measured against the exact solutions of the cyclotron and the hoop's mode 1, its own relative
+error stays below 5e-13 over 100 s; :data:`REFERENCE_ACCURACY`). A user's adaptive run must be at
+least 100 times looser (:data:`MIN_COMPARED_TOL`, ``1e-12``) to be compared with it; a tighter one
+reports no error rather than a meaningless one. The viewer and the recorder stream exactly what
+:meth:`Simulation.sample` returns.
+
+The relative energy error is ``(E - E0) / (E0 - E_floor)``, where ``E_floor`` is the lowest
+energy the system can have (``System.energy_floor()``): it measures the energy that moves, not
+the arbitrary zero of a potential.
+
+Compiled code runs in chunks of about :data:`CHUNK_SECONDS` each, so Ctrl-C (``KeyboardInterrupt``)
+ends any run within a fraction of a second, leaving the simulation at the end of the last whole
+chunk; :meth:`Simulation.estimated_steps` says beforehand how much work a run is.
 
 Fixed-step methods always take steps of exactly ``dt``: :meth:`Simulation.advance_to` takes
 the whole number of steps that fits and carries the remainder, so ``t`` is ``steps * dt``.
@@ -13,6 +25,7 @@ Adaptive methods land exactly on the requested time.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,10 +35,17 @@ from .integrators import kernels
 from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
 from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
 from .integrators.scipy_ivp import advance_scipy
+from .integrators.taylor import TaylorCarry, run_taylor
 from .systems import System
 
 DEFAULT_RTOL = 1e-9
-REFERENCE_TOL = 1e-12
+REFERENCE_TOL = 1e-14
+#: The reference run's own relative error, an upper bound measured over 100 s.
+REFERENCE_ACCURACY = 5e-13
+#: An adaptive run is compared with the reference only if its rtol and atol are at least this.
+MIN_COMPARED_TOL = 100 * REFERENCE_TOL
+#: Target wall time [s] of one call into compiled code; Ctrl-C is seen between calls.
+CHUNK_SECONDS = 0.1
 
 
 @dataclass(frozen=True)
@@ -35,12 +55,16 @@ class Sample:
     t: float
     state: np.ndarray  # (N, d)
     energy: np.ndarray  # (N,)
-    energy_error: np.ndarray  # (N,) relative: (E - E0) / |E0|
+    energy_error: np.ndarray  # (N,) relative: (E - E0) / (E0 - E_floor), see the module docstring
     error: np.ndarray | None  # (N,) against the exact solution or the tight reference
     reference: np.ndarray | None  # (N, d) the state it was measured against
     nfev: int
     steps: int
     invariants: dict[str, np.ndarray] | None = None  # the system's conserved quantities, by name
+    # What ``error`` is measured against ("exact", "reference" or None) and that reference's own
+    # relative error (0.0 for the exact solution: round-off only; REFERENCE_ACCURACY for DOP853).
+    reference_kind: str | None = None
+    reference_accuracy: float | None = None
 
 
 @dataclass(frozen=True)
@@ -66,8 +90,15 @@ class Simulation:
     rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``).
     state : initial state(s); default the system's ``default_state()``.
     reference : measure the error against the exact solution, or a tight DOP853 run when there
-        is none (``"auto"``); ``"exact"`` only where exact; ``None`` never.
+        is none (``"auto"``; not for an adaptive run tighter than :data:`MIN_COMPARED_TOL`, see
+        ``reference_note``); ``"exact"`` only where exact; ``None`` never.
+
+    ``on_chunk``, if set to a callable, is called with the simulation after each chunk of
+    compiled work (for progress displays).
     """
+
+    on_chunk = None
+    _chunk_steps = 4096  # per member; adapted to CHUNK_SECONDS as the run goes
 
     def __init__(
         self,
@@ -114,7 +145,21 @@ class Simulation:
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
         self._has_exact = system.exact(self.state0, 0.0) is not None
+        self._carry: TaylorCarry | None = None
         self._reference: Simulation | None = None
+        #: Why the error is not measured although a reference was asked for ("" otherwise).
+        self.reference_note = ""
+        if (
+            reference == "auto"
+            and not self._has_exact
+            and self.method.adaptive
+            and min(self.rtol, self.atol) < MIN_COMPARED_TOL
+        ):
+            self.reference_note = (
+                f"no error: rtol/atol below {MIN_COMPARED_TOL:g} is not clearly looser than the "
+                f"reference run (DOP853 at {REFERENCE_TOL:g})"
+            )
+            reference = None
         if reference == "auto" and not self._has_exact:
             self._reference = Simulation(
                 system,
@@ -156,6 +201,8 @@ class Simulation:
         self.t0 = self.t
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
         self._has_exact = self.system.exact(self.state0, 0.0) is not None
+        if self._carry is not None:
+            self._carry.forget()  # a kept step and its series belong to the old state
         self._reference = None
         if self._reference_mode == "auto" and not self._has_exact:
             ref = Simulation(
@@ -169,6 +216,27 @@ class Simulation:
         )
 
     # ------------------------------------------------------------------ stepping
+    def restart(self, state: np.ndarray | None = None) -> None:
+        """Go back to ``t = 0`` with the same system, method and settings, from the initial state
+        or from ``state`` (same shape): counters, kept steps and the reference start afresh.
+        Costs a few microseconds, where building a new Simulation costs tens (the system's
+        parameters and energy are worked out again)."""
+        if state is not None:
+            s0 = np.asarray(state, dtype=np.float64).reshape(self.state0.shape)
+            if not np.all(np.isfinite(s0)):
+                raise ValueError("state must be finite")
+            self.state0 = s0.copy()
+            self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+        self.state = self.state0.copy()
+        self.t = self.clock = self.t0 = 0.0
+        self.steps = self.nfev = self.rejected = 0
+        self._H[:] = 0.0
+        self._stats[:] = 0
+        if self._carry is not None:
+            self._carry.forget()
+        if self._reference is not None:
+            self._reference.restart(state)
+
     def step_label(self) -> str:
         if self.method.adaptive:
             return f"rtol={self.rtol:g}, atol={self.atol:g}"
@@ -206,27 +274,7 @@ class Simulation:
                 if failure:
                     raise IntegrationError(m.name, self.step_label(), t_target, failure)
             else:
-                run_dop853(
-                    kernels.RHS[self.system.sys_id],
-                    self.state,
-                    self.p,
-                    self.t,
-                    t_target,
-                    self.rtol,
-                    self.atol,
-                    self._H,
-                    self._F,
-                    self._stats,
-                    self._status,
-                )
-                self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
-                if self._status[0] != kernels.OK:
-                    reason = (
-                        "step size fell below round-off"
-                        if self._status[0] == TOO_SMALL_STEP
-                        else "state became non-finite"
-                    )
-                    raise IntegrationError(m.name, self.step_label(), self.t, reason)
+                self._run_dop853(t_target)
             self.t = t_target
         if self._reference is not None:
             self._reference.advance_to(self.t)
@@ -236,7 +284,94 @@ class Simulation:
         fit and carries the remainder, so many short calls add up to the same run as one long."""
         self.advance_to(self.clock + _v.finite("duration", duration))
 
+    def _timed_chunk(self, run_chunk, steps: int) -> None:
+        """Run ``run_chunk(steps)``, then adapt the chunk size to :data:`CHUNK_SECONDS`."""
+        t0 = time.perf_counter()
+        run_chunk(steps)
+        elapsed = time.perf_counter() - t0
+        if elapsed < CHUNK_SECONDS / 4 and steps >= self._chunk_steps:
+            self._chunk_steps = min(self._chunk_steps * 2, 1 << 40)
+        elif elapsed > CHUNK_SECONDS:
+            self._chunk_steps = max(1, self._chunk_steps // 2)
+        if self.on_chunk is not None:
+            self.on_chunk(self)
+
     def _run_fixed(self, n: int) -> None:
+        """``n`` steps of ``dt`` in chunks (Ctrl-C is seen between them). If the method fails,
+        the run is left where this call found it."""
+        start = self.state.copy(), self.steps, self.t
+        try:
+            while n > 0:
+                k = min(n, self._chunk_steps)
+                self._timed_chunk(self._run_fixed_chunk, k)
+                n -= k
+        except IntegrationError:
+            self.state[:], self.steps, self.t = start
+            raise
+
+    def _run_dop853(self, t_target: float) -> None:
+        """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
+        length of a chunk from the last step size; Ctrl-C is seen between chunks)."""
+        while self.t < t_target:
+            h = float(np.mean(self._H)) if np.all(self._H > 0) else 0.0
+            if h <= 0.0:  # no step yet: guess one from the system's time scale
+                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+            span = self._chunk_steps * h
+            t_next = t_target if not span < t_target - self.t else self.t + span
+            self._timed_chunk(lambda _k, t1=t_next: self._dop853_to(t1), self._chunk_steps)
+            self.t = t_next
+
+    def _dop853_to(self, t1: float) -> None:
+        """One chunk of the compiled adaptive method (DOP853, or Taylor's method with its kept
+        step) from ``t`` to ``t1``."""
+        if self.method.kernel == "taylor":
+            if self._carry is None:
+                self._carry = TaylorCarry(*self.state.shape)
+            run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
+                       self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
+        else:
+            run_dop853(
+                kernels.RHS[self.system.sys_id], self.state, self.p, self.t, t1,
+                self.rtol, self.atol, self._H, self._F, self._stats, self._status,
+            )  # fmt: skip
+        self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
+        if self._status[0] != kernels.OK:
+            reason = (
+                "step size fell below round-off"
+                if self._status[0] == TOO_SMALL_STEP
+                else "state became non-finite"
+            )
+            raise IntegrationError(self.method.name, self.step_label(), self.t, reason)
+
+    def estimated_steps(self, t_end: float) -> float:
+        """The steps a run from the current time to ``t_end`` [s] would take, summed over the
+        ensemble and including the reference run's (a float: it may be huge or infinite).
+
+        Exact for fixed-step methods (``(t_end - t) / dt`` per member); for adaptive methods an
+        estimate from the system's shortest period and the method's order,
+        ``2 rtol^(-1/order)`` steps per period, within a factor of about 3 of what DOP853,
+        RK45, Radau and LSODA take on the three systems; 0 for a closed-form flow. Callers that
+        must bound their work (the CLI's ``--max-steps``, the recorder) compare this with their
+        limit before running.
+        """
+        t_end = _v.finite("t_end", t_end)
+        m = self.method
+        members = len(self.state)
+        with np.errstate(over="ignore", divide="ignore"):
+            span = max(0.0, t_end - self.t)
+            if m.backend == "exact" and (self.system.sys_id is None or self.dt is None):
+                own = 0.0
+            elif not m.adaptive:
+                own = math.floor(span / self.dt + 1e-9) if span / self.dt < 1e300 else math.inf
+            elif span == 0.0:
+                own = 0.0
+            else:
+                periods = span / self.system.time_scale(self.state)
+                own = max(1.0, periods * _steps_per_period(m, self.rtol))
+        ref = 0.0 if self._reference is None else self._reference.estimated_steps(t_end)
+        return float(own) * members + ref
+
+    def _run_fixed_chunk(self, n: int) -> None:
         step, inner = step_functions(self.method, self.system.sys_id)
         before = self.state.copy()
         if inner is None:
@@ -274,12 +409,18 @@ class Simulation:
             return self._reference.state
         return None
 
+    def energy_scale(self) -> np.ndarray:
+        """``E0 - E_floor`` (N,): the energy that moves, by which the energy error is divided
+        (1 where nothing moves: there the error is absolute, in J)."""
+        moving = self.E0 - self.system.energy_floor()
+        return np.where(moving > 0.0, moving, 1.0)
+
     def sample(self) -> Sample:
         # A state about to blow up is huge but finite: its energy may overflow, and that is the
         # information we want to show, not a warning.
         with np.errstate(over="ignore", invalid="ignore"):
             energy = np.asarray(self.system.energy(self.state), dtype=float)
-            scale = np.where(self.E0 != 0.0, np.abs(self.E0), 1.0)
+            scale = self.energy_scale()
             ref = self.reference_state() if self._track_error else None
             err = None if ref is None else self.system.error(self.state, ref)
             invariants = self.system.invariants(self.state)
@@ -293,6 +434,8 @@ class Simulation:
             self.nfev,
             self.steps,
             invariants,
+            self.reference_kind,
+            {"exact": 0.0, "reference": REFERENCE_ACCURACY}.get(self.reference_kind or ""),
         )
 
     def run(self, t_end: float, n_samples: int = 2) -> Trajectory:
@@ -315,6 +458,11 @@ class Simulation:
             self.nfev,
             self.steps,
         )
+
+
+def _steps_per_period(method: Method, rtol: float) -> float:
+    """Roughly the steps an adaptive method of order p takes per period: ``2 rtol^(-1/p)``."""
+    return 2.0 * rtol ** (-1.0 / max(method.order, 1))
 
 
 def _tolerance(name: str, value: float) -> float:

@@ -29,12 +29,25 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import numpy as np
 
 from viz.chromium import CHROMIUM_ARGS, find_chromium
 
 REQUIRE_ENV = "MECHVIZ_REQUIRE_BROWSER"
+
+
+def picture_path(relative: str, tmp_path: Path) -> Path:
+    """Where a test saves a picture: ``docs/img/RELATIVE`` when ``MECHVIZ_WRITE_DOCS=1`` (``make
+    screenshots``), else under ``tmp_path``, so that ``make test`` leaves the checkout as it was."""
+    if os.environ.get("MECHVIZ_WRITE_DOCS") == "1":
+        base = Path(__file__).resolve().parents[1] / "docs" / "img"
+    else:
+        base = Path(tmp_path)
+    path = base / relative
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def _playwright_available() -> bool:

@@ -1,11 +1,20 @@
-"""Fixtures shared by the headless viewer and recorder tests."""
+"""Shared by the tests: a headless viser server fixture, and the rule that a test run leaves the
+checkout as it was: ``git status --porcelain`` is compared before and after the session, and a
+change fails the run (pictures and tables under ``docs/`` are refreshed only by ``make
+screenshots`` and ``make bench-docs``). Not checked outside a git checkout or under
+``MECHVIZ_WRITE_DOCS=1``."""
 
 from __future__ import annotations
 
 import contextlib
 import io
+import os
+import subprocess
+from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture
@@ -18,3 +27,31 @@ def server():
     yield srv
     with contextlib.redirect_stdout(io.StringIO()):
         srv.stop()
+
+
+def _status() -> str | None:
+    try:
+        out = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=all"],
+            cwd=ROOT, capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout if out.returncode == 0 else None
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    session.config._git_status_before = (  # type: ignore[attr-defined]
+        None if os.environ.get("MECHVIZ_WRITE_DOCS") == "1" else _status()
+    )
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    before = getattr(session.config, "_git_status_before", None)
+    if before is None:
+        return
+    after = _status()
+    if after is not None and after != before:
+        changed = sorted(set(after.splitlines()) ^ set(before.splitlines()))
+        print(f"\nthe tests changed the checkout (git status): {'; '.join(changed)}")
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED

@@ -2,8 +2,10 @@
 
 import json
 import math
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -191,3 +193,113 @@ def test_bad_input_exits_nonzero_with_one_line_naming_the_flag(args, needle):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1, out.stderr
     assert needle in lines[0] and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["analyze", "cyclotron", "--charge", "1e308"], "--charge"),
+        (["analyze", "cyclotron", "--field", "1e308"], "--field"),
+        (["analyze", "cyclotron", "--mass", "1e-308"], "--mass"),
+        (["analyze", "cyclotron", "--mass", "1e-300"], "--mass"),
+        (["analyze", "cyclotron", "--speed", "1e-308"], "--speed"),
+        (["analyze", "cyclotron", "--speed", "1e308"], "--speed"),
+        (["analyze", "cyclotron", "--charge", "1e-300"], "--charge"),
+        (["analyze", "disk", "--disk-mass", "1e308"], "--disk-mass"),
+        (["analyze", "disk", "--radius", "1e308"], "--radius"),
+        (["analyze", "disk", "--omega", "1e308"], "--omega"),
+        (["simulate", "hoop", "--t-end", "1e308", "--dt", "0.1"], "--t-end"),
+        (["simulate", "hoop", "--t-end", "1e308", "--method", "dop853"], "--t-end"),
+        (["simulate", "disk", "--t-end", "1e308"], "--t-end"),
+        (["simulate", "hoop", "--t-end", "1e-308", "--dt", "0.1"], "--t-end"),
+        (["simulate", "hoop", "--t-end", "10", "--dt", "1e-308"], "--dt"),
+        (["simulate", "cyclotron", "--t-end", "10", "--dt", "0.1", "--vx", "1e200"], "--vx"),
+        (["simulate", "cyclotron", "--t-end", "1e9", "--dt", "1e-6", "--method", "rk4"], "1e+15"),
+        (
+            ["simulate", "hoop", "--t-end", "10", "--dt", "0.1", "--samples", "10000000000"],
+            "--samples",
+        ),
+        (
+            [
+                "simulate",
+                "hoop",
+                "--theta1",
+                "0.5",
+                "--t-end",
+                "1",
+                "--method",
+                "dop853",
+                "--rtol",
+                "1e-13",
+            ],
+            "--rtol",
+        ),
+    ],
+)
+def test_inputs_whose_consequences_do_not_fit_a_double_are_bad_input(args, needle):
+    out = mechviz(*args)
+    assert out.returncode == 2, out.stdout
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1, out.stderr
+    assert needle in lines[0] and "Traceback" not in out.stderr
+
+
+def test_a_run_beyond_the_step_limit_is_refused_up_front_and_max_steps_raises_it():
+    args = ["simulate", "cyclotron", "--t-end", "2e5", "--dt", "1e-3", "--method", "boris"]
+    out = mechviz(*args)
+    assert out.returncode == 2 and "2e+08 steps" in out.stderr and "--max-steps" in out.stderr
+    out = mechviz(*args, "--max-steps", "3e8", "--samples", "3", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["steps"] == 200_000_000
+
+
+def test_ctrl_c_ends_a_long_run_within_a_second_with_one_line_and_status_130():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "simulate", "hoop", "--theta1", "0.3", "--t-end", "1e6",
+         "--dt", "0.01", "--method", "midpoint", "--max-steps", "1e9"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(5)  # imports and the compiled kernels' cache load; then deep in the run
+    assert proc.poll() is None
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - t0 < 1.5
+    assert proc.returncode == 130 and err.strip() == "mechviz: interrupted"
+
+
+def test_json_is_valid_even_when_a_result_is_not_finite():
+    # Valid input whose derived numbers all fit: strict JSON, no NaN or Infinity tokens.
+    out = mechviz("analyze", "cyclotron", "--charge", "1e-3", "--json")
+    assert out.returncode == 0
+    json.loads(out.stdout, parse_constant=lambda c: pytest.fail(f"invalid JSON token {c}"))
+    out = mechviz("analyze", "cyclotron", "--charge", "1e-300", "--json")
+    assert out.returncode == 2 and "NaN" not in out.stdout and "Infinity" not in out.stdout
+
+
+def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
+    out = mechviz(
+        "simulate", "hoop", "--theta1", "0.5", "--theta2", "-0.3", "--t-end", "10",
+        "--method", "dop853", "--rtol", "1e-12", "--json",
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert 0.0 < r["error_vs_reference"] < 1e-9
+    assert "1e-14" in r["reference"]
+
+
+def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
+    # Mode 2 at 0.01 rad with rk4, dt = 0.05 to t = 10 s loses 1.4e-4 of its oscillation energy
+    # (RK4 damps by about (w dt)^6 / 144 per step); divided by the total energy with the
+    # potential's zero at the pivot, that read as -1e-9. From 90 degrees it read as 1e8.
+    out = mechviz(
+        "simulate", "hoop", "--theta1", "0.0033333333333333335", "--theta2", "-0.01",
+        "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
+    )  # fmt: skip
+    r = json.loads(out.stdout)
+    assert -3e-4 < r["energy_drift"] < -5e-5
+    out = mechviz(
+        "simulate", "hoop", "--theta1", "1.5707963267948966", "--theta2", "1.5707963267948966",
+        "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
+    )  # fmt: skip
+    assert abs(json.loads(out.stdout)["max_energy_error"]) < 1e-2

@@ -203,7 +203,7 @@ def test_full_disk_while_writing_leaves_no_partial_file(tmp_path, monkeypatch):
         real_fsync(fd)
 
     monkeypatch.setattr(os, "fsync", failing_fsync)
-    with pytest.raises(rec.RecordingFailed, match=r"No space left.*keeps the previous"):
+    with pytest.raises(rec.RecordingFailed, match=r"No space left on device; .* is unchanged"):
         rec.record(_short(), tmp_path)
     assert _files(tmp_path) == before  # no .partial file left behind, old files intact
 
@@ -322,6 +322,22 @@ def test_bad_arguments_give_a_one_line_error_and_exit_status_2(argv, message, ca
     assert len(err.splitlines()) == 1, err
     assert message in err, err
     assert not (tmp_path / "X").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"), [("dt = 1e-9\n", "dt = 1e-09"), ("dt = 0.01\nspeed = 1e9\n", "speed x duration")]
+)
+def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys, extra, named):
+    demo_file = tmp_path / "huge.toml"
+    demo_file.write_text(
+        'title = "t"\ndescription = "d"\nexhibit = "cyclotron"\nmethod = "rk4"\n'
+        "duration = 10.0\n" + extra
+    )
+    t0 = time.monotonic()
+    assert main(["record", str(demo_file), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "the limit is 1e+08" in err and named in err, err
+    assert time.monotonic() - t0 < 30 and not (tmp_path / "out").exists()
 
 
 def test_record_command_reports_a_blow_up_in_one_line_with_status_1(tmp_path, capsys):

@@ -1,6 +1,7 @@
 """Recordings in a real browser: each demo's DEMO.html, opened from file:// in headless Chromium,
 draws its scene (non-blank canvas) and shows viser's playback bar. The still of each demo taken
-here is saved to docs/img/demos/NAME.png for the README.
+here goes to docs/img/demos/NAME.png for the README under ``make screenshots``, to a temporary
+folder under ``make test``.
 
 One Chromium serves every demo (pages are reloaded, not relaunched). SwiftShader draws the first
 frame of a lit scene in 4-8 s on an idle machine, several times that
@@ -11,7 +12,6 @@ from __future__ import annotations
 
 import os
 import time
-from pathlib import Path
 
 import browser
 import numpy as np
@@ -21,7 +21,6 @@ from viz import record as rec
 
 pytestmark = pytest.mark.browser
 
-STILLS = Path(__file__).resolve().parents[1] / "docs" / "img" / "demos"
 WIDTH, HEIGHT = 960, 600
 DURATION = 4.0  # seconds of playback recorded per demo
 SEEK = "3.5"  # where the still is taken [s]
@@ -59,7 +58,7 @@ def _drawn(img: np.ndarray) -> bool:
 
 
 @pytest.mark.parametrize("name", DEMOS)
-def test_demo_html_plays_from_file_url_with_its_playback_bar(recordings, page, name):
+def test_demo_html_plays_from_file_url_with_its_playback_bar(recordings, page, name, tmp_path):
     page.goto((recordings / f"{name}.html").resolve().as_uri())
     page.wait_for_function("() => window.__VISER_EMBED_DATA__ !== undefined", timeout=10_000)
     browser.canvas(page).wait_for(timeout=60_000)
@@ -80,6 +79,6 @@ def test_demo_html_plays_from_file_url_with_its_playback_bar(recordings, page, n
     assert float(time_box.input_value()) == pytest.approx(float(SEEK)), "seek or pause failed"
     assert t0 >= 0.0
     browser.wait_for_pixels(page, _drawn, timeout_s=60.0)
-    STILLS.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(STILLS / f"{name}.png"))
-    assert (STILLS / f"{name}.png").stat().st_size > 5_000
+    still = browser.picture_path(f"demos/{name}.png", tmp_path)
+    page.screenshot(path=str(still))
+    assert still.stat().st_size > 5_000

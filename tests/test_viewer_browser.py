@@ -3,14 +3,14 @@
 One app with its 60 Hz loop serves one page for the whole module; the tests run in order on it:
 the scene is drawn with the three exhibits, Pause stops simulated time, the method dropdown
 changes the readout, an invalid parameter shows a notification. The last test switches the
-environment lighting on and saves the README screenshot (``docs/img/viewer.png``).
+environment lighting on and takes the README screenshot (saved to ``docs/img/viewer.png`` only by
+``make screenshots``; ``make test`` keeps it in a temporary folder).
 Skipped with the reason when no Chromium is found (a failure under MECHVIZ_REQUIRE_BROWSER=1).
 """
 
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import browser
 import numpy as np
@@ -19,8 +19,6 @@ from playwright.sync_api import Error as PlaywrightError
 
 pytestmark = pytest.mark.browser
 
-ROOT = Path(__file__).resolve().parents[1]
-SCREENSHOT = ROOT / "docs" / "img" / "viewer.png"
 
 
 @pytest.fixture(scope="module")
@@ -100,20 +98,34 @@ def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
     page.locator("code", has_text="verlet").first.wait_for(timeout=10_000)
 
 
+def _field(page, label: str):
+    """The text box of the GUI row labelled ``label...`` (viser links the label to its row)."""
+    row = page.locator("label", has_text=label).first
+    return row.locator("xpath=ancestor::div[.//input][1]//input").first
+
+
 def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
     app, page, _ = viewer
     page.get_by_role("tab", name="Hoop").click()
     sim = app.exhibits["hoop"].sim
-    box = page.get_by_role("textbox", name="Gravity g [m/s²]")
+    box = _field(page, "Gravity g")
     box.fill("-3")
-    box.press("Enter")
-    page.get_by_role("alert").filter(has_text="gravity must be positive").first.wait_for(
+    page.get_by_role("alert").filter(has_text="Gravity g [m/s²] must be positive").first.wait_for(
         timeout=15_000
     )
     assert app.exhibits["hoop"].sim is sim
+    # a step typed key by key in scientific notation reaches the server as written
+    box = _field(page, "Step dt")
+    box.click()
+    box.press("Control+A")
+    page.keyboard.type("2.5e-2", delay=60)
+    deadline = time.monotonic() + 15
+    while app.exhibits["hoop"].config.dt != 0.025 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert app.exhibits["hoop"].config.dt == 0.025
 
 
-def test_readme_screenshot_with_environment_lighting(viewer):
+def test_readme_screenshot_with_environment_lighting(viewer, tmp_path):
     app, page, _ = viewer
     app.enqueue("call", lambda a: a.server.scene.configure_environment_map(hdri="warehouse"))
     page.get_by_role("tab", name="Hoop").click()  # its chart has data
@@ -125,6 +137,6 @@ def test_readme_screenshot_with_environment_lighting(viewer):
     time.sleep(1.0)
     browser.wait_for_pixels(page, _three_exhibits, timeout_s=120)
     time.sleep(2.0)  # a couple more frames with the lighting settled
-    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(SCREENSHOT))
-    assert SCREENSHOT.stat().st_size > 20_000
+    screenshot = browser.picture_path("viewer.png", tmp_path)
+    page.screenshot(path=str(screenshot))
+    assert screenshot.stat().st_size > 20_000

@@ -55,13 +55,22 @@ from .live_record import add_record_toggle
 from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
 from .scene.panel import Panel
 
-SPACING = 5.5  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
+SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
-OVERVIEW = ((2.4, -8.2, 3.0), (2.4, 0.0, 1.15))
+OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
-CHART_SECONDS = 10.0  # the charts show the last 10 s of frames
+CHART_SECONDS = 10.0  # the charts show the last 10 s by default
+# The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
+# over the window, so a 10-minute window costs the browser no more than a 10-second one.
+CHART_WINDOWS = {"10 s": 10.0, "1 min": 60.0, "10 min": 600.0}
 FPS = 60.0  # display rate of the simulation loop
+SPEEDS = (0.1, 10.0)  # simulated seconds per real second: the speed control's range
+# The floor grid of each theme (plane, cells, sections): quiet against the theme's background.
+GRIDS = {
+    "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
+    "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
+}
 
 
 # --------------------------------------------------------------------------- numba warm-up
@@ -137,6 +146,7 @@ class MechvizApp:
         environment_map: bool = True,
         fps: float | None = None,
         quiet: bool = True,
+        theme: str = "light",
     ) -> None:
         import viser
 
@@ -176,7 +186,10 @@ class MechvizApp:
                 "/lights/sky", sky_color=(255, 255, 255), ground_color=(110, 110, 120),
                 intensity=1.2,
             )  # fmt: skip
-        scene.add_grid(
+        if theme not in GRIDS:
+            raise ValueError(f"theme must be one of {', '.join(GRIDS)}; got {theme!r}")
+        self.theme = theme
+        self.grid = scene.add_grid(
             "/floor",
             width=20.0,
             height=8.0,
@@ -184,10 +197,12 @@ class MechvizApp:
             section_size=1.0,
             position=(0.0, 0.0, 0.0),
         )
+        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
         cfg = dict(configs or {})
         # energies and errors (chart points, divergence checks) at CHART_RATE; poses every frame
         self._measure_every = max(1, round(self.fps / CHART_RATE))
-        history_len = round(CHART_SECONDS * self.fps / self._measure_every)
+        history_len = round(CHART_SECONDS * CHART_RATE)
+        self.chart_window = CHART_SECONDS
         self.exhibits: dict[str, Exhibit] = {
             key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
             for key, cls in EXHIBITS.items()
@@ -218,6 +233,10 @@ class MechvizApp:
 
     @property
     def real_time_factor(self) -> float | None:
+        """Simulated seconds per wall second over the last frames; ``None`` while paused or
+        until two frames have played since the last reset or speed change."""
+        if not self.playing:
+            return None
         w = self._rtf_window
         if len(w) < 2 or w[-1][0] - w[0][0] <= 0:
             return None
@@ -248,38 +267,75 @@ class MechvizApp:
                     ex.apply(command)
                     self._sync_widgets(target)
             except ValueError as exc:
-                self.notify(f"Invalid value ({target})", str(exc), color="red")
                 if target in self.exhibits:
+                    panel = self.panels.get(target)
+                    title = self.exhibits[target].title
+                    self.notify(f"Invalid value ({title})", panel.explain(str(exc)) if panel else str(exc))
                     self._sync_widgets(target)
+                else:
+                    self.notify("Invalid value", str(exc), color="red")
 
     def _apply_app(self, cmd: dict) -> None:
         op = cmd.get("op")
-        if op == "play":
-            self.playing = True
-        elif op == "pause":
-            self.playing = False
-        elif op == "toggle":
-            self.playing = not self.playing
+        if op in ("play", "pause", "toggle"):
+            playing = {"play": True, "pause": False, "toggle": not self.playing}[op]
+            if playing != self.playing:
+                self._rtf_window.clear()  # a pause is not a slow-down
+            self.playing = playing
         elif op == "step":
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
-            v = float(cmd["value"])
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"speed must be positive, got {cmd['value']!r}")
-            self.speed = v
+            v = cmd["value"]
+            lo, hi = SPEEDS
+            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+                if self.gui is not None:
+                    self._syncing = True
+                    self.w["speed"].value = self.speed  # the box shows the speed in force
+                    self._syncing = False
+                raise ValueError(f"Speed must lie between {lo:g}x and {hi:g}x, got {v!r}")
+            self.speed = float(v)
+            self._rtf_window.clear()
         elif op == "reset":
             for ex in self.exhibits.values():
                 ex.reset()
             self.sim_time = 0.0
+            self._rtf_window.clear()  # the clock went back: the old samples say nothing now
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
+        elif op == "chart_window":
+            v = cmd.get("value")
+            if v not in CHART_WINDOWS.values():
+                raise ValueError(f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {v!r}")
+            self.chart_window = float(v)
+            for ex in self.exhibits.values():
+                ex.set_chart_window(self.chart_window)
+            self._shown.clear()
+        elif op == "theme":
+            if cmd.get("value") not in GRIDS:
+                raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}")
+            self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                f"app op must be play, pause, toggle, step, speed, reset or camera; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window or "
+                f"theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
+
+    def _apply_theme(self, theme: str) -> None:
+        """Page and floor for ``theme``; the scene's palette reads on both (viz.geometry)."""
+        self.theme = theme
+        if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
+            self._syncing = True
+            self.w["theme"].value = theme
+            self._syncing = False
+        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        if self.gui is not None:
+            self.gui.configure_theme(
+                control_width="medium", show_logo=False, brand_color=(40, 110, 200),
+                dark_mode=theme == "dark",
+            )  # fmt: skip
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         self.messages.append((title, body))
@@ -376,9 +432,9 @@ class MechvizApp:
         viser = self._viser
         gui = self.server.gui
         self.gui = gui
-        gui.configure_theme(control_width="medium", show_logo=False, brand_color=(40, 110, 200))
         self.w: dict[str, Any] = {}
         w = self.w
+        self._apply_theme(self.theme)
         gui.add_markdown("**mechviz**: three systems of classical mechanics, integrated live.")
         with gui.add_folder("Simulation", expand_by_default=True) as folder:
             self.common_folder = folder
@@ -391,14 +447,27 @@ class MechvizApp:
             w["reset"] = gui.add_button("Reset all", icon=viser.Icon.REFRESH)
             w["speed"] = gui.add_slider(
                 "Speed",
-                min=0.1,
-                max=10.0,
+                min=SPEEDS[0],
+                max=SPEEDS[1],
                 step=0.1,
                 initial_value=self.speed,
                 hint="Simulated seconds per real second",
             )
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS))
+            w["chart_window"] = gui.add_dropdown(
+                "Chart window", options=tuple(CHART_WINDOWS), initial_value="10 s",
+                hint="How much of the past the energy and error charts show",
+            )  # fmt: skip
+            w["theme"] = gui.add_dropdown(
+                "Theme", options=tuple(GRIDS), initial_value=self.theme,
+                hint="Light or dark page; the scene's colours read on both (also on a projector)",
+            )  # fmt: skip
+        self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
+        self._on(
+            w["chart_window"],
+            lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),
+        )
         w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
         w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
         w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))

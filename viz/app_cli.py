@@ -12,7 +12,10 @@ def add_commands(sub) -> None:
         description="Serve the live viewer at http://HOST:PORT/ until Ctrl-C.",
     )
     p.add_argument(
-        "--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1: this machine)"
+        "--host",
+        default="127.0.0.1",
+        help="interface to bind (default 127.0.0.1: this machine only; 0.0.0.0: every "
+        "interface, exposed to the network)",
     )
     p.add_argument(
         "--port", type=int, default=8080, help="port (default 8080; the next free one if busy)"
@@ -27,6 +30,10 @@ def add_commands(sub) -> None:
     p.add_argument(
         "--no-env-map", action="store_true", help="no environment lighting (faster software GL)"
     )
+    p.add_argument(
+        "--theme", choices=("light", "dark"), default="light",
+        help="page theme (default light; the panel switches it too)",
+    )  # fmt: skip
     p.set_defaults(func=_view)
 
 
@@ -37,6 +44,8 @@ def _view(args: argparse.Namespace) -> int:
     import time
 
     from dynamics.cli import CliError
+
+    from .play import exposure_note, reachable_urls
 
     if not 0 <= args.port <= 65535:
         raise CliError(f"--port must be in 0..65535, got {args.port}")
@@ -60,7 +69,9 @@ def _view(args: argparse.Namespace) -> int:
         if interrupted.is_set():
             print("mechviz: interrupted", flush=True)
             return 130
-        app = MechvizApp(host=args.host, port=args.port, environment_map=not args.no_env_map)
+        app = MechvizApp(
+            host=args.host, port=args.port, environment_map=not args.no_env_map, theme=args.theme
+        )
         # The other methods compile while the viewer already runs, so a later switch of method
         # starts at once (measured: 60 fps held while they compile, a few late frames).
         background = threading.Thread(
@@ -74,10 +85,14 @@ def _view(args: argparse.Namespace) -> int:
             used = app.port
             if args.port and used != args.port:
                 print(f"mechviz: port {args.port} is busy; using port {used} instead", flush=True)
+            urls = [f"{u}/" for u in reachable_urls(args.host, used)]
             print(
-                f"mechviz: viewer ready in {time.perf_counter() - t0:.1f} s at {app.url}",
+                f"mechviz: viewer ready in {time.perf_counter() - t0:.1f} s at {', '.join(urls)}",
                 flush=True,
             )
+            note = exposure_note(args.host)
+            if note:
+                print(f"mechviz: {note}", flush=True)
             print("mechviz: press Ctrl-C to stop", flush=True)
             if args.warm != "all":
                 background.start()

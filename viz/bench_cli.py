@@ -1,9 +1,12 @@
-"""``mechviz bench``: speed against accuracy (issue 6).
+"""``mechviz bench``: speed against accuracy.
 
 Runs :func:`dynamics.bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
-``--out`` (default ``docs/bench``).
+``--out`` (default ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install -e
+'.[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
+least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
+checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
 ``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
 (:func:`viz.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
@@ -15,6 +18,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
+from pathlib import Path
 
 
 def _viewer_measurements(quick: bool) -> dict:
@@ -76,12 +81,14 @@ def _run(args: argparse.Namespace) -> int:
     from viz.scene import bench_cases
 
     result = run_bench(
-        quick=args.quick, out=args.out, extras={"viewer": viewer}, exhibit_cases=bench_cases()
-    )
+        quick=args.quick, out=args.out, extras={"viewer": viewer}, peers=args.peers,
+        exhibit_cases=bench_cases(),
+    )  # fmt: skip
     s = summary(result)
+    missed = s["targets"]["missed"]
     if args.json:
         print(json.dumps(s, indent=1, default=str))
-        return 0
+        return 1 if missed else 0
     print(f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})")
     print("time to reach each accuracy: fastest scipy option / fastest of ours")
     for key, row in result["ratios"].items():
@@ -95,12 +102,31 @@ def _run(args: argparse.Namespace) -> int:
             cells.append(f"{t}: {bound}{e['ratio']:.0f}x ({ours.get('method')} "
                          f"{1e3 * ours.get('seconds', 0):.3g} ms)")  # fmt: skip
         print(f"  {key:7s} " + "; ".join(cells))
+    for name, why in s["peers_skipped"].items():
+        print(f"peer {name} skipped: {why}")
+    if s["peer_ratios"]:
+        print("time of each peer over our fastest (below 1: the peer is faster)")
+        for peer, rows in s["peer_ratios"].items():
+            for key, row in rows.items():
+                cells = "; ".join(f"{t}: {'n/a' if r is None else f'{r:.2f}'}"
+                                  for t, r in row.items())  # fmt: skip
+                print(f"  {peer:14s} {key:7s} {cells}")
+    fa = s.get("first_answer")
+    if fa:
+        print(f"first answer in a fresh process (hoop, 1e-9): taylor {fa['taylor']['median_s']} s, "
+              f"dop853 {fa['dop853']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s")
     print("ns per compiled step (numba / C, same run):")
     for k, v in s["per_step_ns"].items():
         print(f"  {k:14s} {v['numba']:8.1f} / {v['c'] if v['c'] is not None else 'n/a'}")
     print(f"viewer: {viewer}")
     print(f"results: {args.out}/results.json; charts: {', '.join(s['charts'] or [])}")
-    return 0
+    if missed:
+        print(f"targets missed ({len(missed)}):")
+        for line in missed:
+            print(f"  {line}")
+    else:
+        print("targets: all met")
+    return 1 if missed else 0
 
 
 def add_commands(sub) -> None:
@@ -109,14 +135,28 @@ def add_commands(sub) -> None:
         help="benchmark speed against accuracy; write results.json and charts",
         description=__doc__.splitlines()[0],
     )
-    p.add_argument("--quick", action="store_true", help="fewer points and repeats (< 2 min)")
-    p.add_argument("--json", action="store_true", help="print a JSON summary (with 'ratios')")
-    p.add_argument("--out", default="docs/bench", help="output directory (default docs/bench)")
+    p.add_argument("--quick", action="store_true", help="fewer points and repeats (< 3 min)")
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print a JSON summary (with 'ratios' and, with --peers, 'peer_ratios')",
+    )
+    p.add_argument(
+        "--peers",
+        action="store_true",
+        help="also run CyRK and heyoka (pip install -e '.[peers]'); each not installed is skipped "
+        "with the reason",
+    )
+    p.add_argument(
+        "--out",
+        default=str(Path(tempfile.gettempdir()) / "mechviz-bench"),
+        help="output directory (default TMP/mechviz-bench; `make bench-docs` writes docs/bench)",
+    )
     p.add_argument(
         "--endurance",
         type=float,
         metavar="SECONDS",
-        help="run only the viewer endurance benchmark for SECONDS (600 for the issue-4 target) "
+        help="run only the viewer endurance benchmark for SECONDS (600 for the 10-minute endurance target) "
         "with --clients headless Chromium pages; writes endurance.json; exit status 1 if a "
         "target is missed",
     )

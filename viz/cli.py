@@ -1,7 +1,7 @@
 """The ``mechviz`` command: one entry point, a subcommand per use.
 
 ``analyze`` and ``simulate`` come from :mod:`dynamics.cli` and need no viewer; ``view``,
-``record``, ``play`` and ``bench`` import what they need only when run.
+``record``, ``play``, ``bench`` and ``video`` import what they need only when run.
 """
 
 from __future__ import annotations
@@ -9,8 +9,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-
-from dynamics.cli import CliError, add_commands
 
 # view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli),
 # video (viz.video_cli).
@@ -28,6 +26,8 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mechviz", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    from dynamics.cli import add_commands  # numpy and numba: inside main's Ctrl-C handling
+
     add_commands(sub)
     # Each of these modules registers its own subcommands and imports viser (or matplotlib)
     # only inside the command it runs, so `analyze` and `simulate` stay light.
@@ -37,14 +37,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
-    except CliError as exc:
-        print(f"mechviz: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
+        from dynamics.cli import CliError
+
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        try:
+            return int(args.func(args) or 0)
+        except CliError as exc:
+            print(f"mechviz: error: {exc}", file=sys.stderr)
+            return 2
+    except KeyboardInterrupt:  # at any moment, start-up included: one line, status 130
         print("mechviz: interrupted", file=sys.stderr)
         return 130
 

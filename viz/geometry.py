@@ -13,23 +13,44 @@ from collections import deque
 import numpy as np
 import trimesh
 
-# Colour palette (RGB uint8) shared by all exhibits and checked by the browser test.
+# Colour palette (RGB uint8) shared by all exhibits. Mid-tones: every colour keeps a contrast of
+# at least 3:1 (the WCAG threshold for graphics) against the light theme's white background and
+# the dark theme's near-black one (BACKGROUNDS), so nothing vanishes on a projector in either.
+BACKGROUNDS = {"light": (255, 255, 255), "dark": (33, 34, 38)}
 CHARGE = (235, 70, 40)
-COMPARE = (40, 170, 255)
-BEAM = (250, 190, 40)
-FIELD = (120, 140, 255)
-DISK = (90, 160, 210)
-RIM = (0, 190, 200)
+COMPARE = (20, 130, 220)
+BEAM = ((205, 120, 0), (205, 70, 25))  # slowest and fastest member of a beam
+FIELD = (100, 120, 240)
+DISK = (70, 140, 200)
+RIM = (0, 150, 160)
 BEAD = (220, 40, 160)
-AXLE = (150, 150, 150)
+AXLE = (125, 125, 135)
+STAND = (120, 120, 130)
 FORCE = (240, 60, 60)
-OMEGA = (40, 200, 90)
-MOMENTUM = (250, 170, 30)
-HOOP = (200, 120, 50)
-GHOST = (180, 180, 180)
-TRAIL = (255, 120, 60)
-CENTRE = (255, 255, 255)
-AXES_RGB = ((230, 60, 60), (60, 200, 60), (60, 110, 240))
+OMEGA = (20, 160, 70)
+MOMENTUM = (210, 120, 0)
+HOOP = (190, 110, 40)
+GHOST = (140, 140, 160)
+TRAIL = (235, 95, 40)
+CENTRE = (160, 92, 225)  # guiding centre, centre of mass, pivot, the predicted circle
+AXES_RGB = ((230, 60, 60), (30, 160, 50), (60, 110, 240))
+PALETTE = {
+    "charge": CHARGE, "compare": COMPARE, "beam slow": BEAM[0], "beam fast": BEAM[1],
+    "field": FIELD, "disk": DISK, "rim": RIM, "bead": BEAD, "axle": AXLE, "stand": STAND,
+    "force": FORCE, "omega": OMEGA, "momentum": MOMENTUM, "hoop": HOOP, "ghost": GHOST,
+    "trail": TRAIL, "centre": CENTRE, **{f"axis {k + 1}": c for k, c in enumerate(AXES_RGB)},
+}  # fmt: skip
+
+
+def contrast(a, b) -> float:
+    """WCAG contrast ratio of two sRGB colours (1 to 21)."""
+
+    def luminance(c) -> float:
+        lin = [v / 12.92 if v <= 0.03928 else ((v + 0.055) / 1.055) ** 2.4 for v in np.asarray(c) / 255]
+        return 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+
+    hi, lo = sorted((luminance(a), luminance(b)), reverse=True)
+    return (hi + 0.05) / (lo + 0.05)
 
 
 # ----------------------------------------------------------------------------- meshes

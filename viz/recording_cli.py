@@ -1,4 +1,4 @@
-"""``mechviz record`` and ``mechviz play``: record built-in demos headless, serve recordings.
+"""``mechviz record`` (record built-in demos headless) and ``mechviz play`` (:mod:`viz.play`).
 
 Registered on the ``mechviz`` parser by :mod:`viz.cli`; viser and matplotlib are imported only
 when a command runs.
@@ -7,16 +7,13 @@ when a command runs.
 from __future__ import annotations
 
 import argparse
-import errno
-import http.server
 import sys
 import time
-import urllib.parse
 from pathlib import Path
 
 from dynamics.cli import CliError, number
 
-DEFAULT_PLAY_PORT = 8090
+from .play import add_command as _add_play
 
 
 def add_commands(sub) -> None:
@@ -42,16 +39,7 @@ def add_commands(sub) -> None:
     add_record_options(p)  # --video, --size
     p.set_defaults(func=run_record)
 
-    q = sub.add_parser(
-        "play",
-        help="serve a .viser recording (or a folder of them) with viser's client",
-        description="Serve PATH (a .viser file or a folder of them) on HOST:PORT with the browser "
-        "client that ships in the viser wheel; prints the URL; Ctrl-C stops.",
-    )
-    q.add_argument("path", help=".viser file or folder")
-    q.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1)")
-    q.add_argument("--port", type=int, default=DEFAULT_PLAY_PORT, help="first port to try")
-    q.set_defaults(func=run_play)
+    _add_play(sub)
 
 
 # =========================================================================== record
@@ -131,7 +119,9 @@ def run_record(args: argparse.Namespace) -> int:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")
             print(f"mechviz: error: {exc}", file=sys.stderr)
-            return 130 if getattr(exc, "interrupted", False) else 1
+            if exc.interrupted:
+                return 130
+            return 2 if exc.bad_input else 1
         _report(res)
         if args.video and (status := film_record(res, args)):
             return status
@@ -152,96 +142,3 @@ def _report(res) -> None:
             continue
         pred = "" if f["predicted"] is None else f", predicted {f['predicted']:.6g}"
         print(f"  {f['name']}: {f['measured']:.6g} {f['unit']}{pred}".rstrip())
-
-
-# =========================================================================== play
-def _client_index() -> bytes:
-    import viser
-
-    return (Path(viser.__file__).parent / "client" / "build" / "index.html").read_bytes()
-
-
-def _recordings(path: Path) -> dict[str, Path]:
-    if not path.exists():
-        raise CliError(f"{path}: no such file or folder")
-    if path.is_file():
-        if path.suffix != ".viser":
-            raise CliError(f"{path}: not a .viser recording")
-        return {path.name: path}
-    found = {p.name: p for p in sorted(path.glob("*.viser"))}
-    if not found:
-        raise CliError(f"{path}: no .viser recordings in this folder")
-    return found
-
-
-def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PLAY_PORT):
-    """An HTTP server for the recordings at ``path`` and viser's client, bound to the first
-    free port from ``port`` (0: any). Returns ``(server, urls)``."""
-    recordings = _recordings(path)
-    index = _client_index()
-
-    class Handler(http.server.BaseHTTPRequestHandler):
-        def do_GET(self) -> None:
-            route = urllib.parse.urlsplit(self.path).path
-            if route in ("/", "/index.html"):
-                return self._send(index, "text/html; charset=utf-8")
-            if route == "/list":
-                items = "".join(
-                    f'<li><a href="/?playbackPath=recordings/{urllib.parse.quote(n)}">{n}</a></li>'
-                    for n in recordings
-                )
-                page = f"<!doctype html><title>mechviz recordings</title><ul>{items}</ul>"
-                return self._send(page.encode(), "text/html; charset=utf-8")
-            if route.startswith("/recordings/"):
-                name = urllib.parse.unquote(route.removeprefix("/recordings/"))
-                if name in recordings:
-                    return self._send(recordings[name].read_bytes(), "application/octet-stream")
-            self.send_error(404)
-
-        def _send(self, body: bytes, ctype: str) -> None:
-            self.send_response(200)
-            self.send_header("Content-Type", ctype)
-            self.send_header("Content-Length", str(len(body)))
-            self.send_header("Cache-Control", "no-store")
-            self.end_headers()
-            self.wfile.write(body)
-
-        def log_message(self, *args) -> None:
-            pass
-
-    first = port
-    for attempt in range(100):
-        try:
-            server = http.server.ThreadingHTTPServer((host, port), Handler)
-            break
-        except OSError as exc:
-            if exc.errno != errno.EADDRINUSE or port == 0 or attempt == 99:
-                raise CliError(f"--port: cannot listen on {host}:{port}: {exc.strerror}") from None
-            port += 1
-    server.daemon_threads = True
-    actual = server.server_address[1]
-    shown = "127.0.0.1" if host in ("0.0.0.0", "") else host
-    base = f"http://{shown}:{actual}"
-    urls = {n: f"{base}/?playbackPath=recordings/{urllib.parse.quote(n)}" for n in recordings}
-    if len(recordings) > 1:
-        urls["(list)"] = f"{base}/list"
-    server.requested_port = first  # type: ignore[attr-defined]
-    return server, urls
-
-
-def run_play(args: argparse.Namespace) -> int:
-    server, urls = make_play_server(Path(args.path), args.host, args.port)
-    port = server.server_address[1]
-    if args.port not in (0, port):
-        print(f"port {args.port} is busy; using {port}")
-    for name, url in urls.items():
-        print(f"{name}: {url}")
-    print("Ctrl-C stops.", flush=True)
-    try:
-        server.serve_forever(poll_interval=0.2)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        server.server_close()
-    print("stopped.")
-    return 0

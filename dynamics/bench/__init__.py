@@ -1,4 +1,4 @@
-"""Speed against accuracy (issue 6): work-precision sweeps, long runs, stability, step costs.
+"""Speed against accuracy: work-precision sweeps, long runs, stability, step costs.
 
 ``run_bench(quick=..., out=...)`` runs everything on the fixed problems of :mod:`.problems`,
 writes ``results.json`` and PNG charts to ``out`` and returns the result. ``mechviz bench``

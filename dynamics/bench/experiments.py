@@ -65,6 +65,9 @@ def long_run_energy(periods: float = 1e4, samples: int = 400, progress=None) -> 
                 "max_abs": float(np.max(np.abs(e))),
                 "mean_first_10pc": float(np.mean(e[:tenth])),
                 "mean_last_10pc": float(np.mean(e[-tenth:])),
+                # bounded: the error at the end is no larger (within 2x) than at the start
+                "bounded": bool(np.max(np.abs(e[-tenth:])) <= 2.0 * max(np.max(np.abs(e[:tenth])),
+                                                                         1e-15)),
                 "seconds": secs,
                 "steps": sim.steps,
             }
@@ -163,7 +166,7 @@ STEP_CASES = (
     ("rk4-free-body", "disk", kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
     ("splitting", "disk", kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
 )
-# PERF_NOTES section 3 (C -O2, other machine load): the reference figures.
+# C -O2 per-step costs measured earlier on this machine (other load): reference figures.
 NOTES_C_NS = {"rk4-charge": 10.7, "boris": 4.0, "rk4-hoop": 168.0, "rk4-free-body": 16.0,
               "splitting": 77.0}  # fmt: skip
 

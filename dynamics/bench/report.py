@@ -32,8 +32,45 @@ def ratio_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def peer_table(result: dict) -> str:
+    """Per problem and accuracy: each peer's time over our fastest, timed head to head."""
+    h2h = result.get("peer_head_to_head") or {}
+    if not h2h:
+        skipped = (result.get("settings") or {}).get("peers_skipped") or {}
+        why = "; ".join(f"{k}: {v}" for k, v in skipped.items())
+        return "No peers were run" + (f" ({why})." if why else " (`mechviz bench --peers`).")
+    peers = list(h2h)
+    lines = [
+        "| problem | accuracy | fastest of ours | " + " | ".join(peers) + " |",
+        "|---|---|---|" + "---|" * len(peers),
+    ]
+    keys = list(next(iter(h2h.values())))
+    for key in keys:
+        targets = list(h2h[peers[0]][key])
+        for t in targets:
+            ours = next((h2h[p][key][t]["ours"] for p in peers if h2h[p][key][t]), None)
+            ours_s = "-" if ours is None else f"{ours['method']} {_ms(ours['seconds'])}"
+            cells = []
+            for p in peers:
+                e = h2h[p][key][t]
+                if e is None:
+                    cells.append("not reached")
+                else:
+                    mark = "**" if e["ratio"] < 1.0 else ""
+                    cells.append(f"{mark}{e['ratio']:.2f}{mark} ({_ms(e['peer']['seconds'])})")
+            lines.append(f"| {key} | {t} | {ours_s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def targets_list(result: dict) -> str:
+    missed = result["targets"].get("missed") or []
+    if not missed:
+        return "Every target met."
+    return "\n".join(f"- missed: {m}" for m in missed)
+
+
 def method_table(result: dict) -> str:
-    """Time each method needs to reach 1e-3, 1e-6, 1e-9 (with its evaluations)."""
+    """Time each method needs to reach each accuracy (with its evaluations)."""
     lines = []
     for key, row in result["ratios"].items():
         methods = sorted({m for e in row.values() for m in e["per_method"]})
@@ -48,9 +85,27 @@ def method_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def first_answer_table(result: dict) -> str:
+    fa = result.get("first_answer")
+    cons = result.get("construction_us") or {}
+    lines = []
+    if fa:
+        lines += [
+            "| fresh process to the hoop's state at 20 s, 1e-9 | median [s] | runs [s] |",
+            "|---|---|---|",
+        ]
+        for k in ("taylor", "dop853", "scipy-odeint"):
+            lines.append(f"| {k} | {fa[k]['median_s']} | {fa[k]['runs_s']} |")
+    if cons:
+        lines += ["", "| problem | new Simulation [us] | restart() [us] |", "|---|---|---|"]
+        for k, v in cons.items():
+            lines.append(f"| {k} | {v['new_simulation']} | {v['restart']} |")
+    return "\n".join(lines) or "-"
+
+
 def step_table(result: dict) -> str:
     lines = [
-        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | PERF_NOTES C |",
+        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | C, earlier run |",
         "|---|---|---|---|---|",
     ]
     for name, r in result["per_step"]["rows"].items():
@@ -97,15 +152,28 @@ def markdown(result: dict) -> str:
     head = (f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
             f"load average {result['load_average']}; {result['machine'].get('cpu', '')}, "
             f"{result['machine']['cpus']} CPUs; versions {result['versions']}.")  # fmt: skip
-    return "\n\n".join([
+    parts = [
         "# Benchmark tables", head,
+        "## Targets", targets_list(result),
         "## Time to reach each accuracy: fastest scipy over fastest of ours",
         "Each side's contenders (within 1.5x of its fastest sweep time) re-timed head to head in "
-        "interleaved rounds; *sweep ratio* is the figure from the sweeps alone.",
+        "interleaved rounds; *sweep ratio* is the figure from the sweeps alone. Problems ending "
+        "in `-untuned` are the cases the methods were not tuned on.",
         ratio_table(result),
-        "## Time per method to reach 1e-3, 1e-6, 1e-9", method_table(result),
-        "## Cost of one compiled step", step_table(result),
-        "## Energy error over 10^4 periods", long_run_table(result),
-        "## Exhibit defaults (10 min of simulated time, error below 1e-3 of the size)",
-        exhibit_table(result),
-    ]) + "\n"  # fmt: skip
+        "## Peers: their time over our fastest (below 1, in bold: the peer is faster)",
+        "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
+        "interleaved rounds.",
+        peer_table(result),
+        "## First answer and construction", first_answer_table(result),
+        "## Time per method to reach each accuracy", method_table(result),
+    ]  # fmt: skip
+    if result.get("per_step"):
+        parts += ["## Cost of one compiled step", step_table(result)]
+    if result.get("long_run"):
+        parts += ["## Energy error over 10^4 periods", long_run_table(result)]
+    if result.get("exhibits"):
+        parts += [
+            "## Exhibit defaults (10 min of simulated time, error below 1e-3 of the size)",
+            exhibit_table(result),
+        ]
+    return "\n\n".join(parts) + "\n"

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import gc
 import math
-import statistics
 import time
 from dataclasses import asdict, dataclass
 
@@ -25,6 +24,8 @@ import numpy as np
 
 from ..integrators.base import IntegrationError, get_method
 from ..simulation import Simulation
+from .peers import PEERS
+from .peers import prepare as prepare_peer
 from .problems import ADAPTIVE_SCIPY, Problem, reference_state
 from .timing import time_calls
 
@@ -62,7 +63,7 @@ class Settings:
     # Quarter-decades: the error an adaptive method reaches is not smooth in its tolerance (on
     # the hoop, DOP853 at 1e-10 misses 1e-9 by 6x and at 1e-11 beats it by 45x), so a coarse
     # grid charges every method, ours and scipy's alike, for accuracy it was not asked for.
-    tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 4) for k in range(12, 49))
+    tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 4) for k in range(12, 61))
     head_to_head_rounds: int = 9
     scipy_methods: tuple[str, ...] = ADAPTIVE_SCIPY
     skip_fixed: tuple[str, ...] = ()
@@ -77,13 +78,19 @@ class Settings:
             cap=0.25,
             energy_samples=10,
             half_steps=False,
-            tolerances=tuple(10.0 ** (-k / 2) for k in range(6, 25)),
+            tolerances=tuple(10.0 ** (-k / 2) for k in range(6, 31)),
             head_to_head_rounds=5,
             # The scipy options that can be fastest (full runs: RK45 and Radau never are).
             scipy_methods=("scipy-dop853", "scipy-lsoda", "odeint"),
             # Never fastest at any target, and each costs ~1 s of compilation per system.
             skip_fixed=("euler", "midpoint"),
         )
+
+
+def _restart_and_run(sim: Simulation, t_end: float) -> None:
+    """One timed run: back to t = 0 (what a run costs beyond the solve) and on to ``t_end``."""
+    sim.restart()
+    sim.advance_to(t_end)
 
 
 def _simulation(problem: Problem, method: str, dt: float | None, tol: float | None) -> Simulation:
@@ -139,9 +146,10 @@ def run_point(
         return Point(problem.key, method, adaptive, dt, tol, steps, nfev, None, None, None, None,
                      first, 0, 0, "failed: non-finite final state")  # fmt: skip
 
+    timed = _simulation(problem, method, dt, tol)
+
     def make():
-        s = _simulation(problem, method, dt, tol)
-        return lambda: s.advance_to(T)
+        return lambda: _restart_and_run(timed, T)
 
     timing = time_calls(
         make,
@@ -207,12 +215,13 @@ def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=N
     return points
 
 
-TARGETS = (1e-3, 1e-6, 1e-9)
+TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
 
 
 def time_to_reach(points: list[Point], target: float) -> Point | None:
     """The fastest point whose error is at or below ``target``."""
-    ok = [p for p in points if p.error is not None and p.error <= target and p.seconds]
+    ok = [p for p in points
+          if p.error is not None and p.error <= target and p.seconds and p.status == "ok"]  # fmt: skip
     return min(ok, key=lambda p: p.seconds) if ok else None
 
 
@@ -256,25 +265,43 @@ def ratio_table(points: list[Point], ours: set[str], theirs: set[str]) -> dict:
     return table
 
 
+_PREPARED: dict = {}
+
+
+def _prepared(problem: Problem, pt: Point):
+    """A callable that runs ``pt`` once to ``T``: ours restart a kept Simulation, a peer's
+    integrator is built once (untimed) and restarted."""
+    key = (problem.key, pt.method, pt.dt, pt.tol)
+    if key not in _PREPARED:
+        if pt.method in PEERS:
+            _PREPARED[key] = prepare_peer(pt.method, problem, pt.tol).run
+        else:
+            sim = _simulation(problem, pt.method, pt.dt, pt.tol)
+            _PREPARED[key] = lambda: _restart_and_run(sim, problem.t_end)
+    return _PREPARED[key]
+
+
 def _run_seconds(problem: Problem, pt: Point, calls: int) -> float:
     """Seconds per call of ``calls`` fresh runs of ``pt`` to ``T`` (gc off, set-up untimed)."""
-    sims = [_simulation(problem, pt.method, pt.dt, pt.tol) for _ in range(calls)]
+    run = _prepared(problem, pt)
     gc.disable()
     try:
         t0 = time.perf_counter()
-        for sim in sims:
-            sim.advance_to(problem.t_end)
+        for _ in range(calls):
+            run()
         return (time.perf_counter() - t0) / calls
     finally:
         gc.enable()
 
 
 def head_to_head(problem: Problem, pts: list[Point], rounds: int, min_sample: float) -> list[float]:
-    """Median seconds per run of each point, timed in interleaved rounds.
+    """Seconds per run of each point: its fastest of ``rounds`` interleaved rounds.
 
     A sweep times one method after another, minutes apart; on a shared machine the load can
     change in between and tilt a ratio either way. Here every round times every contender once,
-    in rotating order, so both sides of a ratio see the same conditions.
+    in rotating order, so both sides of a ratio see the same conditions, and each side's fastest
+    round (the one least disturbed by other jobs) is kept: with bursts of load the median of a
+    few rounds moved a ratio by up to 2.8x between two head-to-head timings of the same points.
     """
     calls = [max(1, math.ceil(min_sample / max(p.seconds or min_sample, 1e-7))) for p in pts]
     samples: list[list[float]] = [[] for _ in pts]
@@ -282,7 +309,7 @@ def head_to_head(problem: Problem, pts: list[Point], rounds: int, min_sample: fl
         for k in range(len(pts)):
             i = (k + r) % len(pts)
             samples[i].append(_run_seconds(problem, pts[i], calls[i]))
-    return [statistics.median(x) for x in samples]
+    return [min(x) for x in samples]
 
 
 def retime_ratios(
@@ -334,3 +361,116 @@ def retime_ratios(
 
 def finite_or_none(x: float | None) -> float | None:
     return None if x is None or not np.isfinite(x) else float(x)
+
+
+# --------------------------------------------------------------------------- peers
+def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) -> Point:
+    """One peer at one tolerance: built and run once untimed (heyoka compiles when built, a
+    CyRK callback at its first call), then timed as ours (:func:`dynamics.bench.timing.time_calls`),
+    its error against the same reference."""
+    ref = reference_state(problem)
+    try:
+        prepared = prepare_peer(peer, problem, tol)
+        y = prepared.run()  # untimed: the first call compiles CyRK's C callback
+        t0 = time.perf_counter()
+        y = prepared.run()
+        first = time.perf_counter() - t0
+    except Exception as exc:  # a peer failing at one tolerance is a result, not a crash
+        return Point(problem.key, peer, True, None, tol, 0, 0, None, None, None, None, None, 0, 0,
+                     f"failed: {exc.__class__.__name__}: {exc}")  # fmt: skip
+    _PREPARED[(problem.key, peer, None, tol)] = prepared.run
+    err = problem.error(y, ref)
+    if not math.isfinite(err):
+        return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, None, None, None,
+                     None, first, 0, 0, "failed: non-finite final state")  # fmt: skip
+    timing = time_calls(lambda: prepared.run, repeats=settings.repeats,
+                        min_sample=settings.min_sample, first_call=first)  # fmt: skip
+    return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, err, None, timing.median,
+                 timing.best, timing.first_call, timing.samples, timing.calls_per_sample, "ok")  # fmt: skip
+
+
+def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
+    points: list[Point] = []
+    for tol in settings.tolerances:
+        pt = run_peer_point(problem, peer, settings, tol)
+        points.append(pt)
+        if pt.error is not None and pt.error < problem.floor:
+            break
+        if (pt.first_call or 0.0) > settings.cap:
+            break
+    return points
+
+
+def peer_table(
+    points: list[Point], table: dict, peers: list[str], problems: dict[str, Problem],
+    settings: Settings,
+) -> dict:  # fmt: skip
+    """Per peer, problem and target: the peer's time over our fastest, timed head to head.
+
+    Our contenders are those of the ratio table (within 1.5x of our fastest, after its own
+    head-to-head); the peer's is its fastest sweep point at the target. All are re-timed here
+    in interleaved rounds and the ratio is peer / ours. ``None``: the peer (or we) did not
+    reach the target within the cap.
+    """
+    out: dict = {}
+    for peer in peers:
+        out[peer] = {}
+        for key, row in table.items():
+            problem = problems[key]
+            out[peer][key] = {}
+            for target, entry in row.items():
+                mine = [p for p in points if p.problem == key and p.method == peer]
+                best = time_to_reach(mine, float(target))
+                if best is None or "ours" not in entry:
+                    out[peer][key][target] = None
+                    continue
+                fastest = entry["ours"]["seconds"]
+                ours = []
+                for m in entry["ours_methods"]:
+                    v = entry["per_method"].get(m)
+                    if v and v["seconds"] <= 1.5 * (entry.get("sweep", entry)["ours"]["seconds"]):
+                        ours.append(next(p for p in points if p.problem == key and p.method == m
+                                         and p.dt == v["dt"] and p.tol == v["tol"]))  # fmt: skip
+                pts = [*ours, best]
+                secs = head_to_head(problem, pts, settings.head_to_head_rounds,
+                                    settings.min_sample)  # fmt: skip
+                i_best = min(range(len(ours)), key=lambda i: secs[i])
+                out[peer][key][target] = {
+                    "ratio": secs[-1] / secs[i_best],
+                    "peer": {"tol": best.tol, "seconds": secs[-1], "error": best.error},
+                    "ours": {
+                        "method": ours[i_best].method,
+                        "seconds": secs[i_best],
+                        "dt": ours[i_best].dt,
+                        "tol": ours[i_best].tol,
+                        "error": ours[i_best].error,
+                    },
+                    "sweep_ours_seconds": fastest,
+                }
+    return out
+
+
+def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
+                  slack: float = 1.3) -> None:  # fmt: skip
+    """Mark points slower than a point of the same method that does more work, re-timed once.
+
+    Along one method's sweep more steps (or a tighter tolerance) never cost less time; a point
+    that is more than ``slack`` times slower than a point further along was timed under a burst
+    of other load. It is re-timed with three times the repeats; if it still breaks the order it
+    is flagged (``status = "outlier"``) and left off the charts and the tables.
+    """
+    def later(a: Point, b: Point) -> bool:  # b does more work than a
+        if a.adaptive:
+            return (b.tol or 0) < (a.tol or 0)
+        return (b.dt or 0) < (a.dt or 0)
+
+    for i, p in enumerate(points):
+        if p.seconds is None or p.status != "ok":
+            continue
+        more = [q for q in points if q.method == p.method and q.seconds and later(p, q)]
+        if not more or p.seconds <= slack * min(q.seconds for q in more):
+            continue
+        t = head_to_head(problem, [p], 3 * settings.repeats, settings.min_sample)[0]
+        p.seconds = min(p.seconds, t)
+        if p.seconds > slack * min(q.seconds for q in more):
+            points[i].status = "outlier"

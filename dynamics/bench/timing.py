@@ -1,4 +1,4 @@
-"""Wall-clock timing as PERF_NOTES section 11 prescribes.
+"""Wall-clock timing of one benchmark point.
 
 One untimed call first (it compiles and warms up, and its result is the one reported), then
 ``repeats`` timed samples with the garbage collector off; a call shorter than ``min_sample``

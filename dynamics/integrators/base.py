@@ -6,7 +6,8 @@ Implementers add a :class:`Method` to :data:`METHODS`:
 - ``backend="numba"``, ``adaptive=False``: ``kernel`` names the step in
   :mod:`dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
   ``run_fixed`` with it.
-- ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``).
+- ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``), or with
+  ``kernel="taylor"`` Taylor's method (:mod:`dynamics.integrators.taylor`).
 - ``backend="scipy"``: ``scipy_name`` is a ``solve_ivp`` method or ``"odeint"``; the driver calls
   :func:`dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
 - ``backend="exact"``: the system's closed-form flow.
@@ -192,6 +193,18 @@ METHODS: dict[str, Method] = {
             ALL,
             "numba",
             stability="step size controlled to rtol, atol",
+        ),
+        Method(
+            "taylor",
+            "Taylor series (compiled; order from the tolerance, 2-30)",
+            0,
+            (),
+            True,
+            False,
+            ALL,
+            "numba",
+            kernel="taylor",
+            stability="step from the series' radius of convergence (Jorba and Zou)",
         ),
         Method(
             "scipy-rk45",

@@ -11,13 +11,28 @@ each member is stepped exactly to ``t1``.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _coef
+import scipy
 
 from .._jit import njit
 from .kernels import NONFINITE, OK
+
+
+def _scipy_tableau():
+    """scipy's ``dop853_coefficients`` module, loaded from its file: importing it the usual way
+    imports all of ``scipy.integrate`` first (about 0.1 s before a first answer)."""
+    path = Path(scipy.__file__).parent / "integrate" / "_ivp" / "dop853_coefficients.py"
+    spec = importlib.util.spec_from_file_location("_mechviz_dop853_coefficients", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+_coef = _scipy_tableau()
 
 N_STAGES = 12
 _A = np.ascontiguousarray(_coef.A[:N_STAGES, :N_STAGES])

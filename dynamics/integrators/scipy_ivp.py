@@ -8,7 +8,6 @@ the comparison measures the solvers, not two implementations of the physics.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import odeint, solve_ivp
 
 from .kernels import RHS
 
@@ -39,6 +38,10 @@ def advance_scipy(
     atol: float,
 ) -> tuple[int, int, str | None]:
     """Advance ``Y`` (N, d) in place; returns ``(nfev, steps, failure message or None)``."""
+    # Imported here: scipy.integrate takes about 0.1 s to import, which a process that never
+    # calls scipy's solvers need not pay before its first answer.
+    from scipy.integrate import odeint, solve_ivp
+
     n, d = Y.shape
     fun = _make_fun(sys_id, p, d)
     nfev = steps = 0

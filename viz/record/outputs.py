@@ -121,7 +121,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
         for lbl, c in zip(tr.states, colours, strict=False):
             ax1.plot(tr.times[lbl], 100 * tr.energy_error[lbl][:, 0], color=c, lw=1, label=lbl)
         ax1.axhline(0.0, color="k", ls="--", lw=0.8, label="exact: energy conserved")
-        ax1.set_ylabel("(E - E0) / |E0| [%]")
+        ax1.set_ylabel("relative energy error [%]")
     else:
         freqs, _shapes = hoop.normal_modes(p)
         for lbl, c in zip(tr.states, colours, strict=False):
@@ -151,7 +151,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
         if fg["name"].startswith("final energy error") and fg["predicted"]:
             ax2.axhline(abs(fg["predicted"]), color="k", ls="--", lw=1,
                         label="predicted final, " + fg["name"].split(", ")[-1])  # fmt: skip
-    ax2.set_ylabel("|E - E0| / |E0|")
+    ax2.set_ylabel("|relative energy error|")
     ax2.legend(fontsize=7)
     ax3.set_ylabel("relative error")
     ax3.set_xlabel("simulated time t [s]")

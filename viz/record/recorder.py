@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import dynamics
-from dynamics.files import write_files_atomically
+from dynamics.files import WriteFailed, WriteInterrupted, json_safe, write_files_atomically
 
 from .demo import Demo, load_demo
 from .figures import figures
@@ -31,9 +31,12 @@ SUFFIXES = (".viser", ".html", ".csv", ".png", ".json")
 
 
 class RecordingFailed(RuntimeError):
-    """A recording that did not complete; the message says what the output folder now holds."""
+    """A recording that did not complete; the message says what the output folder now holds.
+    ``interrupted``: ended by Ctrl-C; ``bad_input``: the demo asks for what cannot be done (too
+    much work, a start the system refuses), which the command line reports as a usage error."""
 
     interrupted = False
+    bad_input = False
 
 
 @dataclass
@@ -83,16 +86,28 @@ def record(
         man["files"] = {
             n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()
         }
-        files[f"{d.name}.json"] = (json.dumps(man, indent=2) + "\n").encode()
+        reasons: dict[str, str] = {}
+        man = json_safe(man, reasons=reasons)  # NaN and infinities as null, with the reason
+        if reasons:
+            man["null_reasons"] = reasons
+        files[f"{d.name}.json"] = (json.dumps(man, indent=2, allow_nan=False) + "\n").encode()
         write_files_atomically(out, files)
+    except WriteInterrupted as exc:  # the write says itself what it left on disk
+        err = RecordingFailed(f"recording of {d.name} interrupted; {exc.on_disk}")
+        err.interrupted = True
+        raise err from exc
+    except WriteFailed as exc:
+        raise RecordingFailed(f"recording of {d.name} failed: {exc}") from exc
     except KeyboardInterrupt as exc:
         err = RecordingFailed(f"recording of {d.name} interrupted; {existing_recording(out, d.name)}")
         err.interrupted = True
         raise err from exc
     except (dynamics.IntegrationError, OSError, ValueError) as exc:
-        raise RecordingFailed(
+        err = RecordingFailed(
             f"recording of {d.name} failed: {exc}; {existing_recording(out, d.name)}"
-        ) from exc
+        )
+        err.bad_input = isinstance(exc, ValueError)
+        raise err from exc
     wall = time.perf_counter() - t_start
     return RecordResult(d, {s: out / f"{d.name}{s}" for s in SUFFIXES}, man, wall, d.frames)
 

@@ -24,6 +24,7 @@ from ..scene import EXHIBITS, Exhibit
 from .demo import Demo
 
 ProgressFn = Callable[[int, int], None]
+MAX_STEPS = 1e8  # integration steps a recording may take, all runs and members together
 
 
 @dataclass
@@ -83,6 +84,7 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None) -> Recorded:
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         ex = build_exhibit(server, demo)
+        check_work(ex, demo)
         position, look_at = ex.camera
         cam = demo.camera
         server.initial_camera.position = tuple(cam.position or position)
@@ -157,6 +159,18 @@ def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None) -> Record
         ghost, log, ex.measured(),
     )  # fmt: skip
     return Recorded(data, html, traces)
+
+
+def check_work(ex: Exhibit, demo: Demo) -> None:
+    """Refuse, before anything runs, a demo whose runs would take more than :data:`MAX_STEPS`
+    steps (:meth:`dynamics.Simulation.estimated_steps`), naming what sets the count."""
+    steps = sum(sim.estimated_steps(demo.simulated_time) for sim in ex.simulations())
+    if not steps <= MAX_STEPS:
+        raise ValueError(
+            f"the runs would take about {steps:.3g} steps ({demo.simulated_time:.4g} s of simulated "
+            f"time = speed x duration, dt = {demo.dt}); the limit is {MAX_STEPS:.0e}: give a larger "
+            "dt or rtol, or a smaller speed or duration"
+        )
 
 
 def _describe(sim: dynamics.Simulation) -> dict[str, Any]:

@@ -250,6 +250,8 @@ class Exhibit:
         self.events: list[tuple[str, str]] = []  # (title, body) for notifications
         self.revision = 0
         self.history = History(self.chart_series, maxlen=history_len)
+        self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
+        self._chart_t = 0.0  # time of the newest chart point
         self.sim: dynamics.Simulation | None = None
         self.compare: dynamics.Simulation | None = None
         self._sample: dynamics.Sample | None = None
@@ -356,7 +358,17 @@ class Exhibit:
         self.failure_error = error
         self.events.append((f"{self.title}: integration stopped", f"{error}. {PAUSED_HINT}"))
 
+    def set_chart_window(self, seconds: float) -> None:
+        """Spread the chart's points evenly over the last ``seconds`` of simulated time (the
+        number of points stays the same); the chart starts afresh."""
+        self.chart_spacing = float(seconds) / self.history.maxlen
+        self.history.clear()
+        self.revision += 1
+
     def _record(self) -> None:
+        if len(self.history) and self.t - self._chart_t < self.chart_spacing and not self.paused:
+            return  # not yet time for the next point of a long window
+        self._chart_t = self.t
         smp = self.sample
         values = {"energy": log10_abs(smp.energy_error), "error": log10_abs(smp.error)}
         c = self.compare_sample

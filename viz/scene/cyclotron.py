@@ -122,7 +122,7 @@ class CyclotronExhibit(Exhibit):
         )  # fmt: skip
         self.ring = s.add_line_segments(
             f"{r}/theory_circle", geo.circle_segments(1.0),
-            colors=np.array((255, 255, 255), np.uint8), thickness=1.5, thickness_units="screen",
+            colors=np.array(geo.CENTRE, np.uint8), thickness=2.0, thickness_units="screen",
         )  # fmt: skip
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
@@ -190,7 +190,7 @@ class CyclotronExhibit(Exhibit):
         n = len(self.beam.state)
         sphere = geo.sphere_mesh(0.045, 1)
         t = np.linspace(0.0, 1.0, n)[:, None]
-        colors = ((1 - t) * np.array([255, 230, 60]) + t * np.array([255, 110, 20])).astype(np.uint8)
+        colors = ((1 - t) * np.array(geo.BEAM[0]) + t * np.array(geo.BEAM[1])).astype(np.uint8)
         self.beam_node = self.scene.add_batched_meshes_simple(
             f"{self.root}/beam", sphere.vertices, sphere.faces,
             batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
@@ -336,11 +336,17 @@ class CyclotronExhibit(Exhibit):
         wb = m["beam_gyrofrequencies"]
         if self.beam is not None:
             lo, hi = self.config.beam_speeds
-            spread = "—" if wb is None else f"{fmt(wb.min())} to {fmt(wb.max())} rad/s"
-            lines.append(
-                f"\nBeam of {len(self.beam.state)} charges, speeds {lo:g}–{hi:g} m/s: "
-                f"ω from {spread} (same period for all)"
-            )
+            n = len(self.beam.state)
+            if wb is None:
+                periods = "periods: measured once the charges have turned half a radian"
+            else:
+                T = 2 * math.pi / np.asarray(wb)
+                periods = (
+                    f"measured periods {fmt(T.min(), 7)} to {fmt(T.max(), 7)} s, a spread of "
+                    f"{T.max() - T.min():.1e} s against theory's 0 (2πm/\\|qB\\| = "
+                    f"{fmt(2 * math.pi / w_th, 7)} s whatever the speed)"
+                )
+            lines.append(f"\nBeam of {n} charges, speeds {lo:g}–{hi:g} m/s: {periods}")
         lines.append(self.work_line())
         return "\n".join(lines)
 
@@ -351,16 +357,12 @@ class CyclotronExhibit(Exhibit):
         panel.param_inputs({"charge": "Charge q [C]", "mass": "Mass m [kg]", "field": "Field B [T]"})
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
-            strength = panel.put("kick", gui.add_slider(
-                "Kick dv [m/s]", min=-1.0, max=1.0, step=0.05, initial_value=c.kick
-            ))  # fmt: skip
+            strength = panel.slider("kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None)
             kick = gui.add_button("Kick", hint="Radial velocity kick: the predicted circle moves at once")
             beam = panel.put("beam", gui.add_checkbox(
                 "Beam", initial_value=c.beam, hint="Many charges, a spread of speeds"
             ))  # fmt: skip
-            size = panel.put("beam_size", gui.add_slider(
-                "Beam size", min=2, max=200, step=1, initial_value=c.beam_size
-            ))  # fmt: skip
+            panel.slider("beam_size", "Beam size", 2, 200, 1, c.beam_size,
+                         lambda v: panel.send({"op": "set", "beam_size": int(v)}))  # fmt: skip
         kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
-        panel.on(size, lambda v: panel.send({"op": "set", "beam_size": int(v)}))

@@ -63,6 +63,16 @@ class DiskConfig(ExhibitConfig):
         finite_numbers("extra_spin", self.extra_spin, 3)
 
 
+def principal_axes_for(p: dk.DiskParams, mode: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(moments, axes (rows), origin)`` in the disk frame: about A (the origin) when driven,
+    about the centre of mass when released."""
+    if mode == "driven":
+        moments, axes = dk.principal_axes(p)
+        return moments, axes, np.zeros(3)
+    moments, axes = dk.principal_axes_cm(p)
+    return moments, axes, dk.centre_of_mass(p)
+
+
 def to_world(v) -> np.ndarray:
     """Disk/space-frame vector(s) (..., 3) -> world vector(s), relative to the exhibit origin."""
     return np.asarray(v, float) @ P.T
@@ -145,7 +155,7 @@ class DiskExhibit(Exhibit):
             ring.apply_translation(LIFT + to_world(pt))
             self.bearings.append(
                 s.add_mesh_simple(
-                    f"{r}/bearing_{name}", ring.vertices, ring.faces, color=(70, 70, 70)
+                    f"{r}/bearing_{name}", ring.vertices, ring.faces, color=geo.AXLE
                 )
             )
             self.bearings.append(
@@ -159,14 +169,16 @@ class DiskExhibit(Exhibit):
         # children placed once (at t = 0 the disk frame is the space frame), so frames only
         # move the arrows themselves.
         self.body_labels = [s.add_label(f"{body}/label_{n}", n) for n in ("F_A", "F_B", "L")]
-        self._build_axes(p)
+        self._build_axes(p, self.config.mode)
 
-    def _build_axes(self, p: dk.DiskParams) -> None:
+    def _build_axes(self, p: dk.DiskParams, mode: str) -> None:
+        """The principal axes and their moments: about A while the axle holds the disk, about the
+        centre of mass once it is released (those govern the tumble), drawn from that point."""
         body, R = f"{self.root}/body", p.radius
-        moments, axes = dk.principal_axes(p)
+        moments, axes, origin = principal_axes_for(p, mode)
         mr2 = p.disk_mass * R * R
         length = 1.3 * R
-        pts = np.stack([np.zeros((3, 3)), axes * length], axis=1).astype(np.float32)
+        pts = np.stack([np.tile(origin, (3, 1)), origin + axes * length], axis=1).astype(np.float32)
         self.axes_node = self.scene.add_arrows(
             f"{body}/principal_axes",
             pts,
@@ -179,11 +191,11 @@ class DiskExhibit(Exhibit):
             self.scene.add_label(
                 f"{body}/principal_axes/I{k + 1}",
                 f"I{k + 1} = {moments[k] / mr2:.3f} MR²",
-                position=axes[k] * (length + 0.08 * R),
+                position=origin + axes[k] * (length + 0.08 * R),
             )
             for k in range(3)
         ]
-        self._built_masses = (p.disk_mass, p.bead_mass, R)
+        self._built_masses = (p.disk_mass, p.bead_mass, R, mode)
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:
@@ -200,8 +212,8 @@ class DiskExhibit(Exhibit):
         self._reset_common()
         if self._built_radius != p.radius:
             self._build_body(p)
-        elif self._built_masses != (p.disk_mass, p.bead_mass, p.radius):
-            self._build_axes(p)
+        elif self._built_masses != (p.disk_mass, p.bead_mass, p.radius, c.mode):
+            self._build_axes(p, c.mode)
         driven = c.mode == "driven"
         self.axle_node.visible = driven
         for h in self.bearings:
@@ -245,6 +257,7 @@ class DiskExhibit(Exhibit):
         self.vector_labels[0].position = LIFT + to_world(a + p.omega * dk.AXLE * self.omega_scale)
         self.vector_labels[1].visible = not driven
         self.body.position = LIFT  # A stays put while driven
+        self._observe()
 
     # ------------------------------------------------------------------ kinematics from dynamics
     def pose(self, sample: dynamics.Sample | None = None):
@@ -357,7 +370,8 @@ class DiskExhibit(Exhibit):
 
     def readout(self) -> str:
         p, smp = self.params, self.sample
-        moments, _ = dk.principal_axes(p)
+        moments, _, _ = principal_axes_for(p, self.config.mode)
+        about = "A" if self.config.mode == "driven" else "the centre of mass"
         mr2 = p.disk_mass * p.radius**2
         lines = [f"**t = {self.t:.2f} s** · {self.config.mode}"]
         lines.append(
@@ -369,18 +383,18 @@ class DiskExhibit(Exhibit):
             "",
             "| quantity | theory | measured |",
             "|---|---|---|",
-            f"| principal moments about A [MR²] | {', '.join(f'{m / mr2:.4g}' for m in moments)} | — |",
+            f"| principal moments about {about} [MR²] | {', '.join(f'{m / mr2:.4g}' for m in moments)} | — |",
         ]
         if self.config.mode == "driven":
-            seed = 5.0 / 8.0 * p.disk_mass * p.radius * p.omega**2
             meas = self.measured()["bearing_force"]
             net = float(np.linalg.norm(dk.net_bearing_force(p, smp.t)))
             lines += [
-                f"| bearing force amplitude \\|F_B\\| [N] | {fmt(self.force_amplitude)} "
+                f"| bearing force amplitude \\|F_B\\| = m R ω²/2 [N] | {fmt(self.force_amplitude)} "
                 f"| {fmt(meas)} |",
-                f"| seed: 5/8 M R ω² (bead 5M/4) [N] | {fmt(seed)} | |",
-                f"| \\|F_A + F_B\\| = (M+m) ω² ρ_cm [N] | {fmt(net)} | |",
             ]
+            if math.isclose(p.bead_mass, 1.25 * p.disk_mass):  # the seed's bead
+                lines.append("| (the seed's 5/8 M R ω², for its bead m = 5M/4) | | |")
+            lines.append(f"| \\|F_A + F_B\\| = (M+m) ω² ρ_cm [N] | {fmt(net)} | |")
             lines.append(
                 f"\nForce arrows: 1 m ↔ {1 / self.force_scale:.3g} N. Measured: "
                 "\\|ŷ × dL/dt\\| / 2R, with dL/dt from central differences of the sampled L(t)."
@@ -407,21 +421,23 @@ class DiskExhibit(Exhibit):
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ GUI
+    def sync_panel(self, panel) -> None:
+        panel.w["disk.spin"].value = float(self.config.extra_spin[2])
+
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
         panel.readout_and_chart(compare=False)
         with gui.add_folder("Motion"):
             mode = panel.put("mode", gui.add_dropdown("Motion", options=MODES, initial_value=c.mode))
-            spin = panel.put("spin", gui.add_slider(
-                "Extra spin at release [rad/s]", min=0.0, max=0.5, step=0.01,
-                initial_value=float(c.extra_spin[2]),
+            panel.slider(
+                "spin", "Extra spin at release [rad/s]", 0.0, 0.5, 0.01, float(c.extra_spin[2]),
+                lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}),
                 hint="Spin about the disk normal added at release: seeds the tumble",
-            ))  # fmt: skip
+            )
             follow = panel.put(
                 "follow_cm", gui.add_checkbox("Follow centre of mass", initial_value=c.follow_cm)
             )
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
-        panel.on(spin, lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}))
         panel.on(follow, lambda v: panel.send({"op": "set", "follow_cm": bool(v)}))
         panel.param_inputs({
             "disk_mass": "Disk mass M [kg]", "radius": "Radius R [m]",

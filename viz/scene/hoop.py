@@ -23,6 +23,7 @@ from dynamics import measure
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
+from .panel import number_text
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -103,7 +104,7 @@ class HoopExhibit(Exhibit):
         beam = geo.rod_between((-0.9 * a, 0.25, zp + 0.08), (0.0, 0.25, zp + 0.08), 0.03)
         pin = geo.rod_between((0.0, 0.25, zp), (0.0, -0.1, zp), 0.02)
         stand = geo.trimesh.util.concatenate([post, beam, pin])
-        s.add_mesh_simple(f"{r}/stand", stand.vertices, stand.faces, color=(110, 110, 110))
+        s.add_mesh_simple(f"{r}/stand", stand.vertices, stand.faces, color=geo.STAND)
         s.add_icosphere(f"{r}/pivot", radius=0.05, color=geo.CENTRE, position=self.pivot_local)
         # one batched node per shape: instance 0 the hoop, 1 the linear-theory ghost, 2 the
         # comparison method (scale 0 while there is none)
@@ -115,13 +116,13 @@ class HoopExhibit(Exhibit):
         self.rings = s.add_batched_meshes_simple(
             f"{r}/rings", ring.vertices, ring.faces, batched_wxyzs=ident,
             batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=colors, batched_opacities=np.array([1.0, 0.3, 1.0]), lod="off",
+            batched_colors=colors, batched_opacities=np.array([1.0, 0.45, 1.0]), lod="off",
         )  # fmt: skip
         bead_colors = np.array([geo.BEAD, geo.GHOST, geo.COMPARE], np.uint8)
         self.beads = s.add_batched_meshes_simple(
             f"{r}/beads", bead.vertices, bead.faces, batched_wxyzs=ident,
             batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.35, 1.0]), lod="off",
+            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.5, 1.0]), lod="off",
         )  # fmt: skip
         self.cmp_label = s.add_label(
             f"{r}/compare_label",
@@ -288,23 +289,21 @@ class HoopExhibit(Exhibit):
         panel.readout_and_chart(compare=True)
         with gui.add_folder("Initial condition"):
             mode = panel.put("mode", gui.add_dropdown("Mode", options=MODES, initial_value=c.mode))
-            amp = panel.put("amplitude", gui.add_slider(
-                "Amplitude [rad]", min=0.05, max=2.5, step=0.05, initial_value=float(c.amplitude)
-            ))  # fmt: skip
-            th1 = panel.put(
-                "th1", gui.add_number("θ1 (custom) [rad]", initial_value=float(c.angles[0]), step=0.01)
-            )
-            th2 = panel.put(
-                "th2", gui.add_number("θ2 (custom) [rad]", initial_value=float(c.angles[1]), step=0.01)
-            )
+            panel.slider("amplitude", "Amplitude [rad]", 0.05, 2.5, 0.05, float(c.amplitude),
+                         lambda v: panel.send({"op": "set", "amplitude": float(v)}))  # fmt: skip
+
+            def angle(k):
+                def apply(x):
+                    angles = list(self.config.angles)  # read in the loop thread when applied
+                    angles[k] = x
+                    panel.send({"op": "set", "mode": "custom", "angles": tuple(angles)})
+
+                return apply
+
+            for k in (0, 1):
+                panel.number(f"th{k + 1}", f"θ{k + 1} (custom) [rad]", c.angles[k], angle(k),
+                             lo=-3.14, hi=3.14)  # fmt: skip
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
-        panel.on(amp, lambda v: panel.send({"op": "set", "amplitude": float(v)}))
-        panel.on(th1, lambda v: panel.send(
-            {"op": "set", "mode": "custom", "angles": (float(v), float(th2.value))}
-        ))  # fmt: skip
-        panel.on(th2, lambda v: panel.send(
-            {"op": "set", "mode": "custom", "angles": (float(th1.value), float(v))}
-        ))  # fmt: skip
         panel.param_inputs({
             "hoop_mass": "Hoop mass M [kg]", "bead_mass": "Bead mass m [kg]",
             "radius": "Radius a [m]", "gravity": "Gravity g [m/s²]",
@@ -313,5 +312,5 @@ class HoopExhibit(Exhibit):
 
     def sync_panel(self, panel) -> None:
         w = panel.w
-        w["hoop.th1"].value, w["hoop.th2"].value = (float(x) for x in self.config.angles)
+        w["hoop.th1"].value, w["hoop.th2"].value = (number_text(x) for x in self.config.angles)
 

@@ -5,10 +5,19 @@ widget table and a ``send`` that queues a command for the exhibit. Callbacks run
 threads and only queue commands; the app applies them between frames and then calls
 :meth:`Panel.sync` so every widget shows the setting actually in force (a refused value
 springs back).
+
+One rule for every number a person types (:func:`parse_number`): what a person writes is read
+as Python reads a float (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus);
+anything else, a non-finite value or one outside the control's range is refused with a
+notification that names the field as the panel labels it, and the box goes back to the value in
+force. Number fields are text boxes for that reason: the browser's own number input rewrites
+scientific notation as it is typed.
 """
 
 from __future__ import annotations
 
+import math
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -26,15 +35,38 @@ def rtol_label(rtol: float) -> str:
 
 
 def rtol_options(current: float) -> tuple[str, ...]:
-    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-13, and the current value
-    if it is not one of them (set by a demo or the command line)."""
-    decades = tuple(f"1e-{k}" for k in range(3, 14))
+    """The tolerance dropdown's choices: every decade from 1e-3 to 1e-12 (the tightest a run is
+    still compared with the reference at), and the current value if it is not one of them (set
+    by a demo or the command line)."""
+    decades = tuple(f"1e-{k}" for k in range(3, 13))
     label = rtol_label(current)
     return decades if label in decades else (*decades, label)
 
 
+def parse_number(label: str, text, lo: float | None = None, hi: float | None = None) -> float:
+    """The number typed into the field ``label`` (see the module docstring), or ``ValueError``
+    with one line naming the field."""
+    raw = str(text).strip().replace("\u2212", "-")
+    try:
+        x = float(raw)
+    except ValueError:
+        raise ValueError(f"{label}: {str(text)!r} is not a number (write e.g. 0.025 or 2.5e-2)") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{label} must be a finite number, got {str(text)!r}")
+    if (lo is not None and x < lo) or (hi is not None and x > hi):
+        raise ValueError(f"{label} must lie between {lo:g} and {hi:g}, got {x:g}")
+    return x
+
+
+def number_text(x: float) -> str:
+    """How a number field shows a value: six significant digits, no trailing zeros."""
+    return f"{float(x):.6g}"
+
+
 def method_text(name: str) -> str:
     m = dynamics.get_method(name)
+    if m.backend == "exact":
+        return f"<small>{m.title}: the closed-form solution, exact at any time; no step</small>"
     text = m.describe()
     if m.stability:
         text += f". Stability: {m.stability}"
@@ -44,7 +76,8 @@ def method_text(name: str) -> str:
 class Panel:
     """One exhibit's controls. ``w`` is the app's widget table, keyed ``"<exhibit>.<name>"``."""
 
-    SYNCED = ("method", "dt", "beam", "beam_size", "mode", "follow_cm", "amplitude")
+    SYNCED = ("method", "dt", "beam", "beam_size", "kick", "mode", "follow_cm", "amplitude")
+    TYPING_PAUSE = 0.6  # s without a keystroke before a number field is read
 
     def __init__(self, app, exhibit) -> None:
         self.app = app
@@ -53,6 +86,7 @@ class Panel:
         self.exhibit = exhibit
         self.key = exhibit.key
         self.w: dict[str, Any] = app.w
+        self.labels: dict[str, str] = {}  # setting name (as in messages) -> the field's label
 
     def send(self, command) -> None:
         self.app.enqueue(self.key, command)
@@ -65,19 +99,78 @@ class Panel:
         self.w[f"{self.key}.{name}"] = widget
         return widget
 
+    def refuse(self, message: str) -> None:
+        """Tell the user why a value was not taken, and put the widgets back to what is in force."""
+        self.app.notify(f"Invalid value ({self.exhibit.title})", message)
+        self.app.enqueue("call", lambda app: app._sync_widgets(self.key))
+
+    def number(self, name: str, label: str, value: float, apply, *, lo=None, hi=None, hint=None):
+        """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value.
+
+        The browser sends the box's text on every keystroke, and ``2.5e`` is on the way to
+        ``2.5e-2``: the text is read once typing has paused for ``TYPING_PAUSE`` seconds."""
+        h = self.put(name, self.gui.add_text(label, initial_value=number_text(value), hint=hint))
+        self.labels[name.split(".")[-1]] = label
+        pending: list[threading.Timer] = []
+
+        def read(v):
+            try:
+                x = parse_number(label, v, lo, hi)
+            except ValueError as exc:
+                self.refuse(str(exc))
+                return
+            apply(x)
+
+        def on(v):
+            for timer in pending:
+                timer.cancel()
+            pending.clear()
+            if self.TYPING_PAUSE <= 0:
+                read(v)
+                return
+            timer = threading.Timer(self.TYPING_PAUSE, read, args=(v,))
+            timer.daemon = True
+            pending.append(timer)
+            timer.start()
+
+        self.on(h, on)
+        return h
+
+    def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
+        """A slider whose typed-in values obey the same range as its track."""
+        h = self.put(name, self.gui.add_slider(label, min=lo, max=hi, step=step, initial_value=value, **kw))
+        self.labels[name] = label
+
+        def on(v):
+            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+                self.refuse(f"{label} must lie between {lo:g} and {hi:g}, got {v!r}")
+                return
+            apply(v)
+
+        self.on(h, on)
+        return h
+
+    def explain(self, message: str) -> str:
+        """A settings error as the panel names things: ``mass must be ...`` -> ``Mass m [kg] must
+        be ...``."""
+        for name, label in sorted(self.labels.items(), key=lambda kv: -len(kv[0])):
+            if message.startswith(name + " ") or message.startswith(name + ":"):
+                return label + message[len(name) :]
+        return message
+
     # ------------------------------------------------------------------ building blocks
     def readout_and_chart(self, compare: bool) -> None:
         viser = self.viser
         self.put("readout", self.gui.add_markdown(""))
         series = [
             viser.uplot.Series(label="t [s]"),
-            viser.uplot.Series(label="log10 |ΔE/E₀|", stroke="#d03030", width=1.5),
+            viser.uplot.Series(label="log10 |energy error|", stroke="#d03030", width=1.5),
             viser.uplot.Series(label="log10 error", stroke="#3060d0", width=1.5),
         ]
         if compare:
             series += [
                 viser.uplot.Series(
-                    label="compare log10 |ΔE/E₀|", stroke="#e08080", width=1.0, dash=[4, 3]
+                    label="compare log10 |energy error|", stroke="#e08080", width=1.0, dash=[4, 3]
                 ),
                 viser.uplot.Series(
                     label="compare log10 error", stroke="#80a0e0", width=1.0, dash=[4, 3]
@@ -100,11 +193,10 @@ class Panel:
         with self.gui.add_folder("Physical parameters"):
             for name, label in labels.items():
                 value = self.exhibit.config.params[name]
-                h = self.put(
-                    f"params.{name}",
-                    self.gui.add_number(label, initial_value=float(value), step=step),
-                )
-                self.on(h, lambda v, n=name: self.send({"op": "set", "params": {n: v}}))
+                self.number(
+                    f"params.{name}", label, value,
+                    lambda x, n=name: self.send({"op": "set", "params": {n: x}}),
+                )  # fmt: skip
 
     def integrator_inputs(self, *, compare: bool) -> None:
         gui, ex = self.gui, self.exhibit
@@ -115,9 +207,7 @@ class Panel:
                 "method", gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
             )
             self.put("about", gui.add_markdown(method_text(ex.config.method)))
-            dt = self.put(
-                "dt", gui.add_number("Step dt [s]", initial_value=float(ex.config.dt), step=0.0001)
-            )
+            self.number("dt", "Step dt [s]", ex.config.dt, lambda x: self.send({"op": "set", "dt": x}))
             self.put("limit", gui.add_markdown(ex.stability_text()))
             # a dropdown of decades: a number input shows 1e-9 as 0.0000000
             rtol = self.put(
@@ -137,7 +227,6 @@ class Panel:
                 self.send({"op": "set", field: v})
 
             self.on(method, choose)
-            self.on(dt, lambda v: self.send({"op": "set", "dt": v}))
             self.on(rtol, lambda v: self.send({"op": "set", "rtol": float(v)}))
             if compare:
                 cmp_ = self.put(
@@ -157,6 +246,7 @@ class Panel:
                 self.on(cmp_, choose_cmp)
             reset = gui.add_button(f"Reset {ex.title.lower()}", icon=self.viser.Icon.REFRESH)
             reset.on_click(lambda _: self.send("reset"))
+        self.show_step_controls()
 
     # ------------------------------------------------------------------ keeping widgets true
     def sync(self) -> None:
@@ -166,7 +256,7 @@ class Panel:
         for name, value in c.params.items():
             h = w.get(f"{key}.params.{name}")
             if h is not None and value is not None:
-                h.value = float(value)
+                h.value = number_text(value)
         h = w.get(f"{key}.rtol")
         if h is not None:
             h.options = rtol_options(c.rtol)
@@ -174,10 +264,21 @@ class Panel:
         for name in self.SYNCED:
             h = w.get(f"{key}.{name}")
             if h is not None and hasattr(c, name):
-                h.value = getattr(c, name)
+                value = getattr(c, name)
+                h.value = number_text(value) if isinstance(h.value, str) and name == "dt" else value
+        self.show_step_controls()
         h = w.get(f"{key}.compare_method")
         if h is not None:
             h.value = c.compare_method or "none"
         w[f"{key}.about"].content = method_text(c.method)
         w[f"{key}.limit"].content = self.exhibit.stability_text()
         self.exhibit.sync_panel(self)
+
+    def show_step_controls(self) -> None:
+        """Show the step box for fixed-step methods and the tolerance for adaptive ones only."""
+        m = self.exhibit.sim.method
+        dt, rtol = self.w.get(f"{self.key}.dt"), self.w.get(f"{self.key}.rtol")
+        if dt is not None:
+            dt.visible = not m.adaptive and m.backend != "exact"
+        if rtol is not None:
+            rtol.visible = m.adaptive

@@ -1,0 +1,244 @@
+"""The integrators a numerical-methods user would pick for speed, on our benchmark problems.
+
+- **CyRK** (``pip install CyRK``): compiled Runge-Kutta in C++. ``nbsolve2_ivp`` with a numba
+  ``cfunc`` right-hand side (the C callback CyRK calls without Python in the loop), methods DOP853,
+  Vern8 and Vern7; and ``pysolve_ivp`` (DOP853) with the same right-hand side as a jitted Python
+  callable.
+- **heyoka.py** (``pip install heyoka``): Taylor's method compiled with LLVM. ``taylor_adaptive``
+  with the equations written in its expression system and the tolerance swept; the integrator is
+  built (compiled) once per tolerance, untimed, and each timed run resets time and state and
+  calls ``propagate_until(T)``.
+
+Each peer integrates the same equations with the same parameters (the right-hand sides call our
+compiled ``acceleration`` functions, or restate them in heyoka's expressions), from the same
+initial state over the same span; errors are measured against the same references. A peer that
+is not installed is reported with the reason instead of run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .problems import Problem
+
+PEERS = ("heyoka", "cyrk-dop853", "cyrk-vern8", "cyrk-vern7", "cyrk-py-dop853")
+
+
+@dataclass
+class PeerRun:
+    """A prepared peer: ``run()`` integrates the problem once and returns the final state."""
+
+    run: Callable[[], np.ndarray]
+    nfev: Callable[[], int]
+
+
+def available() -> dict[str, str | None]:
+    """Per peer package: ``None`` if it imports, else why not."""
+    out: dict[str, str | None] = {}
+    for name, module in (("heyoka", "heyoka"), ("cyrk", "CyRK")):
+        try:
+            __import__(module)
+            out[name] = None
+        except Exception as exc:  # not installed, or installed but broken
+            out[name] = f"{module} not importable ({exc.__class__.__name__}: {exc})"
+    return out
+
+
+def package_of(peer: str) -> str:
+    return "heyoka" if peer.startswith("heyoka") else "cyrk"
+
+
+def versions() -> dict[str, str]:
+    out = {}
+    for name, module in (("heyoka", "heyoka"), ("CyRK", "CyRK")):
+        try:
+            out[name] = __import__(module).__version__
+        except Exception:
+            pass
+    return out
+
+
+# --------------------------------------------------------------------------- heyoka
+def _heyoka_system(problem: Problem):
+    import heyoka as hy
+
+    from ..integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+
+    p = problem.system.kernel_params()
+    kind = problem.system.sys_id
+    if kind == CYCLOTRON:
+        x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
+        w = float(p[0])
+        return [(x, vx), (y, vy), (z, vz), (vx, w * vy), (vy, -w * vx), (vz, 0.0 * vz)]
+    if kind == HOOP:
+        th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
+        M, m, ga = float(p[0]), float(p[1]), float(p[3] / p[2])
+        s, c = hy.sin(th1 - th2), hy.cos(th1 - th2)
+        r1 = -m * s * w2 * w2 - (M + m) * ga * hy.sin(th1)
+        r2 = s * w1 * w1 - ga * hy.sin(th2)
+        m11 = 2.0 * M + m
+        det = m11 - m * c * c
+        return [(th1, w1), (th2, w2), (w1, (r1 - m * c * r2) / det), (w2, (m11 * r2 - c * r1) / det)]
+    if kind == FREE_BODY:
+        w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
+        i1, i2, i3 = (float(v) for v in p)
+        return [
+            (w1, (i2 - i3) * w2 * w3 / i1),
+            (w2, (i3 - i1) * w3 * w1 / i2),
+            (w3, (i1 - i2) * w1 * w2 / i3),
+            (q0, 0.5 * (-q1 * w1 - q2 * w2 - q3 * w3)),
+            (q1, 0.5 * (q0 * w1 + q2 * w3 - q3 * w2)),
+            (q2, 0.5 * (q0 * w2 + q3 * w1 - q1 * w3)),
+            (q3, 0.5 * (q0 * w3 + q1 * w2 - q2 * w1)),
+        ]
+    raise KeyError(problem.key)
+
+
+def heyoka_run(problem: Problem, tol: float, *, fp_type=None) -> PeerRun:
+    """heyoka's ``taylor_adaptive`` at ``tol`` (built now; each ``run()`` restarts at t = 0)."""
+    import heyoka as hy
+
+    sys = _heyoka_system(problem)
+    y0 = problem.y0
+    kw = {}
+    if fp_type is not None:
+        kw["fp_type"] = fp_type
+        y0 = np.array(problem.state0, dtype=fp_type)
+        tol = fp_type(tol)
+    ta = hy.taylor_adaptive(sys, y0, tol=tol, **kw)
+    t_end = problem.t_end if fp_type is None else fp_type(problem.t_end)
+    steps = [0]
+
+    def run() -> np.ndarray:
+        ta.time = 0.0 if fp_type is None else fp_type(0)
+        ta.state[:] = y0
+        out = ta.propagate_until(t_end)
+        steps[0] = int(out[3])
+        return ta.state.copy()
+
+    return PeerRun(run, lambda: steps[0])
+
+
+# --------------------------------------------------------------------------- CyRK
+_CFUNCS: dict[int, object] = {}
+
+
+def _cyrk_rhs(kind: int):
+    """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
+    import numba as nb
+
+    from .. import cyclotron, disk, hoop
+    from ..integrators.kernels import CYCLOTRON, HOOP
+
+    if kind in _CFUNCS:
+        return _CFUNCS[kind]
+    if kind == CYCLOTRON:
+        acc = cyclotron.acceleration
+
+        def f(dy, t, y, args):
+            dy[0] = y[3]
+            dy[1] = y[4]
+            dy[2] = y[5]
+            a, b = acc(y[3], y[4], args[0])
+            dy[3] = a
+            dy[4] = b
+            dy[5] = 0.0
+
+    elif kind == HOOP:
+        acc = hoop.acceleration
+
+        def f(dy, t, y, args):
+            dy[0] = y[2]
+            dy[1] = y[3]
+            a, b = acc(y[0], y[1], y[2], y[3], args[0], args[1], args[3] / args[2])
+            dy[2] = a
+            dy[3] = b
+
+    else:
+        der = disk.free_derivatives
+
+        def f(dy, t, y, args):
+            r = der(y[0], y[1], y[2], y[3], y[4], y[5], y[6], args[0], args[1], args[2])
+            for j in range(7):
+                dy[j] = r[j]
+
+    sig = nb.types.void(
+        nb.types.CPointer(nb.types.float64),
+        nb.types.float64,
+        nb.types.CPointer(nb.types.float64),
+        nb.types.CPointer(nb.types.float64),
+    )
+    cf = nb.cfunc(sig)(f)
+    _CFUNCS[kind] = cf
+    return cf
+
+
+def cyrk_run(problem: Problem, tol: float, method: str = "DOP853") -> PeerRun:
+    """CyRK's ``nbsolve2_ivp`` with a compiled C callback."""
+    from CyRK import nbsolve2_ivp
+
+    addr = _cyrk_rhs(problem.system.sys_id).address
+    p = np.ascontiguousarray(problem.system.kernel_params(), dtype=np.float64)
+    y0 = problem.y0
+    span = (0.0, float(problem.t_end))
+    steps = [0]
+
+    def run() -> np.ndarray:
+        r = nbsolve2_ivp(addr, span, y0, method=method, rtol=tol, atol=tol, args=p)
+        try:
+            if not r.success:
+                raise RuntimeError(f"CyRK {method}: {r.message}")
+            steps[0] = int(r.steps_taken)
+            return np.array(r.y[:, -1])
+        finally:
+            r.free()
+
+    return PeerRun(run, lambda: steps[0])
+
+
+def cyrk_py_run(problem: Problem, tol: float) -> PeerRun:
+    """CyRK's ``pysolve_ivp`` (DOP853) with a jitted right-hand side called from C++ via Python."""
+    from CyRK import pysolve_ivp
+
+    from ..integrators.kernels import RHS
+
+    rhs = RHS[problem.system.sys_id]
+    p = np.ascontiguousarray(problem.system.kernel_params(), dtype=np.float64)
+
+    def f(dy, t, y):
+        rhs(y, p, dy)
+
+    y0 = problem.y0
+    span = (0.0, float(problem.t_end))
+    steps = [0]
+
+    def run() -> np.ndarray:
+        r = pysolve_ivp(f, span, y0, method="DOP853", rtol=tol, atol=tol, pass_dy_as_arg=True)
+        if not r.success:
+            raise RuntimeError(f"CyRK pysolve_ivp: {r.message}")
+        steps[0] = int(r.steps_taken)
+        return np.array(r.y[:, -1])
+
+    return PeerRun(run, lambda: steps[0])
+
+
+def prepare(peer: str, problem: Problem, tol: float) -> PeerRun:
+    if peer == "heyoka":
+        return heyoka_run(problem, tol)
+    if peer == "cyrk-py-dop853":
+        return cyrk_py_run(problem, tol)
+    method = {"cyrk-dop853": "DOP853", "cyrk-vern8": "Vern8", "cyrk-vern7": "Vern7"}[peer]
+    return cyrk_run(problem, tol, method)
+
+
+def tolerances(peer: str, settings_tolerances: tuple[float, ...]) -> tuple[float, ...]:
+    """The tolerance sweep (the same grid as ours; heyoka's error stays near its tolerance, so
+    its sweep stops one decade past the tightest target)."""
+    return tuple(t for t in settings_tolerances if t >= 1e-16 and math.isfinite(t))
+
+# Left out of ``--quick`` runs: in full runs neither was the fastest peer at any target.
+QUICK_SKIP = ("cyrk-vern7", "cyrk-py-dop853")

@@ -1,0 +1,143 @@
+"""Taylor's method: its series agree with the equations, converge at their order, and a sampled
+run takes the same steps as an unsampled one."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
+from dynamics.disk import DiskParams
+from dynamics.integrators import taylor
+from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+
+SYSTEMS = {
+    CYCLOTRON: Cyclotron(),
+    HOOP: Hoop(),
+    FREE_BODY: ReleasedDisk(DiskParams(), (0.3, 0.0, 0.2)),
+}
+STATES = {
+    CYCLOTRON: np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1]),
+    HOOP: np.array([0.9, -1.2, 0.7, -0.4]),
+    FREE_BODY: None,
+}
+
+
+def _series(sys_id, y, order):
+    system = SYSTEMS[sys_id]
+    A = np.zeros((taylor.N_ROWS, taylor.MAX_ORDER + 1))
+    A[: y.size, 0] = y
+    taylor._expand(sys_id, A, system.kernel_params(), order)
+    return A
+
+
+def _state(sys_id):
+    s = STATES[sys_id]
+    return SYSTEMS[sys_id].default_state() if s is None else s
+
+
+def _advance(sys_id, y, order, h):
+    A = _series(sys_id, y, order)
+    out = np.empty(y.size)
+    taylor._horner(A, y.size, order, h, out)
+    return out
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_first_coefficient_is_the_right_hand_side(sys_id):
+    """y^[1] = f(y): the expansion is written for the same equations as the compiled RHS."""
+    _, rhs = taylor.EXPANDS[sys_id]
+    y = _state(sys_id)
+    f = np.empty(y.size)
+    rhs(y, SYSTEMS[sys_id].kernel_params(), f)
+    A = _series(sys_id, y, 6)
+    np.testing.assert_allclose(A[: y.size, 1], f, rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+@pytest.mark.parametrize("order", [3, 5])
+def test_one_step_error_falls_as_h_to_the_order_plus_one(sys_id, order):
+    """The series truncated at order p differs from the converged series by O(h^(p+1)): fit the
+    slope of log(error) against log(h) (the order test, per step)."""
+    y = _state(sys_id)
+    hs = [0.2 / 2**k for k in range(5)]
+    errs = []
+    for h in hs:
+        exact = _advance(sys_id, y, 28, h)
+        errs.append(np.linalg.norm(_advance(sys_id, y, order, h) - exact) / np.linalg.norm(exact))
+    slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
+    assert abs(slope - (order + 1)) < 0.3, (slope, errs)
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_tight_tolerance_lands_on_the_dop853_reference(sys_id):
+    system = SYSTEMS[sys_id]
+    y0 = _state(sys_id)
+    T = 5.0
+    ref = Simulation(system, "dop853", rtol=1e-13, atol=1e-13, state=y0, reference=None)
+    ref.advance_to(T)
+    sim = Simulation(system, "taylor", rtol=1e-13, atol=1e-13, state=y0, reference=None)
+    sim.advance_to(T)
+    assert float(system.error(sim.state, ref.state)[0]) < 1e-11
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_sampling_does_not_add_steps(sys_id):
+    """The last step is carried to the next call: 200 samples take the steps of one run, and the
+    final state differs only by where the last step's polynomial is evaluated (round-off)."""
+    system = SYSTEMS[sys_id]
+    y0 = _state(sys_id)
+    one = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
+    one.advance_to(10.0)
+    many = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
+    many.run(10.0, n_samples=200)
+    assert many.steps == one.steps
+    np.testing.assert_allclose(many.state, one.state, rtol=1e-13, atol=1e-13)
+
+
+def test_a_state_changed_between_calls_starts_a_fresh_step():
+    system = SYSTEMS[HOOP]
+    sim = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=_state(HOOP), reference=None)
+    sim.advance_to(0.01)  # inside the first step
+    sim.state[0] = [0.1, 0.2, 0.0, 0.0]
+    sim.advance_to(1.0)
+    fresh = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=[0.1, 0.2, 0.0, 0.0],
+                       reference=None)  # fmt: skip
+    fresh.advance_to(0.99)
+    np.testing.assert_allclose(sim.state, fresh.state, rtol=1e-9, atol=1e-9)
+
+
+def test_order_and_step_minimise_the_modelled_work():
+    """With a step cost of p^2 alone the choice is Jorba and Zou's (a = 2, p = ln(1/tol)/2 + 1);
+    a cost with constant and linear parts takes higher orders and longer steps, never beyond
+    rho / e."""
+    saved = taylor.STEP_COST[HOOP]
+    try:
+        taylor.STEP_COST[HOOP] = (0.0, 0.0, 1.0)
+        taylor.order_for.cache_clear()
+        p, a = taylor.order_for(1e-12, 1e-12, HOOP)
+        assert abs(p - (math.log(1e12) / 2 + 1)) <= 1.5 and abs(a - 2.0) < 0.25
+    finally:
+        taylor.STEP_COST[HOOP] = saved
+        taylor.order_for.cache_clear()
+    for sys_id in SYSTEMS:
+        for tol in (1e-3, 1e-9, 1e-14):
+            p, a = taylor.order_for(tol, tol, sys_id)
+            assert 3 <= p <= taylor.MAX_ORDER and 1.0 <= a <= 2.0
+            assert (p - 1) * a >= -math.log(tol) - 1e-9  # (h/rho)^(p-1) within tol
+    assert taylor.order_for(1e-12, 1e-12, CYCLOTRON)[0] > taylor.order_for(1e-12, 1e-12, HOOP)[0]
+
+
+@pytest.mark.parametrize("method", ["taylor", "dop853", "rk4"])
+def test_restart_repeats_the_run_of_a_fresh_simulation(method):
+    system = SYSTEMS[HOOP]
+    kw = {"dt": 0.01} if method == "rk4" else {"rtol": 1e-9, "atol": 1e-9}
+    sim = Simulation(system, method, state=_state(HOOP), **kw)
+    sim.advance_to(3.0)
+    first = sim.state.copy(), sim.steps, sim.nfev
+    sim.restart()
+    assert sim.t == 0.0 and sim.steps == 0
+    sim.advance_to(3.0)
+    np.testing.assert_array_equal(sim.state, first[0])
+    assert (sim.steps, sim.nfev) == first[1:]
+    assert sim.sample().error[0] < 1e-6
