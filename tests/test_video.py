@@ -193,3 +193,24 @@ def test_an_interrupted_video_leaves_nothing_behind(recording, tmp_path):
         video.write_video(clip, target, size=SIZE, progress=interrupt)
     assert target.read_bytes() == b"previous video"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.mp4"]
+
+
+@pytest.mark.browser
+def test_frames_are_the_recording_itself_not_a_moment_between_two_of_its_frames(
+    recording, monkeypatch
+):
+    """Capturing 12 ms of the page's clock earlier or later gives the same frames: each is
+    taken while one recorded frame is complete on the canvas."""
+    clip = video.clip_from_file(recording / "helix.viser")
+    orig = video.frame_clock_ms
+
+    def film(shift_ms: float) -> list[np.ndarray]:
+        monkeypatch.setattr(
+            video, "frame_clock_ms", lambda k, fps: (orig(k, fps)[0], orig(k, fps)[1] + shift_ms)
+        )
+        return list(video.render_frames(clip.page, fps=clip.fps, frames=6, size=SIZE))
+
+    base, early, late = film(0.0), film(-12.0), film(12.0)
+    for other in (early, late):
+        assert all(np.array_equal(a, b) for a, b in zip(base, other, strict=True))
+    assert _moves(base) == 1.0

@@ -2,16 +2,17 @@
 
 A recording's self-contained page (``DEMO.html``, a live session's download, or a page built
 around a ``DEMO.viser``) is opened in headless Chromium with the page's clock faked: the player
-advances its playback with ``Date.now()``, so advancing the fake clock by exactly one frame
-period before each screenshot gives the frame at ``t = k / fps`` of playback, deterministically
-and without waiting for real time. Each frame gets the title, the caption and the key readouts
-(measured against predicted, from the recording's manifest) drawn in with Pillow, and goes to
-the encoder:
+advances its playback with ``Date.now()``, so advancing the fake clock to each frame's capture
+time before its screenshot gives the recording as it stands at ``t = k / fps`` of playback,
+deterministically and without waiting for real time (at most 30 fps; :func:`frame_clock_ms`).
+Each frame gets the title, the caption and the key readouts (measured against predicted, from
+the recording's manifest) drawn in with Pillow, and goes to the encoder:
 
 - ``mp4``: H.264, yuv420p, ``+faststart`` (plays in browsers, PowerPoint and Keynote), encoded by
   the ffmpeg that ships in ``imageio-ffmpeg``, streamed frame by frame;
-- ``gif``: Pillow, one adaptive 256-colour palette per frame, looping; GIF delays are whole
-  centiseconds, so they alternate (30 fps: 30, 40, 30 ms, ...) to keep the exact duration.
+- ``gif``: Pillow, one 256-colour palette for all frames (half from the first frame, half a
+  colour cube), looping; GIF delays are whole centiseconds, so they alternate (30 fps: 30, 40,
+  30 ms, ...) to keep the exact duration.
 
 A video of ``duration`` seconds at ``fps`` has ``round(duration * fps)`` frames, the first at
 ``t = 0``. The file is written to a temporary name beside the target and renamed into place, so
@@ -44,7 +45,7 @@ from .chromium import CHROMIUM_ARGS, find_chromium
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
 MAX_SIDE = 3840
-GIF_MAX_FPS = 50  # browsers play GIF delays below 20 ms as 100 ms
+MAX_FPS = 30  # see render_frames: the player needs about 40 ms of clock per frame
 LOAD_TIMEOUT_S = 180.0  # first frame of a lit scene in software WebGL, on a loaded machine
 
 ProgressFn = Callable[[int, int], None]
@@ -208,14 +209,28 @@ def _drawn(img: np.ndarray) -> bool:
     return len(np.unique(img[::4, ::4].reshape(-1, 3), axis=0)) > 40
 
 
+def frame_clock_ms(k: int, fps: int) -> tuple[float, float]:
+    """``(playback speed, clock time [ms] after play)`` at which frame ``k`` is captured.
+
+    Measured in the player: a recorded frame reaches the canvas within two animation frames
+    (the fake clock runs them every 16 ms) of about 20 ms after its time, so it is on screen,
+    complete, from about 38 ms after its time until the next one arrives. Frames are captured
+    in the middle of that window; above 15 fps the player runs at 0.5x so the window stays
+    over 30 ms wide (which caps videos at 30 fps)."""
+    speed = 1.0 if fps <= 15 else 0.5
+    period = 1000.0 / (fps * speed)
+    return speed, k * period + 38.0 + (period - 30.0) / 2
+
+
 def render_frames(
     page_html: bytes, *, fps: int, frames: int, size: tuple[int, int] = DEFAULT_SIZE
 ) -> Iterator[np.ndarray]:
-    """Yield ``frames`` images ``(H, W, 3)`` uint8 of the player page, frame ``k`` at playback
-    time ``(k + 1/2) / fps`` (mid-frame, so a recorded frame is never missed by rounding).
+    """Yield ``frames`` images ``(H, W, 3)`` uint8 of the player page: frame ``k`` is the
+    recording as it stands at playback time ``k / fps``.
 
     One headless Chromium, the page's clock faked: load, wait for the first drawn frame, seek
-    to 0 and play, then advance the clock by one frame period before each screenshot."""
+    to 0 and play, then advance the clock to each frame's capture time
+    (:func:`frame_clock_ms`) before its screenshot."""
     from playwright.sync_api import Error as PlaywrightError
     from playwright.sync_api import sync_playwright
 
@@ -235,10 +250,11 @@ def render_frames(
             )
             try:
                 page = context.pages[0] if context.pages else context.new_page()
-                clip = _open_player(page, html_path, W, H)
+                speed = frame_clock_ms(0, fps)[0]
+                clip = _open_player(page, html_path, W, H, speed)
                 cdp = context.new_cdp_session(page)
                 clip["scale"] = 1
-                ms = [round((k + 0.5) * 1000 / fps) for k in range(frames)]
+                ms = [round(frame_clock_ms(k, fps)[1]) for k in range(frames)]
                 prev = 0
                 for k in range(frames):
                     page.clock.run_for(ms[k] - prev)
@@ -256,9 +272,10 @@ def render_frames(
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _open_player(page, html_path: Path, W: int, H: int) -> dict[str, float]:
+def _open_player(page, html_path: Path, W: int, H: int, speed: float) -> dict[str, float]:
     """Load the player with a fake clock, size its canvas to W x H, wait until the scene is
-    drawn, seek to 0 and play with the clock paused. Returns the canvas's clip rectangle."""
+    drawn, set the playback ``speed``, seek to 0 and play with the clock paused. Returns the
+    canvas's clip rectangle."""
     page.clock.install(time=0)
     # fixedDpr: the client would otherwise lower its resolution when frames are slow.
     page.goto(html_path.as_uri() + "?fixedDpr=1")
@@ -288,6 +305,11 @@ def _open_player(page, html_path: Path, W: int, H: int) -> dict[str, float]:
         if time.monotonic() > deadline:
             raise VideoError("the recording's scene was never drawn in Chromium")
         page.clock.run_for(100)
+    if speed != 1.0:
+        page.get_by_role("combobox").first.click()
+        page.clock.run_for(300)  # the menu opens on timers of the faked clock
+        page.get_by_role("option", name=f"{speed:g}x").click()
+        page.clock.run_for(300)
     # Seeking through the time box pauses playback at t = 0; the play button resumes it.
     time_box.first.fill("0")
     time_box.first.press("Enter")
@@ -500,8 +522,8 @@ def check_request(fmt: str, size: tuple[int, int], fps: int) -> None:
         raise ValueError(
             f"size: width and height must be even numbers from 16 to {MAX_SIDE}, got {W}x{H}"
         )
-    if fmt == "gif" and fps > GIF_MAX_FPS:
-        raise ValueError(f"fps: a GIF plays at most {GIF_MAX_FPS} frames per second, got {fps}")
+    if fps > MAX_FPS:
+        raise ValueError(f"fps: videos are made at up to {MAX_FPS} frames per second, got {fps}")
 
 
 def write_video(
