@@ -50,7 +50,10 @@ def add_commands(sub) -> None:
         "--size", type=size_type, metavar="WxH",
         help=f"frame size in pixels, even numbers (default {video.DEFAULT_SIZE[0]}x{video.DEFAULT_SIZE[1]})",
     )  # fmt: skip
-    p.add_argument("--fps", type=int, metavar="N", help="frames per second (default: the demo's, else 30)")
+    p.add_argument(
+        "--fps", type=int, metavar="N",
+        help=f"frames per second, up to {video.MAX_FPS} (default: the demo's, else 30)",
+    )  # fmt: skip
     p.set_defaults(func=run_video)
 
 
