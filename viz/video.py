@@ -455,7 +455,8 @@ class _Mp4Writer:
 class _GifWriter:
     """Frames share one palette (half from the first frame, half a uniform colour cube), so
     Pillow stores only the part of each frame that changed. Until the file is written, frames
-    are kept as compressed palette indices (a 960x540 frame of a mostly blank scene: ~10 kB)."""
+    are kept as compressed palette indices (a 960x540 frame of a mostly blank scene: ~10 kB);
+    Pillow's writer then holds every frame uncompressed (W x H bytes each) until it is done."""
 
     def __init__(self, path: Path, size: tuple[int, int], fps: int):
         self.path, self.size, self.fps = path, size, fps
