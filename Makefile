@@ -1,12 +1,12 @@
 # mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
-# against accuracy (into a temporary folder). `make screenshots` and `make bench-docs` refresh the
-# pictures and tables committed under docs/; nothing else writes there. Each target creates .venv
-# and installs the project (editable) on first use.
+# against accuracy (into a temporary folder). `make screenshots`, `make bench-docs` and
+# `make readme-gif` refresh the pictures and tables committed under docs/; nothing else writes
+# there. Each target creates .venv and installs the project (editable) on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench bench-docs screenshots lint clean
+.PHONY: run test bench bench-docs screenshots readme-gif lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -36,6 +36,13 @@ bench-docs: $(VENV)/.installed-test
 screenshots: $(VENV)/.installed-test
 	MECHVIZ_WRITE_DOCS=1 MECHVIZ_ALL_DEMOS=1 $(BIN)/python -m pytest -q \
 		tests/test_viewer_browser.py tests/test_recording_browser.py
+
+# The GIF in the README's "Use it in class": the radial-kick demo filmed in headless Chromium.
+README_GIF := docs/img/radial-kick.gif
+readme-gif: $(VENV)/.installed-test
+	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(BIN)/mechviz record radial-kick --out "$$tmp" --duration 8 --fps 10 --video gif --size 640x360 && \
+	cp "$$tmp/radial-kick.gif" $(README_GIF).partial && mv $(README_GIF).partial $(README_GIF)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

@@ -38,6 +38,9 @@ def add_commands(sub) -> None:
         "--theme", choices=("light", "dark"), default="light",
         help="page of the .html (default light); the scene's colours read on both",
     )  # fmt: skip
+    from .video_cli import add_record_options
+
+    add_record_options(p)  # --video, --size
     p.set_defaults(func=run_record)
 
     _add_play(sub)
@@ -109,6 +112,10 @@ def run_record(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out: {out} exists and is not a folder")
+    if args.video or args.size:
+        from .video_cli import check_record_options, film_record
+
+        check_record_options(args, demos)
     for demo in demos:
         try:
             res = rec.record(demo, out, progress=ProgressBar(demo.name), theme=args.theme)
@@ -120,6 +127,8 @@ def run_record(args: argparse.Namespace) -> int:
                 return 130
             return 2 if exc.bad_input else 1
         _report(res)
+        if args.video and (status := film_record(res, args)):
+            return status
     return 0
 
 

@@ -1,0 +1,216 @@
+"""Videos of recordings: what a person gets from ``mechviz record --video`` and ``mechviz video``.
+
+The browser tests film short, small recordings (1-2 s at 10 fps, 320x180) so they stay cheap in
+software WebGL; they check the frame count, frame rate and duration the file declares, that
+the frames move, that the words are drawn in, and that nothing half-written is left behind.
+"""
+
+from __future__ import annotations
+
+import itertools
+import shutil
+
+import browser
+import numpy as np
+import pytest
+
+from viz import cli, video
+from viz import record as rec
+
+SIZE = (320, 180)
+
+
+def _mechviz(capsys, *argv: str) -> tuple[int, str, str]:
+    """Run ``mechviz ARGV``: exit status, stdout, stderr (usage errors exit through argparse)."""
+    try:
+        status = cli.main(list(argv))
+    except SystemExit as exc:
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+# --------------------------------------------------------------------------- no browser
+def test_gif_delays_add_up_to_the_exact_duration_at_any_frame_rate():
+    for fps in (10, 24, 25, 30, 50):
+        delays = video.gif_delays_ms(3 * fps, fps)
+        assert len(delays) == 3 * fps
+        assert sum(delays) == 3000
+        assert all(d % 10 == 0 and d >= 20 for d in delays)
+
+
+@pytest.mark.parametrize(
+    ("argv", "flag"),
+    [
+        (["record", "helix", "--out", "OUT", "--video", "mp4", "--size", "10x"], "--size"),
+        (["record", "helix", "--out", "OUT", "--video", "mp4", "--size", "641x360"], "--size"),
+        (["record", "helix", "--out", "OUT", "--video", "avi"], "--video"),
+        (["record", "helix", "--out", "OUT", "--size", "640x360"], "--size"),
+        (["record", "helix", "--out", "OUT", "--video", "gif", "--fps", "60"], "--fps"),
+        (["video", "MISSING.viser"], "MISSING.viser"),
+        (["video", "MISSING.viser", "--size", "x"], "--size"),
+    ],
+)
+def test_bad_video_input_is_one_line_naming_the_flag_and_exit_status_2(
+    capsys, tmp_path, argv, flag
+):
+    argv = [a.replace("OUT", str(tmp_path / "out")) for a in argv]
+    argv = [a.replace("MISSING", str(tmp_path / "no")) for a in argv]
+    status, _, err = _mechviz(capsys, *argv)
+    assert status == 2
+    assert len(err.strip().splitlines()) == 1, err
+    assert flag.replace("MISSING", "no") in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_without_chromium_one_line_says_how_to_get_it_and_exit_status_is_2(
+    capsys, tmp_path, monkeypatch
+):
+    monkeypatch.setattr(video, "find_chromium", lambda: None)
+    out = tmp_path / "out"
+    status, _, err = _mechviz(capsys, "record", "helix", "--out", str(out), "--video", "mp4")
+    assert status == 2
+    assert len(err.strip().splitlines()) == 1
+    assert "chromium" in err.lower() and "install" in err
+    assert not out.exists(), "nothing is recorded when the video cannot be made"
+
+
+def test_a_file_that_is_not_a_recording_is_refused(capsys, tmp_path):
+    fake = tmp_path / "fake.viser"
+    fake.write_bytes(b"\x00" * 64)
+    status, _, err = _mechviz(capsys, "video", str(fake))
+    assert status == 2
+    assert "not a viser recording" in err
+    assert not (tmp_path / "fake.mp4").exists()
+
+
+# --------------------------------------------------------------------------- browser
+def _mp4_frames(path) -> tuple[dict, list[np.ndarray]]:
+    import imageio_ffmpeg
+
+    gen = imageio_ffmpeg.read_frames(str(path))
+    meta = next(gen)
+    W, H = meta["size"]
+    frames = [np.frombuffer(b, np.uint8).reshape(H, W, 3) for b in gen]
+    return meta, frames
+
+
+def _gif_frames(path) -> tuple[list[int], list[np.ndarray]]:
+    from PIL import Image
+
+    im = Image.open(path)
+    delays, frames = [], []
+    for k in range(im.n_frames):
+        im.seek(k)
+        delays.append(im.info["duration"])
+        frames.append(np.asarray(im.convert("RGB")))
+    return delays, frames
+
+
+def _moves(frames: list[np.ndarray]) -> float:
+    """Fraction of consecutive frame pairs that differ visibly."""
+    diffs = [np.abs(a.astype(int) - b).max() > 40 for a, b in itertools.pairwise(frames)]
+    return float(np.mean(diffs))
+
+
+def _has_words(frame: np.ndarray) -> bool:
+    """Dark ink in the band along the top (the title) and along the bottom (the readouts)."""
+    H = frame.shape[0]
+    top, bottom = frame[: H // 8], frame[-H // 8 :]
+    return all((band.mean(axis=-1) < 90).mean() > 0.005 for band in (top, bottom))
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("fmt", ["mp4", "gif"])
+def test_record_video_has_the_requested_frames_fps_and_duration_and_moves(capsys, tmp_path, fmt):
+    browser.require_browser()
+    status, out, err = _mechviz(
+        capsys, "record", "helix", "--out", str(tmp_path), "--duration", "2", "--fps", "10",
+        "--video", fmt, "--size", f"{SIZE[0]}x{SIZE[1]}",
+    )  # fmt: skip
+    assert status == 0, err
+    path = tmp_path / f"helix.{fmt}"
+    assert path.is_file() and str(path) in out
+    if fmt == "mp4":
+        meta, frames = _mp4_frames(path)
+        assert meta["codec"] == "h264" and meta["pix_fmt"].startswith("yuv420p")
+        assert meta["fps"] == 10
+        assert meta["duration"] == pytest.approx(2.0, abs=0.01)
+    else:
+        delays, frames = _gif_frames(path)
+        assert sum(delays) == 2000 and set(delays) == {100}
+    assert len(frames) == 20
+    assert frames[0].shape == (SIZE[1], SIZE[0], 3)
+    assert _moves(frames) > 0.8, "the charge moves from frame to frame"
+    assert _has_words(frames[0]) and _has_words(frames[-1])
+    assert not list(tmp_path.glob(".*partial")), "no temporary files left"
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    browser.require_browser()
+    out = tmp_path_factory.mktemp("rec")
+    rec.record(rec.load_demo("helix").with_overrides(duration=1.0, fps=10), out)
+    return out
+
+
+@pytest.mark.browser
+def test_video_converts_a_viser_file_and_a_bare_html_page(capsys, recording, tmp_path):
+    # Beside its manifest: the demo's duration and fps.
+    target = tmp_path / "clip.mp4"
+    status, _, err = _mechviz(
+        capsys, "video", str(recording / "helix.viser"), "--out", str(target),
+        "--size", f"{SIZE[0]}x{SIZE[1]}",
+    )  # fmt: skip
+    assert status == 0, err
+    meta, frames = _mp4_frames(target)
+    assert (len(frames), meta["fps"]) == (10, 10)
+    assert _moves(frames) > 0.5
+    # A page without a manifest (as the live viewer downloads a session): the whole recording.
+    page = tmp_path / "session.html"
+    shutil.copy(recording / "helix.html", page)
+    status, _, err = _mechviz(
+        capsys, "video", str(page), "--format", "gif", "--fps", "5", "--size", f"{SIZE[0]}x{SIZE[1]}"
+    )
+    assert status == 0, err
+    delays, frames = _gif_frames(tmp_path / "session.gif")
+    duration = video.recording_duration(video.recording_of_page(page.read_bytes()))
+    assert len(frames) == round(duration * 5)
+    assert sum(delays) == pytest.approx(1000 * len(frames) / 5, abs=10)
+
+
+@pytest.mark.browser
+def test_an_interrupted_video_leaves_nothing_behind(recording, tmp_path):
+    target = tmp_path / "old.mp4"
+    target.write_bytes(b"previous video")
+    clip = video.clip_from_file(recording / "helix.viser")
+
+    def interrupt(done, total):
+        if done == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        video.write_video(clip, target, size=SIZE, progress=interrupt)
+    assert target.read_bytes() == b"previous video"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.mp4"]
+
+
+@pytest.mark.browser
+def test_frames_are_the_recording_itself_not_a_moment_between_two_of_its_frames(
+    recording, monkeypatch
+):
+    """Capturing 12 ms of the page's clock earlier or later gives the same frames: each is
+    taken while one recorded frame is complete on the canvas."""
+    clip = video.clip_from_file(recording / "helix.viser")
+    orig = video.frame_clock_ms
+
+    def film(shift_ms: float) -> list[np.ndarray]:
+        monkeypatch.setattr(
+            video, "frame_clock_ms", lambda k, fps: (orig(k, fps)[0], orig(k, fps)[1] + shift_ms)
+        )
+        return list(video.render_frames(clip.page, fps=clip.fps, frames=6, size=SIZE))
+
+    base, early, late = film(0.0), film(-12.0), film(12.0)
+    for other in (early, late):
+        assert all(np.array_equal(a, b) for a, b in zip(base, other, strict=True))
+    assert _moves(base) == 1.0
