@@ -38,7 +38,10 @@ def recordings(tmp_path_factory):
     browser.require_browser()
     out = tmp_path_factory.mktemp("html")
     for name in DEMOS:
-        rec.record(rec.load_demo(name).with_overrides(duration=DURATION), out)
+        demo = rec.load_demo(name)
+        # long enough for the demo's scripted events (a kick at t = 5 s) to be in the recording
+        last = max((e.t / demo.speed for e in demo.events), default=0.0)
+        rec.record(demo.with_overrides(duration=max(DURATION, last + 1.0)), out)
     return out
 
 
