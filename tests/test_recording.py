@@ -313,6 +313,8 @@ BAD_ARGS = [
     (["record", "helix", "--out", "X", "--fps", "ten"], "invalid int value"),
     (["record", "helix", "--out", "X", "--duration", "nan"], "must be finite"),
     (["play", "/nonexistent/demo.viser"], "no such file or folder"),
+    (["record", "helix", "--out", "X", "--duration", "1e308"], "--duration: duration x fps gives"),
+    (["record", "helix", "--out", "/tmp/" + "a" * 300], "--out: File name too long"),
 ]
 
 

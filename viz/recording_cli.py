@@ -110,8 +110,11 @@ def run_record(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise _option_error(exc, args) from None
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CliError(f"--out: {out} exists and is not a folder")
+    try:
+        if out.exists() and not out.is_dir():
+            raise CliError(f"--out: {out} exists and is not a folder")
+    except OSError as exc:  # a name too long for the file system, a folder we may not read
+        raise CliError(f"--out: {exc.strerror or exc}") from None
     if args.video or args.size:
         from .video_cli import check_record_options, film_record
 

@@ -265,8 +265,10 @@ def check(d: Demo) -> None:
     _finite_positive("speed", d.speed)
     if not 1 <= d.fps <= 240:
         raise ValueError(f"fps must be a whole number from 1 to 240, got {d.fps!r}")
-    if d.frames > MAX_FRAMES:
-        raise ValueError(f"duration x fps gives {d.frames} frames; the limit is {MAX_FRAMES}")
+    if not d.duration * d.fps < MAX_FRAMES:  # before counting frames: 1e308 x 30 overflows
+        raise ValueError(
+            f"duration x fps gives {d.duration * d.fps:.3g} frames; the limit is {MAX_FRAMES}"
+        )
     if d.exhibit == "disk" and d.motion is None:
         raise ValueError("motion must be driven or released for the disk")
     if d.exhibit != "disk" and d.motion is not None:
