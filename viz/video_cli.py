@@ -67,7 +67,7 @@ def _flag_error(exc: ValueError, flags: dict[str, str]) -> CliError:
 
 
 def _progress(label: str):
-    from .recording_cli import ProgressBar
+    from .progress import ProgressBar
 
     return ProgressBar(label)
 
