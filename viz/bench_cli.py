@@ -3,7 +3,8 @@
 Runs :func:`dynamics.bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
-``--out`` (default ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install -e
+``--out`` (default a temporary folder, ``TMP/mechviz-bench``; ``make bench-docs`` writes the
+committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install -e
 '.[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
 least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
