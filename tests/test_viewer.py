@@ -668,3 +668,22 @@ def test_the_released_disk_draws_poinsot_with_the_contact_point_on_the_invariabl
     assert (contact - plane_at) @ plane_normal == pytest.approx(0.0, abs=1e-6)
     ex.apply({"op": "set", "mode": "driven"})
     assert not pc_view.frame.visible and not pc_view.plane_frame.visible
+
+
+def test_the_driven_disk_draws_dl_dt_at_l_s_tip_and_it_is_the_bearings_torque(app):
+    frames(app, 40)
+    ex = app.exhibits["disk"]
+    p, t = ex.params, ex.sample.t
+    arrows = ex.vectors.points.astype(float)
+    L_tip, dL_tip = arrows[1, 1], arrows[2, 1] - arrows[2, 0]
+    np.testing.assert_allclose(arrows[2, 0], L_tip, atol=1e-6)  # drawn from L's tip
+    L = dk.angular_momentum(p, t)
+    torque = np.cross(p.omega * dk.AXLE, L)  # dL/dt for a uniform rotation
+    a, b = dk.axle_points(p)
+    bearings = np.cross(b - a, dk.bearing_force_b(p, t))  # about A: only F_B has an arm
+    np.testing.assert_allclose(bearings, torque, rtol=1e-9, atol=1e-12)
+    drawn = np.linalg.inv(P) @ dL_tip
+    assert drawn @ torque / (np.linalg.norm(drawn) * np.linalg.norm(torque)) > 1 - 1e-6
+    # L's tip lies on the drawn rim of its cone about the axle
+    rim = ex.cone_rim.points.astype(float)[:, 0]
+    assert np.min(np.linalg.norm(rim - L_tip, axis=1)) < 0.05

@@ -29,6 +29,7 @@ STAND = (120, 120, 130)
 FORCE = (240, 60, 60)
 OMEGA = (20, 160, 70)
 MOMENTUM = (210, 120, 0)
+TORQUE = (170, 100, 30)  # dL/dt
 HOOP = (190, 110, 40)
 GHOST = (140, 140, 160)
 TRAIL = (235, 95, 40)
@@ -37,7 +38,7 @@ AXES_RGB = ((230, 60, 60), (30, 160, 50), (60, 110, 240))
 PALETTE = {
     "charge": CHARGE, "compare": COMPARE, "beam slow": BEAM[0], "beam fast": BEAM[1],
     "field": FIELD, "disk": DISK, "rim": RIM, "bead": BEAD, "axle": AXLE, "stand": STAND,
-    "force": FORCE, "omega": OMEGA, "momentum": MOMENTUM, "hoop": HOOP, "ghost": GHOST,
+    "force": FORCE, "omega": OMEGA, "momentum": MOMENTUM, "torque": TORQUE, "hoop": HOOP, "ghost": GHOST,
     "trail": TRAIL, "centre": CENTRE, **{f"axis {k + 1}": c for k, c in enumerate(AXES_RGB)},
 }  # fmt: skip
 

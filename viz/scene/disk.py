@@ -161,14 +161,20 @@ class DiskExhibit(Exhibit):
             position=(0.0, 0.0, 3.0),
             anchor="bottom-center",
         )
+        # omega, L and, while driven, dL/dt = omega x L drawn at L's tip (the torque the
+        # bearings must supply; L's tip sweeps the rim of a cone about the axle, drawn too)
         self.vectors = s.add_arrows(
             f"{r}/vectors",
-            np.zeros((2, 2, 3), np.float32),
-            colors=np.array([geo.OMEGA, geo.MOMENTUM], np.uint8),
+            np.zeros((3, 2, 3), np.float32),
+            colors=np.array([geo.OMEGA, geo.MOMENTUM, geo.TORQUE], np.uint8),
             shaft_radius=0.02,
             head_radius=0.06,
             head_length=0.14,
         )
+        self.cone_rim = s.add_line_segments(
+            f"{r}/L_cone_rim", np.zeros((1, 2, 3), np.float32), colors=np.array(geo.MOMENTUM, np.uint8),
+            thickness=1.5, thickness_units="screen",
+        )  # fmt: skip
         self.forces = s.add_arrows(
             f"{r}/bearing_forces",
             np.zeros((2, 2, 3), np.float32),
@@ -316,7 +322,15 @@ class DiskExhibit(Exhibit):
             ],
             axis=1,
         )
-        self._vector_points = np.zeros((2, 2, 3), np.float32)  # reused by every frame
+        self._vector_points = np.zeros((3, 2, 3), np.float32)  # reused by every frame
+        # dL/dt = omega x L, fixed in the body too: drawn at L's tip, at the length L's tip moves
+        # in one radian of turn (so it is tangent to the cone's rim and as long as its radius)
+        self._body_dL = np.cross(p.omega * dk.AXLE, self._body_L) / abs(p.omega) * self.momentum_scale
+        phi = np.linspace(0.0, 2 * np.pi, 97)
+        rim = LIFT + to_world(np.einsum("kij,j->ki", dk.rotation_about_axle(phi), self._body_L))
+        rim = LIFT + (rim - LIFT) * self.momentum_scale
+        self.cone_rim.points = np.stack([rim[:-1], rim[1:]], axis=1).astype(np.float32)
+        self.cone_rim.visible = driven
         self._force_points = np.zeros((2, 2, 3), np.float32)
         self.body_labels[0].position = a + dk.angular_momentum(p, 0.0) * self.momentum_scale
         self.vector_labels[0].position = (
@@ -400,6 +414,7 @@ class DiskExhibit(Exhibit):
         pts = self._vector_points
         pts[:, 0] = b0
         pts[0, 1], pts[1, 1] = tips
+        pts[2, 1] = b0  # no dL/dt arrow: the free body has no torque
         self.vectors.points = pts
         for h, tip in zip(self.vector_labels, tips, strict=True):  # both move with the tumble
             h.position = tip
@@ -414,9 +429,11 @@ class DiskExhibit(Exhibit):
         L, fa, fb = (turn @ self._body_arrows).T
         a, b = self._driven_a, self._driven_b
         pts = self._vector_points  # drawn from A, which is the body node's origin at LIFT
-        pts[:, 0] = LIFT
+        pts[:2, 0] = LIFT
         pts[0, 1] = self._driven_omega_tip
         pts[1, 1] = LIFT + L
+        pts[2, 0] = LIFT + L
+        pts[2, 1] = LIFT + L + turn @ self._body_dL
         self.vectors.points = pts
         f = self._force_points
         f[0, 0], f[0, 1] = a, a + fa
