@@ -77,17 +77,6 @@ GRIDS = {
 }
 
 
-def chart_scales(t0: float, t1: float) -> dict:
-    """uPlot scales of the energy/error charts: x the time span ``t0 .. t1`` [s], y log10 from
-    the round-off floor to 100."""
-    import viser.uplot as uplot
-
-    return {
-        "x": uplot.Scale(time=False, auto=False, range=(t0, t1)),
-        "y": uplot.Scale(auto=False, range=(LOG_FLOOR, 2.0)),
-    }
-
-
 # --------------------------------------------------------------------------- numba warm-up
 def warm_up(
     which: str = "defaults",
@@ -187,7 +176,6 @@ class MechvizApp:
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
-        self._chart_ranges: dict[str, tuple[float, float, float]] = {}  # (t0, t1, window) [s]
         self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -615,22 +603,10 @@ class MechvizApp:
                 data = ex.chart_data()
                 if len(data[0]) >= 2:
                     chart.data = data[: len(chart.series)]
-                    self._frame_chart(key, chart, float(data[0][-1]))
+                    self.panels[key].keep_time_axis(
+                        "chart", float(data[0][-1]), self.chart_window, (LOG_FLOOR, 2.0)
+                    )
             self._shown[key] = (ex.revision, ex.history.version)
-
-    def _frame_chart(self, key: str, chart, t: float) -> None:
-        """Give the chart an explicit time axis: the window ending a quarter window ahead of
-        ``t``, moved on once ``t`` passes its end. The browser's chart keeps the time range it
-        had when it was drawn; a chart drawn again (after a resize and a tab switch) would keep
-        a stale one and show no lines. Moving the range redraws the chart, so it moves in
-        steps of a quarter window, not every update."""
-        lo, hi, window = self._chart_ranges.get(key, (math.inf, -math.inf, 0.0))
-        if lo <= t <= hi and window == self.chart_window:
-            return
-        hi = t + 0.25 * self.chart_window
-        lo = hi - 1.25 * self.chart_window
-        self._chart_ranges[key] = (lo, hi, self.chart_window)
-        chart.scales = chart_scales(lo, hi)
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -278,6 +278,30 @@ class HoopExhibit(Exhibit):
         t, angles = self.motion.arrays()
         return {"mode_frequencies": measure.mode_frequencies(t, angles, self.shapes)}
 
+    def modal_history(self, points: int = 600) -> tuple[np.ndarray, ...]:
+        """``(t, q1, q2, q1_linear, q2_linear)`` over the samples since the start (at most
+        ``points`` of them, evenly thinned): the angles' coordinates on the two mode shapes, and
+        linear theory's from the same start (each a cosine at its mode's frequency)."""
+        t, angles = self.motion.arrays()
+        if len(t) > points:
+            keep = np.linspace(0, len(t) - 1, points).round().astype(int)
+            t, angles = t[keep], angles[keep]
+        q = measure.modal_coordinates(angles, self.shapes)
+        sim = self.sim
+        ghost = hp.linear_solution(self.params, sim.state0[0], t - sim.t0)[:, :2]
+        g = measure.modal_coordinates(ghost, self.shapes)
+        return t, q[:, 0], q[:, 1], g[:, 0], g[:, 1]
+
+    def refresh_panel(self, panel) -> None:
+        chart = panel.w.get("hoop.modes_chart")
+        if chart is None or len(self.motion) < 2:
+            return
+        data = self.modal_history()
+        chart.data = data
+        top = 1.3 * max(float(np.abs(np.concatenate(data[1:3])).max()), 1e-6)
+        window = max(10.0, 3 * 2 * math.pi / float(hp.normal_modes(self.params)[0][0]))
+        panel.keep_time_axis("modes_chart", float(data[0][-1]), window, (-top, top))
+
     def initial_mode_amplitudes(self) -> np.ndarray:
         """The start's coordinates on the two mode shapes [rad]."""
         return self.modal_coordinates(self.sim.state0[0])
@@ -372,6 +396,25 @@ class HoopExhibit(Exhibit):
                 panel.number(f"th{k + 1}", f"θ{k + 1} (custom) [rad]", c.angles[k], angle(k),
                              current=lambda k=k: self.config.angles[k], lo=-3.14, hi=3.14)  # fmt: skip
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
+        with gui.add_folder("Normal-mode coordinates"):
+            gui.add_markdown(
+                "<small>The angles on the two mode shapes: θ = q1 (1, 1) + q2 (mode 2's shape). "
+                "Solid: the motion; dashed: linear theory, each a cosine at its own frequency "
+                "(the table gives both). At small amplitude they agree.</small>"
+            )
+            u = panel.viser.uplot
+            panel.put("modes_chart", gui.add_uplot(
+                data=tuple(np.zeros(2) for _ in range(5)),
+                series=(
+                    u.Series(label="t [s]"),
+                    u.Series(label="q1 [rad]", stroke="#e63c3c", width=1.5),
+                    u.Series(label="q2 [rad]", stroke="#3c6ef0", width=1.5),
+                    u.Series(label="q1 linear", stroke="#e63c3c", width=1.0, dash=[4, 3]),
+                    u.Series(label="q2 linear", stroke="#3c6ef0", width=1.0, dash=[4, 3]),
+                ),
+                scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(-1.0, 1.0))},
+                aspect=1.6,
+            ))  # fmt: skip
         panel.param_inputs({
             "hoop_mass": "Hoop mass M [kg]", "bead_mass": "Bead mass m [kg]",
             "radius": "Radius a [m]", "gravity": "Gravity g [m/s²]",

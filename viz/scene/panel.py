@@ -87,6 +87,7 @@ class Panel:
         self.key = exhibit.key
         self.w: dict[str, Any] = app.w
         self.labels: dict[str, str] = {}  # setting name (as in messages) -> the field's label
+        self._time_axes: dict[str, tuple[float, float, float]] = {}  # chart -> (t0, t1, window)
 
     def send(self, command) -> None:
         self.app.enqueue(self.key, command)
@@ -155,6 +156,24 @@ class Panel:
 
         self.on(h, on)
         return h
+
+    def keep_time_axis(self, name: str, t: float, window: float, y_range) -> None:
+        """Give the chart ``name`` an explicit time axis: the ``window`` [s] ending a quarter
+        window ahead of ``t``, moved on once ``t`` passes its end, and the y range ``y_range``.
+        The browser's chart keeps the time range it had when it was drawn; one drawn again
+        (after a resize and a tab switch) would keep a stale range and show no lines. Moving
+        the range redraws the chart, so it moves in quarter-window steps, not every update."""
+        lo, hi, win = self._time_axes.get(name, (math.inf, -math.inf, 0.0))
+        if lo <= t <= hi and win == window:
+            return
+        hi = t + 0.25 * window
+        lo = hi - 1.25 * window
+        self._time_axes[name] = (lo, hi, window)
+        uplot = self.viser.uplot
+        self.w[f"{self.key}.{name}"].scales = {
+            "x": uplot.Scale(time=False, auto=False, range=(lo, hi)),
+            "y": uplot.Scale(auto=False, range=tuple(y_range)),
+        }
 
     def explain(self, message: str) -> str:
         """A settings error as the panel names things: ``mass must be ...`` -> ``Mass m [kg] must
