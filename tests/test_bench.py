@@ -151,3 +151,12 @@ def test_each_peer_solves_the_same_problem(peer, key):
     run = peers.prepare(peer, pb, 1e-10)
     assert pb.error(run.run(), reference_state(pb)) < 1e-6
     assert run.nfev() > 0
+
+
+def test_an_adaptive_sweep_stops_where_the_error_stops_falling():
+    from dynamics.bench.sweeps import STALL, _stalled
+
+    falling = [_pt("odeint", 10.0**-k, 1.0) for k in range(8)]
+    assert not _stalled(falling)
+    flat = falling + [_pt("odeint", 1e-7, 1.0)] * STALL
+    assert _stalled(flat)

@@ -201,6 +201,19 @@ def sweep_fixed(problem: Problem, method: str, settings: Settings, progress=None
     return points
 
 
+STALL = 4  # tolerances in a row that did not halve the best error: the method's floor
+
+
+def _stalled(points: list[Point]) -> bool:
+    """True once the last ``STALL`` points brought the error no lower than half the best before
+    them (round-off, or a solver that clips the tolerance, as scipy's does below 2.2e-14)."""
+    errs = [p.error if p.error is not None else math.inf for p in points]
+    if len(errs) <= STALL:
+        return False
+    before = min(errs[:-STALL])
+    return min(errs[-STALL:]) >= 0.5 * before
+
+
 def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
     points: list[Point] = []
     for tol in settings.tolerances:
@@ -210,7 +223,7 @@ def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=N
             progress()
         if pt.error is not None and pt.error < problem.floor:
             break
-        if (pt.first_call or 0.0) > settings.cap:
+        if (pt.first_call or 0.0) > settings.cap or _stalled(points):
             break
     return points
 
@@ -396,7 +409,7 @@ def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
         points.append(pt)
         if pt.error is not None and pt.error < problem.floor:
             break
-        if (pt.first_call or 0.0) > settings.cap:
+        if (pt.first_call or 0.0) > settings.cap or _stalled(points):
             break
     return points
 
