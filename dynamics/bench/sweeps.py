@@ -469,8 +469,9 @@ def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
 
     Along one method's sweep more steps (or a tighter tolerance) never cost less time; a point
     that is more than ``slack`` times slower than a point further along was timed under a burst
-    of other load. It is re-timed with three times the repeats; if it still breaks the order it
-    is flagged (``status = "outlier"``) and left off the charts and the tables.
+    of other load. It is re-timed with up to three times the repeats (fewer for a slow point);
+    if it still breaks the order it is flagged (``status = "outlier"``) and left off the charts
+    and the tables.
     """
     def later(a: Point, b: Point) -> bool:  # b does more work than a
         if a.adaptive:
@@ -483,7 +484,9 @@ def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
         more = [q for q in points if q.method == p.method and q.seconds and later(p, q)]
         if not more or p.seconds <= slack * min(q.seconds for q in more):
             continue
-        t = head_to_head(problem, [p], 3 * settings.repeats, settings.min_sample)[0]
+        # Re-time with three times the repeats, within about 0.5 s: a slow point gets fewer.
+        rounds = max(3, min(3 * settings.repeats, int(0.5 / max(p.seconds, 1e-9))))
+        t = head_to_head(problem, [p], rounds, settings.min_sample)[0]
         p.seconds = min(p.seconds, t)
         if p.seconds > slack * min(q.seconds for q in more):
             points[i].status = "outlier"
