@@ -201,17 +201,20 @@ def sweep_fixed(problem: Problem, method: str, settings: Settings, progress=None
     return points
 
 
-STALL = 4  # tolerances in a row that did not halve the best error: the method's floor
+STALL_DECADES = 2.0  # stop once the tolerance is this many decades below the best point's
 
 
 def _stalled(points: list[Point]) -> bool:
-    """True once the last ``STALL`` points brought the error no lower than half the best before
-    them (round-off, or a solver that clips the tolerance, as scipy's does below 2.2e-14)."""
-    errs = [p.error if p.error is not None else math.inf for p in points]
-    if len(errs) <= STALL:
+    """True once the tolerance has gone ``STALL_DECADES`` decades below the tolerance of the
+    point with the smallest error without beating it: round-off, or a solver that clips the
+    tolerance (scipy's below 2.2e-14). The error of an adaptive method is not monotone in its
+    tolerance over a decade (a Taylor method changes order in whole steps), so a shorter window
+    cut sweeps short."""
+    ok = [p for p in points if p.error is not None and p.tol]
+    if not ok:
         return False
-    before = min(errs[:-STALL])
-    return min(errs[-STALL:]) >= 0.5 * before
+    best = min(ok, key=lambda p: p.error)
+    return points[-1].tol is not None and points[-1].tol < best.tol * 10.0**-STALL_DECADES
 
 
 def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
