@@ -30,8 +30,10 @@ test: $(VENV)/.installed-test
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench
 
+# The figures the README shows: the peers installed, the quick run, written to docs/bench.
 bench-docs: $(VENV)/.installed-test
-	$(BIN)/mechviz bench --out docs/bench
+	$(BIN)/python -m pip install -q -e '.[peers]'
+	$(BIN)/mechviz bench --peers --quick --out docs/bench
 
 screenshots: $(VENV)/.installed-test
 	MECHVIZ_WRITE_DOCS=1 MECHVIZ_ALL_DEMOS=1 $(BIN)/python -m pytest -q \

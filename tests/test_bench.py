@@ -155,3 +155,15 @@ def test_each_peer_solves_the_same_problem(peer, key):
     run = peers.prepare(peer, pb, 1e-10)
     assert pb.error(run.run(), reference_state(pb)) < 1e-6
     assert run.nfev() > 0
+
+
+def test_an_adaptive_sweep_stops_where_the_error_stops_falling():
+    from dynamics.bench.sweeps import _stalled
+
+    def pt(tol, err):
+        return Point("hoop", "odeint", True, None, tol, 10, 40, err, 0.0, 1.0, 1.0, 0.0, 5, 1, "ok")
+
+    jumpy = [pt(10.0 ** (-k / 4), e) for k, e in enumerate([1e-3, 2e-4, 3e-4, 3e-4, 2.5e-4, 1e-5])]
+    assert not _stalled(jumpy)  # flat for a decade, then falling again: not a floor
+    flat = [pt(10.0 ** (-k / 4), 1e-7 if k > 2 else 1e-3) for k in range(12)]
+    assert _stalled(flat)  # two decades below the best without beating it

@@ -693,7 +693,7 @@ def test_the_modal_coordinates_follow_linear_theory_at_small_amplitude(server):
     ex = HoopExhibit(server, HoopConfig(mode="mix", amplitude=0.02, method="rk4", dt=1 / 240))
     for _ in range(300):
         ex.advance(1 / 60)
-    t, q1, q2, l1, l2 = ex.modal_history()
+    _, q1, q2, l1, l2 = ex.modal_history()
     assert np.abs(q1).max() == pytest.approx(0.01, rel=1e-2)  # mix: half the amplitude each
     np.testing.assert_allclose(q1, l1, atol=2e-4)  # 2 % of the amplitude: linear theory holds
     np.testing.assert_allclose(q2, l2, atol=2e-4)

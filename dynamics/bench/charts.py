@@ -15,7 +15,7 @@ COLORS = {
     "splitting": "tab:green", "yoshida4": "tab:olive", "midpoint": "tab:purple",
     "euler": "tab:brown", "exact": "tab:gray", "scipy-rk45": "tab:pink",
     "scipy-dop853": "tab:red", "scipy-radau": "black", "scipy-lsoda": "tab:cyan",
-    "odeint": "darkgoldenrod", "taylor": "tab:red",
+    "odeint": "darkgoldenrod", "taylor": "magenta",
     "heyoka": "black", "cyrk-dop853": "0.45", "cyrk-vern8": "0.6", "cyrk-vern7": "0.7",
     "cyrk-py-dop853": "0.8",
 }  # fmt: skip

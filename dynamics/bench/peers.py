@@ -20,10 +20,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .problems import Problem
+if TYPE_CHECKING:  # for annotations only: the problems module imports this one at run time
+    from .problems import Problem
 
 PEERS = ("heyoka", "cyrk-dop853", "cyrk-vern8", "cyrk-vern7", "cyrk-py-dop853")
 

@@ -201,6 +201,22 @@ def sweep_fixed(problem: Problem, method: str, settings: Settings, progress=None
     return points
 
 
+STALL_DECADES = 2.0  # stop once the tolerance is this many decades below the best point's
+
+
+def _stalled(points: list[Point]) -> bool:
+    """True once the tolerance has gone ``STALL_DECADES`` decades below the tolerance of the
+    point with the smallest error without beating it: round-off, or a solver that clips the
+    tolerance (scipy's below 2.2e-14). The error of an adaptive method is not monotone in its
+    tolerance over a decade (a Taylor method changes order in whole steps), so a shorter window
+    cut sweeps short."""
+    ok = [p for p in points if p.error is not None and p.tol]
+    if not ok:
+        return False
+    best = min(ok, key=lambda p: p.error)
+    return points[-1].tol is not None and points[-1].tol < best.tol * 10.0**-STALL_DECADES
+
+
 def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
     points: list[Point] = []
     for tol in settings.tolerances:
@@ -210,7 +226,7 @@ def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=N
             progress()
         if pt.error is not None and pt.error < problem.floor:
             break
-        if (pt.first_call or 0.0) > settings.cap:
+        if (pt.first_call or 0.0) > settings.cap or _stalled(points):
             break
     return points
 
@@ -396,7 +412,7 @@ def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
         points.append(pt)
         if pt.error is not None and pt.error < problem.floor:
             break
-        if (pt.first_call or 0.0) > settings.cap:
+        if (pt.first_call or 0.0) > settings.cap or _stalled(points):
             break
     return points
 
@@ -456,8 +472,9 @@ def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
 
     Along one method's sweep more steps (or a tighter tolerance) never cost less time; a point
     that is more than ``slack`` times slower than a point further along was timed under a burst
-    of other load. It is re-timed with three times the repeats; if it still breaks the order it
-    is flagged (``status = "outlier"``) and left off the charts and the tables.
+    of other load. It is re-timed with up to three times the repeats (fewer for a slow point);
+    if it still breaks the order it is flagged (``status = "outlier"``) and left off the charts
+    and the tables.
     """
     def later(a: Point, b: Point) -> bool:  # b does more work than a
         if a.adaptive:
@@ -470,7 +487,9 @@ def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
         more = [q for q in points if q.method == p.method and q.seconds and later(p, q)]
         if not more or p.seconds <= slack * min(q.seconds for q in more):
             continue
-        t = head_to_head(problem, [p], 3 * settings.repeats, settings.min_sample)[0]
+        # Re-time with three times the repeats, within about 0.5 s: a slow point gets fewer.
+        rounds = max(3, min(3 * settings.repeats, int(0.5 / max(p.seconds, 1e-9))))
+        t = head_to_head(problem, [p], rounds, settings.min_sample)[0]
         p.seconds = min(p.seconds, t)
         if p.seconds > slack * min(q.seconds for q in more):
             points[i].status = "outlier"
