@@ -320,3 +320,37 @@ def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
         "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
     )  # fmt: skip
     assert abs(json.loads(out.stdout)["max_energy_error"]) < 1e-2
+
+
+_SWALLOWING_CALLBACK = """
+import ctypes, ctypes.util, sys, time
+from dynamics.cli import _ctrl_c_within_a_second
+
+libc = ctypes.CDLL(ctypes.util.find_library("c"))
+CMP = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)
+
+@CMP
+def slow(a, b):  # like numba's compiler: Python called from C, which drops its exceptions
+    print("inside", flush=True)
+    time.sleep(30)
+    return 0
+
+with _ctrl_c_within_a_second():
+    items = (ctypes.c_int * 2)(2, 1)
+    libc.qsort(items, 2, ctypes.sizeof(ctypes.c_int), slow)
+    time.sleep(30)
+print("not interrupted")
+"""
+
+
+def test_ctrl_c_inside_code_that_swallows_keyboard_interrupt_still_ends_the_run():
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _SWALLOWING_CALLBACK],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert proc.stdout.readline().strip() == "inside"
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and time.monotonic() - t0 < 3.0
+    assert err.strip() == "mechviz: interrupted" and "not interrupted" not in out
