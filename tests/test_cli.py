@@ -308,7 +308,8 @@ def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
 def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
     # Mode 2 at 0.01 rad with rk4, dt = 0.05 to t = 10 s loses 1.4e-4 of its oscillation energy
     # (RK4 damps by about (w dt)^6 / 144 per step); divided by the total energy with the
-    # potential's zero at the pivot, that read as -1e-9. From 90 degrees it read as 1e8.
+    # potential's zero at the pivot, that read as -2e-9. From 90 degrees (E0 = 0 up to round-off)
+    # it read as -5e10.
     out = mechviz(
         "simulate", "hoop", "--theta1", "0.0033333333333333335", "--theta2", "-0.01",
         "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
