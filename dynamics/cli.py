@@ -6,7 +6,8 @@ Bad input is one line naming the flag, exit status 2: a value that is not a fini
 also one whose *consequences* are not representable (a gyrofrequency that overflows, a kinetic
 energy that underflows to 0, a step count beyond ``--max-steps``). ``simulate`` estimates its work
 before it starts (:meth:`dynamics.Simulation.estimated_steps`), shows progress on a terminal for
-runs longer than a few seconds, and stops within a fraction of a second on Ctrl-C (exit 130).
+runs longer than a few seconds, and stops within about a second on Ctrl-C (exit 130), even inside
+numba's compiler.
 ``--json`` is always valid JSON: a number that is not finite is ``null``, and ``null_reasons``
 says why.
 """
@@ -14,12 +15,15 @@ says why.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import copy
 import json
 import math
 import os
 import re
+import signal
 import sys
+import threading
 import time
 from typing import Any
 
@@ -592,5 +596,43 @@ def _run_simulate(args: argparse.Namespace) -> int:
         raise CliError(f"--samples: must be from 2 to {MAX_SAMPLES}, got {args.samples}")
     if args.max_steps < 1:
         raise CliError(f"--max-steps: must be at least 1, got {args.max_steps:g}")
-    _emit(simulate(args.system, args), args.json)
+    with _ctrl_c_within_a_second():
+        result = simulate(args.system, args)
+    _emit(result, args.json)
     return 0
+
+
+@contextlib.contextmanager
+def _ctrl_c_within_a_second():
+    """Ctrl-C raises ``KeyboardInterrupt`` as usual, and if the process has not ended a second
+    later (numba's compiler, which runs Python callbacks from C, swallows the exception), prints
+    the usual line and exits with status 130. Only for commands that write no files."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    done = threading.Event()
+
+    def hard_exit() -> None:
+        if not done.is_set():
+            sys.stderr.write("mechviz: interrupted\n")
+            sys.stderr.flush()
+            os._exit(130)
+
+    def on_sigint(signum, frame) -> None:
+        timer = threading.Timer(1.0, hard_exit)
+        timer.daemon = True
+        timer.start()
+        raise KeyboardInterrupt
+
+    def unraisable(info) -> None:  # the swallowed KeyboardInterrupt is not worth a traceback
+        if not issubclass(info.exc_type, KeyboardInterrupt):
+            previous_hook(info)
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
+    try:
+        yield
+    finally:
+        done.set()
+        signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = previous_hook

@@ -17,6 +17,7 @@ on disk (:class:`WriteFailed`, :class:`WriteInterrupted`).
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import os
@@ -206,6 +207,8 @@ def _make_dirs(path: Path) -> list[Path]:
 
 
 def _keep_old(final: Path, backup: Path) -> None:
+    if final.is_dir() and not final.is_symlink():
+        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
     with contextlib.suppress(FileNotFoundError):
         backup.unlink()
     try:

@@ -347,12 +347,14 @@ class Simulation:
         """The steps a run from the current time to ``t_end`` [s] would take, summed over the
         ensemble and including the reference run's (a float: it may be huge or infinite).
 
-        Exact for fixed-step methods (``(t_end - t) / dt`` per member); for adaptive methods an
-        estimate from the system's shortest period and the method's order,
-        ``2 rtol^(-1/order)`` steps per period, within a factor of about 3 of what DOP853,
-        RK45, Radau and LSODA take on the three systems; 0 for a closed-form flow. Callers that
-        must bound their work (the CLI's ``--max-steps``, the recorder) compare this with their
-        limit before running.
+        Exact for fixed-step methods (``(t_end - t) / dt`` per member); 0 for a closed-form flow;
+        for adaptive methods an estimate from the system's shortest period
+        (``System.time_scale``) and the method's order, ``2 rtol^(-1/order)`` steps per period.
+        Measured on the three systems at rtol 1e-4 to 1e-12: DOP853 (ours and scipy's) and RK45
+        take 1.5 to 4.3 times fewer steps than estimated, Radau from 1.1 times fewer to 2.9 times
+        more, LSODA and odeint 2.5 to 7 times more (their order varies; 12 is their highest).
+        Callers that must bound their work (the CLI's ``--max-steps``, the recorder) compare this
+        with their limit before running.
         """
         t_end = _v.finite("t_end", t_end)
         m = self.method

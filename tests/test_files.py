@@ -158,3 +158,13 @@ def test_json_safe_turns_non_finite_numbers_into_null_and_says_where():
 def test_write_json_atomically_writes_valid_json_for_nan(tmp_path):
     files.write_json_atomically(tmp_path / "r.json", {"ratio": float("nan")})
     assert json.loads((tmp_path / "r.json").read_text()) == {"ratio": None}
+
+
+def test_a_folder_where_a_file_should_go_fails_the_write_and_changes_nothing(tmp_path):
+    files.write_files_atomically(tmp_path, {"a.csv": b"old csv\n"})
+    (tmp_path / "a.json").mkdir()
+    with pytest.raises(files.WriteFailed, match="Is a directory") as info:
+        files.write_files_atomically(tmp_path, {"a.csv": b"new csv\n", "a.json": b"{}\n"})
+    assert info.value.unchanged
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "a.json"]
+    assert (tmp_path / "a.csv").read_bytes() == b"old csv\n"
