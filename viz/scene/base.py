@@ -306,6 +306,19 @@ class Exhibit:
         opts = m.step_options(c.dt if dt is None else dt, c.rtol if rtol is None else rtol)
         return dynamics.Simulation(system, m, state=state, reference=reference, **opts)
 
+    def _make_runs(self, system, s0) -> tuple[dynamics.Simulation, dynamics.Simulation | None]:
+        """The main run of ``config.method`` and, if the config names one, the comparison run
+        of ``compare_method`` with its own ``compare_dt`` / ``compare_rtol`` (else the main
+        run's), both from ``s0``."""
+        c = self.config
+        sim = self._make_simulation(system, c.method, s0)
+        cmp_ = None
+        if getattr(c, "compare_method", None):
+            cmp_ = self._make_simulation(
+                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
+            )
+        return sim, cmp_
+
     # ------------------------------------------------------------------ stepping
     def advance(self, sim_seconds: float, *, measure: bool = True) -> None:
         """Advance every simulation by ``sim_seconds`` (no-op while paused). ``measure``: also

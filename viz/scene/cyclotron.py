@@ -184,12 +184,7 @@ class CyclotronExhibit(Exhibit):
         p = c.physics()
         system = dynamics.Cyclotron(p)
         s0 = c.initial_state()
-        sim = self._make_simulation(system, c.method, s0)
-        cmp_ = None
-        if c.compare_method:
-            cmp_ = self._make_simulation(
-                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
-            )
+        sim, cmp_ = self._make_runs(system, s0)
         beam = None
         if c.beam:
             beam = self._make_simulation(system, c.method, c.beam_states(), reference=None)
@@ -436,8 +431,7 @@ class CyclotronExhibit(Exhibit):
         chart.data = (w["x"], w["V"], w["level"], w["point"], w["bottom"])
         frame = (w["x_range"], w["y_range"])
         if frame != getattr(self, "_well_frame", None):  # a kick or a new start: a new well
-            import viser.uplot as uplot
-
+            uplot = panel.viser.uplot
             chart.scales = {
                 "x": uplot.Scale(time=False, auto=False, range=w["x_range"]),
                 "y": uplot.Scale(auto=False, range=w["y_range"]),

@@ -204,12 +204,7 @@ class HoopExhibit(Exhibit):
         p = c.physics()
         system = dynamics.Hoop(p)
         s0 = c.initial_state()
-        sim = self._make_simulation(system, c.method, s0)
-        cmp_ = None
-        if c.compare_method:
-            cmp_ = self._make_simulation(
-                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
-            )
+        sim, cmp_ = self._make_runs(system, s0)
         self.params = p
         self.sim, self.compare = sim, cmp_
         self._reset_common()
@@ -223,7 +218,7 @@ class HoopExhibit(Exhibit):
         self.beads.batched_scales = scales
         if cmp_ is not None:
             self.cmp_label.text = f"{c.compare_method} (blue)"
-        self.shapes = hp.normal_modes(p)[1]
+        self.mode_frequencies, self.shapes = hp.normal_modes(p)
         self.motion = Motion((2,))  # the angles
         self.config_space.start(self.shapes, s0[:2], c.ghost)
         self._observe()
@@ -299,7 +294,7 @@ class HoopExhibit(Exhibit):
         data = self.modal_history()
         chart.data = data
         top = 1.3 * max(float(np.abs(np.concatenate(data[1:3])).max()), 1e-6)
-        window = max(10.0, 3 * 2 * math.pi / float(hp.normal_modes(self.params)[0][0]))
+        window = max(10.0, 3 * 2 * math.pi / float(self.mode_frequencies[0]))
         panel.keep_time_axis("modes_chart", float(data[0][-1]), window, (-top, top))
 
     def initial_mode_amplitudes(self) -> np.ndarray:
@@ -343,7 +338,7 @@ class HoopExhibit(Exhibit):
     # ------------------------------------------------------------------ readout
     def readout(self) -> str:
         p, smp, c = self.params, self.sample, self.config
-        freqs, _ = hp.normal_modes(p)
+        freqs = self.mode_frequencies
         meas = self.measured()["mode_frequencies"]
         lines = [
             f"**t = {self.t:.2f} s** · {self.method_line(self.sim)} · {c.mode}",
