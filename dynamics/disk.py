@@ -293,6 +293,44 @@ def free_angular_momentum_space(moments: np.ndarray, state: np.ndarray) -> np.nd
     return np.einsum("...ij,...j->...i", quaternion_to_matrix(s[..., 3:7]), body)
 
 
+def polhode_period(moments: np.ndarray, w: np.ndarray) -> float:
+    """The period [s] of the body-frame angular velocity of a torque-free body: the time the
+    polhode takes to close, from the Jacobi elliptic solution of Euler's equations (Landau and
+    Lifshitz, *Mechanics*, Sec. 37).
+
+    With the moments sorted ``A < B < C`` [kg m^2], ``2E = sum I_i w_i^2`` and
+    ``M^2 = sum (I_i w_i)^2``: if ``M^2 > 2EB`` (the polhode circles the axis of the largest
+    moment) ``w`` is ``(cn, sn, dn)`` of ``lambda t`` with
+    ``lambda^2 = (C - B)(M^2 - 2EA) / ABC`` and ``k^2 = (B - A)(2EC - M^2) / ((C - B)(M^2 - 2EA))``;
+    if ``M^2 < 2EB`` (it circles the smallest) ``A`` and ``C`` trade places. ``cn`` and ``sn``
+    have the period ``4K(k)``, so the polhode closes after ``T = 4K(k) / lambda``. On the
+    separatrix (``M^2 = 2EB``: the spin along the intermediate axis, or a polhode through it) ``T``
+    is infinite, and so it is at rest. A spin exactly along the axis of the largest or smallest
+    moment gives the limit ``k = 0``: ``2 pi / lambda``, the period of small wobbles about it.
+    """
+    from scipy import special  # deferred: importing dynamics should not pay for it
+
+    inertia = np.asarray(moments, dtype=float)
+    w = np.asarray(w, dtype=float)
+    order = np.argsort(inertia)
+    a, b, c = inertia[order]
+    wa, wb, wc = w[order]
+    two_e = a * wa * wa + b * wb * wb + c * wc * wc
+    m2 = (a * wa) ** 2 + (b * wb) ** 2 + (c * wc) ** 2
+    if two_e <= 0.0 or abs(m2 - two_e * b) <= 1e-14 * m2:
+        return math.inf  # at rest, or on the separatrix to round-off (k = 1)
+    if m2 < two_e * b:  # circles the axis of the smallest moment: swap the roles of A and C
+        a, c = c, a
+    lam2 = (c - b) * (m2 - two_e * a) / (a * b * c)
+    num = (b - a) * (two_e * c - m2)
+    if lam2 <= 0.0:
+        return math.inf
+    k2 = num / ((c - b) * (m2 - two_e * a))
+    if not 0.0 <= k2 < 1.0:
+        return math.inf  # the separatrix (k = 1) or round-off beyond it
+    return 4.0 * float(special.ellipk(k2)) / math.sqrt(lam2)
+
+
 def poinsot(moments: np.ndarray, state: np.ndarray) -> dict[str, np.ndarray | float]:
     """Poinsot's construction for a torque-free state (7,): the inertia ellipsoid about the
     centre of mass, ``x^T I x = 1`` (semi-axes ``1/sqrt(I_i)`` along the principal axes),

@@ -211,3 +211,37 @@ def test_poinsot_the_ellipsoid_touches_the_invariable_plane_where_its_normal_is_
             plane = (pc["normal"], pc["distance"])
         np.testing.assert_allclose(pc["normal"], plane[0], atol=1e-8)  # the plane is fixed
         assert pc["distance"] == pytest.approx(plane[1], rel=1e-8)
+
+
+@pytest.mark.parametrize("extra_spin", [(0.05, 0.0, 0.1), (0.6, 0.0, -0.1), (0.02, 0.3, 1.5)])
+def test_the_polhode_closes_with_the_period_of_the_jacobi_elliptic_solution(extra_spin):
+    """Euler's equations integrated to the period 4K(k)/lambda of their Jacobi elliptic
+    solution bring the body-frame angular velocity back to its start (to the integrator's
+    tolerance), and not before: at every earlier sample it is far from it. The three starts
+    circle the largest axis, the smallest axis (M^2 < 2EB), and the largest again at k near 0."""
+    system = ReleasedDisk(DiskParams(omega=2.0), extra_spin=extra_spin)
+    moments = system.kernel_params()
+    sim = Simulation(system, "taylor", rtol=1e-13, reference=None)
+    w0 = sim.state[0, :3].copy()
+    period = disk.polhode_period(moments, w0)
+    assert math.isfinite(period) and period > 0
+    closest = math.inf
+    for t in np.linspace(0.05, 0.95, 60) * period:
+        sim.advance_to(float(t))
+        closest = min(closest, float(np.linalg.norm(sim.state[0, :3] - w0)))
+    assert closest > 1e-3 * np.linalg.norm(w0)  # not closed before T
+    sim.advance_to(period)
+    np.testing.assert_allclose(sim.state[0, :3], w0, atol=1e-10 * np.linalg.norm(w0))
+
+
+def test_the_polhode_period_is_infinite_on_the_separatrix_and_the_wobble_period_on_an_axis():
+    """On the intermediate axis (the seed's released disk) the polhode is the separatrix: it
+    never closes. Exactly on the largest axis the period is that of small wobbles about it,
+    2 pi / (w sqrt((C - A)(C - B) / AB))."""
+    a, b, c = 0.25, 29 / 36, 19 / 18
+    moments = np.array([a, b, c])
+    assert disk.polhode_period(moments, np.array([0.0, 2.0, 0.0])) == math.inf
+    wobble = 2.0 * math.sqrt((c - a) * (c - b) / (a * b))
+    assert disk.polhode_period(moments, np.array([0.0, 0.0, 2.0])) == pytest.approx(
+        2 * math.pi / wobble, rel=1e-14
+    )
