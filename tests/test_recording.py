@@ -439,3 +439,24 @@ def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatc
     data = base64.b64decode(re.search(rb'__VISER_EMBED_DATA__="([^"]+)"', html).group(1))
     assert len(frame_times(data)) >= 40  # one frame per loop frame while recording
     assert any(title == "Recording saved" for title, _ in app.messages)
+
+
+def test_the_csv_holds_the_quantities_of_the_pictures_and_they_obey_their_physics(recorded):
+    """The radial kick's rows: E_perp = p_r^2/2m + V_eff(r) for every sample (the well of the
+    seed's argument, exact to round-off on Boris's rotation as on any state). The hoop's rows:
+    the modal coordinates put the angles back together, theta = q1 s1 + q2 s2."""
+    out, _ = recorded
+    rows = list(csv.DictReader(io.StringIO((out / "radial-kick.csv").read_text())))
+    p = rec.load_demo("radial-kick").config().physics()
+    for r in rows:
+        e_perp = 0.5 * p.mass * (float(r["vx"]) ** 2 + float(r["vy"]) ** 2)
+        rebuilt = float(r["p_r"]) ** 2 / (2 * p.mass) + float(r["V_eff"])
+        assert rebuilt == pytest.approx(e_perp, rel=1e-8, abs=1e-12)
+    hoop = rec.load_demo("hoop-large-amplitude")
+    _, shapes = dynamics.hoop.normal_modes(hoop.config().physics())
+    rows = list(csv.DictReader(io.StringIO((out / "hoop-large-amplitude.csv").read_text())))
+    assert {r["run"] for r in rows} >= {"linear-theory"}  # linear theory's coordinates too
+    for r in rows:
+        q = np.array([float(r["q1"]), float(r["q2"])])
+        theta = q @ shapes
+        assert theta == pytest.approx([float(r["theta1"]), float(r["theta2"])], abs=1e-9)

@@ -598,6 +598,7 @@ class MechvizApp:
             self.w[f"{key}.readout"].content = ex.readout()
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
+                self.panels[key].refresh_plot()
             if force or shown is None or shown[1] != ex.history.version:
                 chart = self.w[f"{key}.chart"]
                 data = ex.chart_data()

@@ -2,8 +2,13 @@
 
 ``DEMO.csv`` holds one row per run, member and frame: ``run, member, t``, the state (names from
 :mod:`dynamics`), the energy, the relative energy error and the error against the exact
-solution or the tight reference (:class:`dynamics.Simulation`). ``DEMO.png`` charts the motion
-with the predictions marked, the energy error and the error. ``DEMO.json`` is the manifest.
+solution or the tight reference (:class:`dynamics.Simulation`), then the exhibit's other
+quantities, as the viewer's plot names them (:meth:`viz.scene.base.Exhibit.plot_variables`: the
+charge's ``r``, ``p_r``, ``p_phi``, ``V_eff``; the hoop's modal coordinates ``q1``, ``q2``; the
+disk's ``L``). ``DEMO.png`` charts the motion with the predictions marked, the energy error and
+the error, and below them the exhibit's pictures (:meth:`~viz.scene.base.Exhibit.pictures`:
+the well, configuration space, the phase portrait, the polhode) with their exact curves, drawn
+by the viewer's own :func:`viz.scene.plot.draw_xy`. ``DEMO.json`` is the manifest.
 """
 
 from __future__ import annotations
@@ -24,31 +29,88 @@ import dynamics
 from dynamics import cyclotron, disk, hoop, measure
 
 from ..scene import EXHIBITS
+from ..scene.plot import Curve, Samples, draw_xy
 from .demo import Demo
 from .run import Traces
+
+
+def samples(tr: Traces, label: str, member: int = 0) -> Samples:
+    """One member of one run of the traces as the viewer's plot takes them."""
+    err = tr.error[label]
+    K = len(tr.times[label])
+    return Samples(
+        tr.times[label], tr.states[label][:, member], tr.energy[label][:, member],
+        tr.energy_error[label][:, member], np.full(K, np.nan) if err is None else err[:, member],
+    )  # fmt: skip
+
+
+def ghost_samples(tr: Traces) -> Samples | None:
+    """Linear theory's states (the hoop's ghost) as plot samples; no energy or error."""
+    if tr.ghost is None:
+        return None
+    nan = np.full(len(tr.t), np.nan)
+    return Samples(tr.t, tr.ghost[:, 0], nan, nan, nan)
+
+
+def derived_variables(d: Demo) -> dict:
+    """The exhibit's plot quantities beyond the state, energy and errors (the CSV's last columns)."""
+    names = set(dynamics.SYSTEMS[_system_name(d)].state_names) | {"t", "energy", "energy_error", "error"}
+    variables = EXHIBITS[d.exhibit].plot_variables(d.config())
+    return {n: v for n, v in variables.items() if n not in names}
 
 
 def traces_csv(d: Demo, tr: Traces) -> bytes:
     """The traces as CSV (long format, one row per run, member and frame)."""
     names = list(dynamics.SYSTEMS[_system_name(d)].state_names)
+    extra = derived_variables(d)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["run", "member", "t", *names, "energy", "energy_error", "error"])
+    w.writerow(["run", "member", "t", *names, "energy", "energy_error", "error", *extra])
     fmt = "{:.10g}".format
+
+    def columns(smp: Samples) -> np.ndarray:
+        if not extra:
+            return np.zeros((len(smp), 0))
+        with np.errstate(all="ignore"):
+            return np.column_stack([v.values(smp) for v in extra.values()])
+
     K = len(tr.t)
     for label, S in tr.states.items():
         err = tr.error[label]
         for j in range(S.shape[1]):
+            more = columns(samples(tr, label, j))
             for k in range(K):
                 w.writerow([
                     label, j, fmt(tr.times[label][k]), *map(fmt, S[k, j]),
                     fmt(tr.energy[label][k, j]), fmt(tr.energy_error[label][k, j]),
-                    "" if err is None else fmt(err[k, j]),
+                    "" if err is None else fmt(err[k, j]), *map(fmt, more[k]),
                 ])  # fmt: skip
-    if tr.ghost is not None:
+    ghost = ghost_samples(tr)
+    if ghost is not None:
+        more = columns(ghost)
         for k in range(K):
-            w.writerow(["linear-theory", 0, fmt(tr.t[k]), *map(fmt, tr.ghost[k, 0]), "", "", ""])
+            w.writerow(["linear-theory", 0, fmt(tr.t[k]), *map(fmt, tr.ghost[k, 0]), "", "", "",
+                        *map(fmt, more[k])])  # fmt: skip
     return buf.getvalue().encode()
+
+
+def draw_pictures(d: Demo, tr: Traces, axes) -> None:
+    """The exhibit's pictures on ``axes`` (one each): the main run's path, linear theory's
+    where there is a ghost, and the exact curves, as the viewer's plot draws them."""
+    cls, config = EXHIBITS[d.exhibit], d.config()
+    variables = cls.plot_variables(config)
+    main = samples(tr, tr.main)
+    ghost = ghost_samples(tr)
+    for ax, (x, y) in zip(axes, cls.pictures(config), strict=True):
+        curves = list(cls.plot_curves(config, x, y, main))
+        if ghost is not None:
+            with np.errstate(all="ignore"):
+                curves.append(Curve(variables[x].values(ghost), variables[y].values(ghost),
+                                    "linear theory", dashed=True))  # fmt: skip
+        draw_xy(ax, variables, x, y, main, curves, path_label=tr.main)
+        ax.xaxis.label.set_fontsize(8)
+        ax.yaxis.label.set_fontsize(8)
+        ax.tick_params(labelsize=7)
 
 
 def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
@@ -61,8 +123,12 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
     p = d.config().physics()
     main = tr.main
     t = tr.times[main]
-    fig = Figure(figsize=(9, 9.5), dpi=100, layout="constrained")
-    ax1, ax2, ax3, ax4 = fig.subplots(4, 1, height_ratios=(3, 2, 2, 1.1))
+    pictures = EXHIBITS[d.exhibit].pictures(d.config())
+    fig = Figure(figsize=(9, 9.5 + 4.0 * bool(pictures)), dpi=100, layout="constrained")
+    top, bottom = fig.subfigures(2, 1, height_ratios=(9.5, 4.0)) if pictures else (fig, None)
+    ax1, ax2, ax3, ax4 = top.subplots(4, 1, height_ratios=(3, 2, 2, 1.1))
+    if bottom is not None:
+        draw_pictures(d, tr, np.atleast_1d(bottom.subplots(1, len(pictures))))
     ax2.sharex(ax1)
     ax3.sharex(ax1)
     ax4.axis("off")

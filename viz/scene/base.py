@@ -19,7 +19,11 @@ the screen by one path. Every exhibit has
   ``chart_data()``, ``camera``, ``runs()`` (the simulations a recording traces, by role),
 - ``build_panel(panel)``: its controls, in the tab the app gives it (:mod:`viz.scene.panel`),
 - ``revision``: bumped by every change; while unchanged, ``draw()`` and ``readout()`` would show
-  the same thing (the app skips them).
+  the same thing (the app skips them),
+- ``plot_variables(config)``, ``plot_curves(config, x, y, samples)``, ``pictures(config)``
+  and ``default_plot(config)``: what the panel's plot of any variable against any other and a recording's
+  pictures draw (:mod:`viz.scene.plot`); ``plot_samples()`` the main run's samples over the
+  chart window.
 """
 
 from __future__ import annotations
@@ -33,6 +37,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 import dynamics
+
+from .plot import Curve, Samples, Variable, common_variables
 
 # |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
 DIVERGED = 24.0
@@ -251,6 +257,7 @@ class Exhibit:
         self.revision = 0
         self.steps_last_advance = 0  # steps the main run took in the last advance
         self.history = History(self.chart_series, maxlen=history_len)
+        self.trace = Ring((1,), history_len)  # sized for the run's state in _reset_common
         self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
         self._chart_t = 0.0  # time of the newest chart point
         self.sim: dynamics.Simulation | None = None
@@ -379,6 +386,7 @@ class Exhibit:
         number of points stays the same); the chart starts afresh."""
         self.chart_spacing = float(seconds) / self.history.maxlen
         self.history.clear()
+        self.trace.clear()
         self.revision += 1
 
     def _record(self) -> None:
@@ -392,6 +400,8 @@ class Exhibit:
             values["energy_compare"] = log10_abs(c.energy_error)
             values["error_compare"] = log10_abs(c.error)
         self.history.add(self.t, **values)
+        err = smp.error[0] if smp.error is not None else math.nan
+        self.trace.add([self.t, *smp.state[0], smp.energy[0], smp.energy_error[0], err])
 
     def chart_data(self) -> tuple[np.ndarray, ...]:
         """``(t, log10|dE/E0|, log10 error, ...)`` of the last samples (see ``chart_series``)."""
@@ -513,6 +523,44 @@ class Exhibit:
         self._sample = None
         self._compare_sample = None
         self.history.clear()
+        d = self.sim.state.shape[1]
+        if self.trace._buf.shape[1] != d + 4:
+            self.trace = Ring((d + 4,), self.history.maxlen)
+        self.trace.clear()
+
+    # ------------------------------------------------------------------ any variable against any other
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """The quantities the exhibit can plot for ``config``, by name (:mod:`viz.scene.plot`):
+        at least time, the state, energy and the errors."""
+        system = dynamics.SYSTEMS[cls.system_for(config)]
+        return common_variables({n: n for n in system.state_names})
+
+    @classmethod
+    def system_for(cls, config) -> str:
+        """The name of the :data:`dynamics.SYSTEMS` entry a run of ``config`` integrates."""
+        return config.system_name
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples: Samples) -> list[Curve]:
+        """The exact curves that go with ``y`` against ``x`` (none by default)."""
+        return []
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        """The pairs a recording draws in its PNG: the seed's own pictures of the system."""
+        return ()
+
+    @classmethod
+    def default_plot(cls, config) -> tuple[str, str]:
+        """The pair the panel's plot shows first: the first picture (else energy against t)."""
+        pictures = cls.pictures(config)
+        return pictures[0] if pictures else ("t", "energy")
+
+    def plot_samples(self) -> Samples:
+        """The main run's samples over the chart window (member 0 of an ensemble)."""
+        d = self.sim.state.shape[1]
+        return Samples.from_rows(self.trace.array(), d)
 
     # ------------------------------------------------------------------ subclass hooks
     def _build(self) -> None:  # pragma: no cover - abstract

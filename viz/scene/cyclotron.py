@@ -24,6 +24,7 @@ from dynamics import measure
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt, positive
+from .plot import Curve, Variable, common_variables
 
 
 @dataclass(frozen=True)
@@ -212,6 +213,7 @@ class CyclotronExhibit(Exhibit):
             self.beam_motion = Motion((n, 2), maxlen=min(1800, max(64, 400_000 // n)))
         self.trail.lift()
         self.compare_trail.lift()
+        self.trace.clear()  # the plot's points before a kick lie in another well
         self._observe()
 
     def _rebuild_beam_node(self) -> None:
@@ -395,48 +397,66 @@ class CyclotronExhibit(Exhibit):
 
     # ------------------------------------------------------------------ the effective potential
     def well(self) -> dict:
-        """The charge's radial motion in its effective potential: ``p_phi`` is conserved, so
-        ``E_perp = p_r^2/2m + V_eff(r)`` (:func:`dynamics.cyclotron.radial_coordinates`) and
-        ``r`` swings between the orbit's closest and farthest distances from the axis, where
-        ``V_eff = E_perp``. Returns the chart's ``x`` (radii [m], the charge's ``r`` and the
-        well's bottom ``r0`` among them), ``V`` [J], the ``level`` E_perp [J], ``point`` and
-        ``bottom`` (V at r and at r0, NaN elsewhere), and ``x_range``/``y_range`` to draw."""
-        p, st = self.params, self.state
-        p_phi = float(cy.canonical_angular_momentum(p, st))
-        e_perp = 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2)
-        r_now = float(cy.radial_coordinates(p, st)[0])
-        centre = cy.guiding_centre(p, st)
-        dist, rho = math.hypot(centre[0], centre[1]), cy.larmor_radius(p, st)
-        r_min, r_max = abs(dist - rho), dist + rho
-        r0 = cy.effective_potential_minimum(p, p_phi) if p_phi != 0.0 else 0.0
-        lo = max(0.5 * r_min, 0.02 * r_max)
-        hi = 1.25 * r_max + 0.05
-        grid = np.linspace(lo, hi, 160)
-        x = np.unique(np.concatenate([grid, [r_now], [r0] if lo <= r0 <= hi else []]))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            V = cy.effective_potential(p, x, p_phi)
-        point = np.where(x == r_now, V, np.nan)
-        bottom = np.where(x == r0, V, np.nan) if lo <= r0 <= hi else np.full_like(x, np.nan)
-        return {
-            "x": x, "V": V, "level": np.full_like(x, e_perp), "point": point, "bottom": bottom,
-            "x_range": (float(lo), float(hi)), "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
-            "r": r_now, "r0": r0, "r_min": r_min, "r_max": r_max, "p_phi": p_phi,
-        }  # fmt: skip
+        """:func:`well` of the charge's current state."""
+        return well(self.params, self.state)
 
-    def refresh_panel(self, panel) -> None:
-        chart = panel.w.get("cyclotron.well")
-        if chart is None:
-            return
-        w = self.well()
-        chart.data = (w["x"], w["V"], w["level"], w["point"], w["bottom"])
-        frame = (w["x_range"], w["y_range"])
-        if frame != getattr(self, "_well_frame", None):  # a kick or a new start: a new well
-            uplot = panel.viser.uplot
-            chart.scales = {
-                "x": uplot.Scale(time=False, auto=False, range=w["x_range"]),
-                "y": uplot.Scale(auto=False, range=w["y_range"]),
-            }
-            self._well_frame = frame
+    # ------------------------------------------------------------------ plots
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """The state, and the radial motion of the seed's argument: ``r``, ``p_r``, ``p_phi``
+        and ``V_eff(r)`` for the sample's own ``p_phi``."""
+        p = config.physics()
+        units = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s"}
+        out = common_variables({n: f"{n} [{u}]" for n, u in units.items()})
+
+        def r(s):
+            return cy.radial_coordinates(p, s.states)[0]
+
+        def p_phi(s):
+            return cy.canonical_angular_momentum(p, s.states)
+
+        def v_eff(s):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return cy.effective_potential(p, r(s), p_phi(s))
+
+        out["r"] = Variable("distance from the axis r [m]", r)
+        out["p_r"] = Variable("radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1])
+        out["p_phi"] = Variable("canonical angular momentum p_φ [kg m²/s]", p_phi)
+        out["V_eff"] = Variable("effective potential V_eff(r) [J]", v_eff)
+        return out
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
+        """``(r, V_eff)``: the well for the newest sample's ``p_phi`` and its level ``E_perp``
+        (the path lies on the level, between the turning points); ``(x, y)``: the circle
+        predicted from the newest sample (guiding centre and Larmor radius)."""
+        if not len(samples):
+            return []
+        p, st = config.physics(), samples.states[-1]
+        if (x, y) == ("r", "V_eff"):
+            w = well(p, st)
+            lo, hi = w["x_range"]
+            return [
+                Curve(w["x"], w["V"], "V_eff(r) = (p_φ − qBr²/2)² / 2mr²"),
+                Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "E⊥ = m v⊥²/2", dashed=True),
+                Curve(np.array([w["r0"]]), np.array([cy.effective_potential(p, w["r0"], w["p_phi"])
+                      if w["r0"] > 0 else np.nan]), "r0 = √(2|p_φ|/|qB|)",
+                      kw={"marker": "o", "ls": "none"}),
+            ]  # fmt: skip
+        if (x, y) == ("x", "y"):
+            centre, rho = cy.guiding_centre(p, st), cy.larmor_radius(p, st)
+            phi = np.linspace(0.0, 2 * math.pi, 181)
+            return [
+                Curve(centre[0] + rho * np.cos(phi), centre[1] + rho * np.sin(phi),
+                      "predicted circle: centre r + m v×B/qB², radius v⊥/ω", dashed=True),
+                Curve(np.array([centre[0]]), np.array([centre[1]]), "guiding centre",
+                      kw={"marker": "+", "ms": 9, "ls": "none"}),
+            ]  # fmt: skip
+        return []
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        return (("r", "V_eff"), ("x", "y"))
 
     # ------------------------------------------------------------------ GUI
     def build_panel(self, panel) -> None:
@@ -454,25 +474,38 @@ class CyclotronExhibit(Exhibit):
                          lambda v: panel.send({"op": "set", "beam_size": int(v)}))  # fmt: skip
         kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
-        with gui.add_folder("Radial motion in the effective potential"):
-            gui.add_markdown(
-                "<small>p_φ is conserved, so r moves in the well V_eff(r) = (p_φ − qBr²/2)²/2mr² "
-                "at the level E⊥ (dashed): red, the charge; violet, the bottom r0 = √(2\\|p_φ\\|/\\|qB\\|). "
-                "It swings between the turning points at the gyrofrequency; a kick changes p_φ and "
-                "redraws the well.</small>"
-            )
-            u = panel.viser.uplot
-            panel.put("well", gui.add_uplot(
-                data=tuple(np.zeros(2) for _ in range(5)),
-                series=(
-                    u.Series(label="r [m]"),
-                    u.Series(label="V_eff [J]", stroke="#a05ce1", width=2),
-                    u.Series(label="E⊥ [J]", stroke="#888", width=1, dash=[5, 4]),
-                    u.Series(label="charge", stroke="#eb4628", width=0,
-                             points={"show": True, "size": 10, "fill": "#eb4628"}),
-                    u.Series(label="r0", stroke="#a05ce1", width=0,
-                             points={"show": True, "size": 8, "fill": "#a05ce1"}),
-                ),
-                scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(0.0, 1.0))},
-                aspect=1.6,
-            ))  # fmt: skip
+        panel.plot(
+            "p_φ is conserved, so r moves in the well V_eff(r) = (p_φ − qBr²/2)²/2mr² at the level "
+            "E⊥ (dashed), between the turning points, at the gyrofrequency; its bottom is "
+            "r0 = √(2\\|p_φ\\|/\\|qB\\|). A kick changes p_φ and redraws the well. Pick x and y "
+            "for any other pair: (x, y) shows the orbit from above with the predicted circle."
+        )
+
+
+def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
+    """The charge's radial motion in its effective potential: ``p_phi`` is conserved, so
+    ``E_perp = p_r^2/2m + V_eff(r)`` (:func:`dynamics.cyclotron.radial_coordinates`) and ``r``
+    swings between the orbit's closest and farthest distances from the axis, where
+    ``V_eff = E_perp``. Returns the chart's ``x`` (radii [m], the charge's ``r`` and the well's
+    bottom ``r0`` among them), ``V`` [J], the ``level`` E_perp [J], ``point`` and ``bottom`` (V at
+    r and at r0, NaN elsewhere), and ``x_range``/``y_range`` to draw."""
+    p_phi = float(cy.canonical_angular_momentum(p, st))
+    e_perp = 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2)
+    r_now = float(cy.radial_coordinates(p, st)[0])
+    centre = cy.guiding_centre(p, st)
+    dist, rho = math.hypot(centre[0], centre[1]), cy.larmor_radius(p, st)
+    r_min, r_max = abs(dist - rho), dist + rho
+    r0 = cy.effective_potential_minimum(p, p_phi) if p_phi != 0.0 else 0.0
+    lo = max(0.5 * r_min, 0.02 * r_max)
+    hi = 1.25 * r_max + 0.05
+    grid = np.linspace(lo, hi, 160)
+    x = np.unique(np.concatenate([grid, [r_now], [r0] if lo <= r0 <= hi else []]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        V = cy.effective_potential(p, x, p_phi)
+    point = np.where(x == r_now, V, np.nan)
+    bottom = np.where(x == r0, V, np.nan) if lo <= r0 <= hi else np.full_like(x, np.nan)
+    return {
+        "x": x, "V": V, "level": np.full_like(x, e_perp), "point": point, "bottom": bottom,
+        "x_range": (float(lo), float(hi)), "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
+        "r": r_now, "r0": r0, "r_min": r_min, "r_max": r_max, "p_phi": p_phi,
+    }  # fmt: skip

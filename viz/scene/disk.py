@@ -27,6 +27,7 @@ from dynamics import measure
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
+from .plot import Curve, Variable, common_variables
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
@@ -398,7 +399,88 @@ class DiskExhibit(Exhibit):
         t, x = self.motion.arrays()
         if self.config.mode == "driven":
             return {"bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])}
-        return {"growth_rate": measure.wobble_growth_rate(t, x)}
+        middle = int(np.argsort(dk.free_kernel_params(self.params))[1])
+        freq = measure.crossing_frequency(t, x[:, middle]) if len(t) else None
+        return {
+            "growth_rate": measure.wobble_growth_rate(t, x),
+            # the component on the intermediate axis is sn or cn: two zero crossings a period
+            "polhode_period": None if not freq else 2 * math.pi / freq,
+        }
+
+    def polhode_period(self) -> float:
+        """The polhode's period [s] from the Jacobi elliptic solution (released only)."""
+        return dk.polhode_period(self.sim.system.kernel_params(), self.state[:3])
+
+    # ------------------------------------------------------------------ plots
+    @classmethod
+    def system_for(cls, config) -> str:
+        return "driven-disk" if config.mode == "driven" else "free-body"
+
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """Driven: the angle and rate, and L about A in space (its tip circles the axle).
+        Released: the body-frame angular velocity about the centre of mass, the quaternion, and
+        L in space (conserved)."""
+        p = config.physics()
+        if config.mode == "driven":
+            out = common_variables({"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"})
+
+            def L(s):
+                return dk.rotation_about_axle(s.states[:, 0]) @ (dk.inertia_tensor(p) @ (p.omega * dk.AXLE))
+
+            about = "A"
+        else:
+            out = common_variables({
+                "w1": "ω₁ (body, smallest moment) [rad/s]", "w2": "ω₂ (body, intermediate) [rad/s]",
+                "w3": "ω₃ (body, largest moment) [rad/s]",
+                **{f"q{k}": f"quaternion q{k}" for k in range(4)},
+            })  # fmt: skip
+            moments = dk.free_kernel_params(p)
+
+            def L(s):
+                return dk.free_angular_momentum_space(moments, s.states)
+
+            about = "CM"
+        for k, axis in enumerate("xyz"):
+            out[f"L{axis}"] = Variable(f"L_{axis} about {about}, space [kg m²/s]",
+                                       lambda s, k=k: L(s)[:, k])  # fmt: skip
+        return out
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
+        """Released, two components of ``w``: the polhode's exact projection. ``E`` and ``|L|``
+        fixed, eliminating ``w_k`` leaves the conic ``sum_(i != k) I_i (I_k - I_i) w_i^2 =
+        2E I_k - L^2``: an ellipse, or along the intermediate axis a hyperbola, whose asymptotes
+        are the separatrix. Driven, ``(Lx, Lz)``: the circle L's tip sweeps about the axle."""
+        if not len(samples):
+            return []
+        p = config.physics()
+        if config.mode == "driven":
+            if (x, y) != ("Lx", "Lz"):
+                return []
+            body = dk.inertia_tensor(p) @ (p.omega * dk.AXLE)
+            rho = math.hypot(body[0], body[2])
+            phi = np.linspace(0.0, 2 * math.pi, 181)
+            return [Curve(rho * np.cos(phi), rho * np.sin(phi), "L's tip: circle about the axle",
+                          dashed=True)]  # fmt: skip
+        names = ("w1", "w2", "w3")
+        if x not in names or y not in names or x == y:
+            return []
+        moments = dk.free_kernel_params(p)
+        w = samples.states[-1, :3]
+        two_e = float(np.sum(moments * w * w))
+        l2 = float(np.sum((moments * w) ** 2))
+        i, j = names.index(x), names.index(y)
+        k = 3 - i - j
+        a, b = moments[i] * (moments[k] - moments[i]), moments[j] * (moments[k] - moments[j])
+        c = two_e * moments[k] - l2
+        reach = math.sqrt(two_e / float(moments.min()))  # no component of w is larger
+        return [Curve(*_conic(a, b, c, reach), "exact polhode: Σ I_i (I_k − I_i) ω_i² = 2E I_k − L²",
+                      dashed=True)]  # fmt: skip
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        return (("Lx", "Lz"),) if config.mode == "driven" else (("w1", "w3"), ("w2", "w3"))
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
@@ -493,13 +575,16 @@ class DiskExhibit(Exhibit):
             axle = rot @ dk.AXLE
             cos_axle = float(axle @ L / max(np.linalg.norm(L), 1e-300))
             err = float(np.max(smp.error)) if smp.error is not None else 0.0
+            meas = self.measured()
             lines += [
                 f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
                 f"| error vs DOP853 reference | 0 | {err:.2e} |",
                 f"| \\|L\\| about CM [kg m²/s] | conserved | {fmt(float(np.linalg.norm(L)), 8)} |",
                 f"| axle · L̂ (tumble: ±1 flips) | — | {cos_axle:+.3f} |",
                 f"| wobble growth rate [1/s] | {fmt(self.growth_rate_theory())} "
-                f"| {fmt(self.measured()['growth_rate'])} |",
+                f"| {fmt(meas['growth_rate'])} |",
+                f"| polhode period 4K(k)/λ [s] | {fmt(self.polhode_period())} "
+                f"| {fmt(meas['polhode_period'])} |",
             ]
             lines.append(
                 "\nSpin about the intermediate principal axis is unstable: "
@@ -527,8 +612,41 @@ class DiskExhibit(Exhibit):
             )
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
         panel.on(follow, lambda v: panel.send({"op": "set", "follow_cm": bool(v)}))
+        panel.plot(
+            "Released: the angular velocity in the body's principal frame. E and \\|L\\| are "
+            "conserved, so its tip runs on the polhode, where the energy ellipsoid meets the "
+            "sphere of \\|L\\|; seen along the intermediate axis it is a hyperbola whose "
+            "asymptotes are the separatrix the tumble follows. Driven: L about A, whose tip "
+            "circles the axle."
+        )
         panel.param_inputs({
             "disk_mass": "Disk mass M [kg]", "radius": "Radius R [m]",
             "bead_mass": "Bead mass m [kg]", "omega": "Spin ω [rad/s]",
         })  # fmt: skip
         panel.integrator_inputs(compare=False)
+
+
+def _conic(a: float, b: float, c: float, reach: float, n: int = 721) -> tuple[np.ndarray, np.ndarray]:
+    """Points of ``a x^2 + b y^2 = c``: an ellipse (one closed curve) or a hyperbola (both
+    branches, split by NaN, out to ``reach`` from the centre), or nothing (NaN)."""
+    if a < 0 and b < 0:
+        a, b, c = -a, -b, -c
+    if a > 0 and b > 0:
+        if c <= 0:
+            return np.full(1, np.nan), np.full(1, np.nan)
+        phi = np.linspace(0.0, 2 * math.pi, n)
+        return math.sqrt(c / a) * np.cos(phi), math.sqrt(c / b) * np.sin(phi)
+    if a == 0 or b == 0 or c == 0:  # degenerate: the asymptotes themselves
+        if a * b >= 0:
+            return np.full(1, np.nan), np.full(1, np.nan)
+        s = math.sqrt(-a / b)
+        u = np.linspace(-reach, reach, 3)
+        return np.concatenate([u, [np.nan], u]), np.concatenate([s * u, [np.nan], -s * u])
+    vertex = math.sqrt(abs(c / a)) if (a > 0) == (c > 0) else math.sqrt(abs(c / b))
+    u = np.linspace(-1.0, 1.0, n) * (math.acosh(max(1.0, reach / vertex)) + 0.1)
+    nan = [np.nan]
+    if (a > 0) == (c > 0):  # branches open along x
+        px, py = math.sqrt(c / a) * np.cosh(u), math.sqrt(-c / b) * np.sinh(u)
+        return np.concatenate([px, nan, -px]), np.concatenate([py, nan, py])
+    px, py = math.sqrt(-c / a) * np.sinh(u), math.sqrt(c / b) * np.cosh(u)
+    return np.concatenate([px, nan, px]), np.concatenate([py, nan, -py])

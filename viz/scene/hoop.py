@@ -24,6 +24,7 @@ from dynamics import measure
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
 from .panel import number_text
+from .plot import Curve, Variable, common_variables
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -259,6 +260,7 @@ class HoopExhibit(Exhibit):
         self.trail.lift()
         self.cmp_trail.lift()
         self.motion.clear()
+        self.trace.clear()
         self._observe()
 
     def modal_coordinates(self, state) -> np.ndarray:
@@ -286,6 +288,66 @@ class HoopExhibit(Exhibit):
         ghost = hp.linear_solution(self.params, sim.state0[0], t - sim.t0)[:, :2]
         g = measure.modal_coordinates(ghost, self.shapes)
         return t, q[:, 0], q[:, 1], g[:, 0], g[:, 1]
+
+    # ------------------------------------------------------------------ plots
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """The angles, their rates and the two normal-mode coordinates (the angles on the mode
+        shapes, :func:`dynamics.measure.modal_coordinates`)."""
+        _, shapes = hp.normal_modes(config.physics())
+        out = common_variables({
+            "theta1": "hoop angle θ1 [rad]", "theta2": "bead angle θ2 [rad]",
+            "omega1": "hoop rate θ1' [rad/s]", "omega2": "bead rate θ2' [rad/s]",
+        })  # fmt: skip
+        for k in (0, 1):
+            out[f"q{k + 1}"] = Variable(
+                f"mode-{k + 1} coordinate q{k + 1} [rad]",
+                lambda s, k=k: measure.modal_coordinates(s.states[:, :2], shapes)[:, k],
+            )
+        return out
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
+        """Configuration space ``(theta1, theta2)``: the mode lines (1, 1) and (m, -(M + m)).
+        A phase portrait ``(theta_i, theta_i')``: the separatrix of the pendulum mode 1 reduces
+        to, ``theta' = +-2 omega_1 cos(theta / 2)``, and, for a motion on the mode-1 set
+        (``theta1 = theta2``), its exact orbit ``theta'^2 = 2 (e + omega_1^2 cos theta)``."""
+        p = config.physics()
+        freqs, shapes = hp.normal_modes(p)
+        pair = {x, y}
+        if pair == {"theta1", "theta2"}:
+            out = []
+            for k, shape in enumerate(shapes):
+                u = np.asarray(shape) / np.abs(shape).max() * math.pi
+                line = np.array([-u, u])
+                cols = (0, 1) if x == "theta1" else (1, 0)
+                out.append(Curve(line[:, cols[0]], line[:, cols[1]],
+                                 f"mode {k + 1}: {('(1, 1)', '(m, −(M+m))')[k]}"))  # fmt: skip
+            return out
+        if (x, y) not in (("theta1", "omega1"), ("theta2", "omega2")):
+            return []
+        w1 = float(freqs[0])
+        th = np.linspace(-math.pi, math.pi, 361)
+        top = 2 * w1 * np.cos(th / 2)
+        out = [
+            Curve(np.concatenate([th, th[::-1]]), np.concatenate([top, -top[::-1]]),
+                  "separatrix θ' = ±2ω₁ cos(θ/2)"),
+        ]  # fmt: skip
+        if len(samples):
+            s = samples.states[-1]
+            # on the mode-1 set, to what an integrator keeps of it (the set is unstable at
+            # large amplitude: round-off grows off it by about 1e-9 over a 3 rad swing)
+            if abs(s[0] - s[1]) < 1e-6 and abs(s[2] - s[3]) < 1e-6:
+                e = 0.5 * s[2] ** 2 - w1 * w1 * math.cos(s[0])
+                with np.errstate(invalid="ignore"):
+                    v = np.sqrt(2 * (e + w1 * w1 * np.cos(th)))
+                out.append(Curve(np.concatenate([th, th[::-1]]), np.concatenate([v, -v[::-1]]),
+                                 "exact pendulum orbit", dashed=True))  # fmt: skip
+        return out
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        return (("theta1", "omega1"), ("theta1", "theta2"))
 
     def refresh_panel(self, panel) -> None:
         chart = panel.w.get("hoop.modes_chart")
@@ -391,6 +453,12 @@ class HoopExhibit(Exhibit):
                 panel.number(f"th{k + 1}", f"θ{k + 1} (custom) [rad]", c.angles[k], angle(k),
                              current=lambda k=k: self.config.angles[k], lo=-3.14, hi=3.14)  # fmt: skip
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
+        panel.plot(
+            "Mode 1 (θ1 = θ2) is exactly a pendulum, θ'' = −ω₁² sin θ with ω₁ = √(g/2a): its "
+            "phase portrait (θ1, θ1') stays on the orbit of its energy, inside the separatrix "
+            "θ' = ±2ω₁ cos(θ/2) (it swings) or outside it (it goes over the top). Pick θ2 "
+            "against θ1 for configuration space with the two mode lines."
+        )
         with gui.add_folder("Normal-mode coordinates"):
             gui.add_markdown(
                 "<small>The angles on the two mode shapes: θ = q1 (1, 1) + q2 (mode 2's shape). "

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -27,6 +28,7 @@ import dynamics
 
 from ..warm import warm_method
 from .base import LOG_FLOOR
+from .plot import PlotImage
 
 
 def rtol_label(rtol: float) -> str:
@@ -88,6 +90,11 @@ class Panel:
         self.w: dict[str, Any] = app.w
         self.labels: dict[str, str] = {}  # setting name (as in messages) -> the field's label
         self._time_axes: dict[str, tuple[float, float, float]] = {}  # chart -> (t0, t1, window)
+        self.plot_choice = exhibit.default_plot(exhibit.config)  # (x, y) of the panel's plot
+        self._plot_image: PlotImage | None = None
+        self._plot_names: tuple[str, ...] | None = None  # the quantities of the motion shown
+        self._plot_drawn: tuple | None = None  # what the image shows: (choice, trace version, theme)
+        self._plot_time = -math.inf  # when it was drawn (time.monotonic)
 
     def send(self, command) -> None:
         self.app.enqueue(self.key, command)
@@ -274,6 +281,83 @@ class Panel:
             reset = gui.add_button(f"Reset {ex.title.lower()}", icon=self.viser.Icon.REFRESH)
             reset.on_click(lambda _: self.send("reset"))
         self.show_step_controls()
+
+    PLOT_INTERVAL = 0.2  # s between updates of the plot (about 1 ms each; 20-40 ms new axes)
+
+    def plot(self, note: str) -> None:
+        """The plot of any variable against any other: two dropdowns naming the quantities as
+        their axes do, and the image (:mod:`viz.scene.plot`), over the chart window; ``note``
+        says what the exhibit's first pair shows."""
+        ex = self.exhibit
+        variables = ex.plot_variables(ex.config)
+        labels = tuple(v.label for v in variables.values())
+        x, y = self.plot_choice
+        with self.gui.add_folder("Plot any two variables"):
+            self.put("plot_note", self.gui.add_markdown(
+                f"<small>{note} Blue: the main run over the chart window, red: now; the other "
+                "lines are exact curves of the theory (see the legend).</small>"
+            ))  # fmt: skip
+            self.put("plot_y", self.gui.add_dropdown("y", options=labels, initial_value=variables[y].label))
+            self.put("plot_x", self.gui.add_dropdown("x", options=labels, initial_value=variables[x].label))
+            self.put("plot", self.gui.add_image(np.full((320, 360, 3), 255, np.uint8), format="jpeg"))
+
+        def choose(axis: int, label: str) -> None:
+            variables = ex.plot_variables(ex.config)
+            name = next((n for n, v in variables.items() if v.label == label), None)
+            if name is None:
+                self.refuse(f"{'xy'[axis]}: {label!r} is not a quantity of this exhibit")
+                return
+            choice = list(self.plot_choice)
+            choice[axis] = name
+            self.plot_choice = (choice[0], choice[1])
+            self.app.enqueue("call", lambda app: self.refresh_plot(force=True))
+
+        self.on(self.w[f"{self.key}.plot_x"], lambda v: choose(0, v))
+        self.on(self.w[f"{self.key}.plot_y"], lambda v: choose(1, v))
+
+    def refresh_plot(self, force: bool = False) -> None:
+        """Redraw the plot if something new is to be shown, at most every ``PLOT_INTERVAL``
+        seconds unless ``force``d (a new choice)."""
+        image = self.w.get(f"{self.key}.plot")
+        if image is None:
+            return
+        now = time.monotonic()
+        if not force and now - self._plot_time < self.PLOT_INTERVAL:
+            return
+        ex = self.exhibit
+        variables = ex.plot_variables(ex.config)
+        if tuple(variables) != self._plot_names:  # another motion, other quantities: its own first
+            if self._plot_names is not None or not set(self.plot_choice) <= set(variables):
+                self.plot_choice = ex.default_plot(ex.config)
+            self._plot_names = tuple(variables)
+        dark = getattr(self.app, "theme", "light") == "dark"
+        drawn = (self.plot_choice, ex.trace.version, ex.config, dark)
+        if drawn == self._plot_drawn:
+            return
+        self.sync_plot(variables)
+        if self._plot_image is None:
+            self._plot_image = PlotImage()
+        x, y = self.plot_choice
+        samples = ex.plot_samples()
+        image.image = self._plot_image.render(
+            dark, variables=variables, x=x, y=y, samples=samples,
+            curves=ex.plot_curves(ex.config, x, y, samples), path_label=ex.sim.method.name,
+        )  # fmt: skip
+        self._plot_drawn, self._plot_time = drawn, now
+
+    def sync_plot(self, variables) -> None:
+        """The plot's dropdowns show the quantities of the running motion and the choice."""
+        labels = tuple(v.label for v in variables.values())
+        hx, hy = self.w[f"{self.key}.plot_x"], self.w[f"{self.key}.plot_y"]
+        syncing, self.app._syncing = self.app._syncing, True
+        try:
+            for h, name in ((hx, self.plot_choice[0]), (hy, self.plot_choice[1])):
+                if tuple(h.options) != labels:
+                    h.options = labels
+                if h.value != variables[name].label:
+                    h.value = variables[name].label
+        finally:
+            self.app._syncing = syncing
 
     # ------------------------------------------------------------------ keeping widgets true
     def sync(self) -> None:
