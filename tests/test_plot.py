@@ -56,7 +56,7 @@ def test_every_quantity_is_finite_and_every_picture_draws(cls, config):
     for x, y in pairs:
         curves = cls.plot_curves(config, x, y, smp)
         rgb = image.render(variables=variables, x=x, y=y, samples=smp, curves=curves)
-        assert rgb.shape == (320, 360, 3) and rgb.std() > 10  # something is drawn
+        assert rgb.shape == (500, 560, 3) and rgb.std() > 10  # something is drawn
 
 
 def test_the_charge_sits_in_its_well_at_the_level_of_its_transverse_energy():
@@ -164,7 +164,7 @@ def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_oth
         app.exhibits["disk"].apply({"op": "set", "mode": "released"})
         disk.refresh_plot(force=True)
         released = DiskExhibit.plot_variables(app.exhibits["disk"].config)
-        assert disk.plot_choice == DiskExhibit.default_plot(app.exhibits["disk"].config) == ("w1", "w3")
+        assert disk.plot_choice == DiskExhibit.default_plot(app.exhibits["disk"].config) == ("w2", "w3")
         assert tuple(app.w["disk.plot_x"].options) == tuple(v.label for v in released.values())
     finally:
         app.stop()

@@ -437,10 +437,10 @@ class CyclotronExhibit(Exhibit):
             w = well(p, st)
             lo, hi = w["x_range"]
             return [
-                Curve(w["x"], w["V"], "V_eff(r) = (p_φ − qBr²/2)² / 2mr²"),
-                Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "E⊥ = m v⊥²/2", dashed=True),
+                Curve(w["x"], w["V"], "V_eff(r)"),
+                Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "level E⊥", dashed=True),
                 Curve(np.array([w["r0"]]), np.array([cy.effective_potential(p, w["r0"], w["p_phi"])
-                      if w["r0"] > 0 else np.nan]), "r0 = √(2|p_φ|/|qB|)",
+                      if w["r0"] > 0 else np.nan]), "bottom r0",
                       kw={"marker": "o", "ls": "none"}),
             ]  # fmt: skip
         if (x, y) == ("x", "y"):
@@ -448,7 +448,7 @@ class CyclotronExhibit(Exhibit):
             phi = np.linspace(0.0, 2 * math.pi, 181)
             return [
                 Curve(centre[0] + rho * np.cos(phi), centre[1] + rho * np.sin(phi),
-                      "predicted circle: centre r + m v×B/qB², radius v⊥/ω", dashed=True),
+                      "predicted circle", dashed=True),
                 Curve(np.array([centre[0]]), np.array([centre[1]]), "guiding centre",
                       kw={"marker": "+", "ms": 9, "ls": "none"}),
             ]  # fmt: skip

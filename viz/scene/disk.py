@@ -461,8 +461,7 @@ class DiskExhibit(Exhibit):
             body = dk.inertia_tensor(p) @ (p.omega * dk.AXLE)
             rho = math.hypot(body[0], body[2])
             phi = np.linspace(0.0, 2 * math.pi, 181)
-            return [Curve(rho * np.cos(phi), rho * np.sin(phi), "L's tip: circle about the axle",
-                          dashed=True)]  # fmt: skip
+            return [Curve(rho * np.cos(phi), rho * np.sin(phi), "L's cone", dashed=True)]
         names = ("w1", "w2", "w3")
         if x not in names or y not in names or x == y:
             return []
@@ -475,12 +474,12 @@ class DiskExhibit(Exhibit):
         a, b = moments[i] * (moments[k] - moments[i]), moments[j] * (moments[k] - moments[j])
         c = two_e * moments[k] - l2
         reach = math.sqrt(two_e / float(moments.min()))  # no component of w is larger
-        return [Curve(*_conic(a, b, c, reach), "exact polhode: Σ I_i (I_k − I_i) ω_i² = 2E I_k − L²",
+        return [Curve(*_conic(a, b, c, reach), "exact polhode",
                       dashed=True)]  # fmt: skip
 
     @classmethod
     def pictures(cls, config) -> tuple[tuple[str, str], ...]:
-        return (("Lx", "Lz"),) if config.mode == "driven" else (("w1", "w3"), ("w2", "w3"))
+        return (("Lx", "Lz"),) if config.mode == "driven" else (("w2", "w3"), ("w1", "w3"))
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:

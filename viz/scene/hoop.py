@@ -321,8 +321,7 @@ class HoopExhibit(Exhibit):
                 u = np.asarray(shape) / np.abs(shape).max() * math.pi
                 line = np.array([-u, u])
                 cols = (0, 1) if x == "theta1" else (1, 0)
-                out.append(Curve(line[:, cols[0]], line[:, cols[1]],
-                                 f"mode {k + 1}: {('(1, 1)', '(m, −(M+m))')[k]}"))  # fmt: skip
+                out.append(Curve(line[:, cols[0]], line[:, cols[1]], f"mode {k + 1} line"))
             return out
         if (x, y) not in (("theta1", "omega1"), ("theta2", "omega2")):
             return []
@@ -331,7 +330,7 @@ class HoopExhibit(Exhibit):
         top = 2 * w1 * np.cos(th / 2)
         out = [
             Curve(np.concatenate([th, th[::-1]]), np.concatenate([top, -top[::-1]]),
-                  "separatrix θ' = ±2ω₁ cos(θ/2)"),
+                  "separatrix"),
         ]  # fmt: skip
         if len(samples):
             s = samples.states[-1]

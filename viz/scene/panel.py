@@ -299,7 +299,7 @@ class Panel:
             ))  # fmt: skip
             self.put("plot_y", self.gui.add_dropdown("y", options=labels, initial_value=variables[y].label))
             self.put("plot_x", self.gui.add_dropdown("x", options=labels, initial_value=variables[x].label))
-            self.put("plot", self.gui.add_image(np.full((320, 360, 3), 255, np.uint8), format="jpeg"))
+            self.put("plot", self.gui.add_image(np.full((500, 560, 3), 255, np.uint8), format="jpeg"))
 
         def choose(axis: int, label: str) -> None:
             variables = ex.plot_variables(ex.config)

@@ -98,11 +98,12 @@ def draw_xy(
     xs, ys = _finite(variables, x, y, samples)
     artists = []
     for k, c in enumerate(curves):
+        # solid curves under the path (it runs on them), dashed ones over it (both show)
         style = {"color": CURVE_COLOURS[k % len(CURVE_COLOURS)], "lw": 1.3,
-                 "ls": "--" if c.dashed else "-", **c.kw}  # fmt: skip
+                 "ls": "--" if c.dashed else "-", "zorder": 3 if c.dashed else 1, **c.kw}  # fmt: skip
         artists += ax.plot(c.x, c.y, label=c.label, **style)
-    artists += ax.plot(xs, ys, color=PATH_COLOUR, lw=1.2, label=path_label)
-    artists += ax.plot(xs[-1:], ys[-1:], "o", color=POINT_COLOUR, ms=5)
+    artists += ax.plot(xs, ys, color=PATH_COLOUR, lw=1.2, label=path_label, zorder=2)
+    artists += ax.plot(xs[-1:], ys[-1:], "o", color=POINT_COLOUR, ms=5, zorder=4)
     ax.set_xlabel(variables[x].label)
     ax.set_ylabel(variables[y].label)
     lims = limits(xs, ys, curves)
@@ -113,7 +114,8 @@ def draw_xy(
     if legend and (curves or path_label):
         # below the axes, not over the path: the figure's constrained layout makes room
         ax.legend(handles=artists[:-1], fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2),
-                  ncols=2, frameon=False, handlelength=1.6, columnspacing=1.0)  # fmt: skip
+                  ncols=2 if len(artists) > 3 else 1, frameon=False, handlelength=1.4,
+                  columnspacing=0.8)  # fmt: skip
     return artists
 
 
@@ -160,7 +162,9 @@ class PlotImage:
     :func:`_holds`), kept as a background, and each update restores it and draws the data's
     artists over it (matplotlib's blitting)."""
 
-    def __init__(self, width_px: int = 360, height_px: int = 320, dpi: int = 100) -> None:
+    # The panel shows the image about 280 px wide: drawn at twice that, it stays sharp on a
+    # high-density screen and its 8-point text reads at 11 px.
+    def __init__(self, width_px: int = 560, height_px: int = 500, dpi: int = 200) -> None:
         import matplotlib
 
         matplotlib.use("Agg", force=False)
@@ -199,7 +203,7 @@ class PlotImage:
                 self._draw_background()
             else:
                 self.canvas.restore_region(self._background)
-        for artist in self._artists:
+        for artist in sorted(self._artists, key=lambda a: a.get_zorder()):
             self.ax.draw_artist(artist)
         return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
 

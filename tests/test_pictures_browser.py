@@ -1,0 +1,129 @@
+"""The seed's pictures as a person sees them in the live viewer (headless Chromium): the well
+V_eff(r), the hoop's phase portrait and configuration space, the disk's polhode, and
+Poinsot's construction. Each test checks the picture shows the motion and the exact curve
+beside it, and saves it; ``make screenshots`` saves them as the README's stills
+(``docs/img/pictures/``), ``make test`` in a temporary folder."""
+
+from __future__ import annotations
+
+import io
+import time
+
+import browser
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    browser.require_browser()
+    from viz.app import MechvizApp, warm_up
+    from viz.scene import CyclotronConfig, DiskConfig, HoopConfig
+
+    configs = {
+        # off the axis and kicked: r swings in its well
+        "cyclotron": CyclotronConfig(centre=(0.5, 0.0), vz=0.0, method="boris", dt=0.01),
+        "hoop": HoopConfig(mode="mode 1", amplitude=1.5, method="taylor", rtol=1e-10),
+        "disk": DiskConfig(mode="released", extra_spin=(0.0, 0.0, 0.05)),
+    }
+    warm_up("defaults", configs)
+    app = MechvizApp(port=0, environment_map=False, configs=configs)
+    try:
+        with browser.open_page(app.url, width=1280, height=800, timeout_s=60) as page:
+            browser.dismiss_webgl_alert(page)
+            yield app, page
+    finally:
+        app.stop()
+
+
+def _plot(page, tab: str) -> np.ndarray:
+    """The visible tab's plot image as the page shows it (RGB)."""
+    from PIL import Image
+
+    page.get_by_role("tab", name=tab).click()
+    time.sleep(1.0)
+    for _attempt in range(10):
+        images = [i for i in page.locator("img").all() if i.is_visible()]
+        images = [i for i in images if (i.bounding_box() or {}).get("height", 0) > 150]
+        if images:
+            img = images[0]
+            img.evaluate("e => e.scrollIntoView({block: 'center'})")
+            time.sleep(0.6)
+            png = page.screenshot(clip=img.bounding_box())
+            return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+        time.sleep(0.5)
+    raise AssertionError(f"no plot image in the {tab} tab")
+
+
+def _pixels(img: np.ndarray, hex_colour: str, tol: int = 40) -> int:
+    rgb = np.array([int(hex_colour[i : i + 2], 16) for i in (1, 3, 5)])
+    return int((np.abs(img.astype(int) - rgb).max(axis=-1) < tol).sum())
+
+
+def _save(img: np.ndarray, name: str, tmp_path) -> None:
+    from PIL import Image
+
+    Image.fromarray(img).save(browser.picture_path(f"pictures/{name}.png", tmp_path))
+
+
+def _choose(app, key: str, x: str, y: str) -> None:
+    ex = app.exhibits[key]
+    variables = ex.plot_variables(ex.config)
+    app.w[f"{key}.plot_x"].value = variables[x].label  # as the dropdowns do
+    app.w[f"{key}.plot_y"].value = variables[y].label
+
+
+KICK = {"op": "kick", "dv": 0.4}
+MIX = {"op": "set", "mode": "mix", "amplitude": 1.0}
+MODE_1 = {"op": "set", "mode": "mode 1", "amplitude": 1.5}
+
+
+@pytest.mark.parametrize(
+    ("tab", "key", "pair", "name", "start"),
+    [
+        ("Cyclotron", "cyclotron", ("r", "V_eff"), "well", ("reset", KICK)),
+        ("Cyclotron", "cyclotron", ("x", "y"), "orbit-from-above", ("reset", KICK)),
+        # mode 1 is unstable at large amplitude: the picture is taken within a few periods
+        ("Hoop", "hoop", ("theta1", "omega1"), "phase-portrait", (MODE_1, "reset")),
+        ("Hoop", "hoop", ("theta1", "theta2"), "configuration-space", (MIX, "reset")),
+        ("Disk", "disk", ("w2", "w3"), "polhode", ("reset",)),
+    ],
+)
+def test_the_plot_shows_the_motion_and_its_exact_curve(viewer, tmp_path, tab, key, pair, name, start):
+    from viz.scene.plot import CURVE_COLOURS, PATH_COLOUR
+
+    app, page = viewer
+    for command in start:
+        app.enqueue(key, command)
+    time.sleep(0.5)
+    _choose(app, key, *pair)
+    deadline = time.monotonic() + 20
+    while len(app.exhibits[key].trace) < 200 and time.monotonic() < deadline:
+        time.sleep(0.5)  # let the path grow
+    img = _plot(page, tab)
+    assert app.panels[key].plot_choice == pair
+    _save(img, name, tmp_path)
+    # a dashed curve drawn over the path where the motion runs on it hides much of the path
+    assert _pixels(img, PATH_COLOUR) > 25, "the motion's path"
+    assert _pixels(img, CURVE_COLOURS[0]) > 100, "the exact curve"
+
+
+def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
+    """Presentation mode on the released disk: the inertia ellipsoid on its invariable plane,
+    the polhode and herpolhode, the principal axes about the centre of mass."""
+    app, page = viewer
+    app.enqueue("app", {"op": "present", "value": "Disk"})
+    try:
+        time.sleep(3.0)
+        img = browser.screenshot_array(page)
+        background = np.median(img.reshape(-1, 3), axis=0)
+        drawn = np.abs(img.astype(int) - background).max(axis=-1) > 40
+        assert drawn.mean() > 0.02  # the construction fills part of the page
+        rows, cols = np.nonzero(drawn[:, : img.shape[1] - 360])  # left of the panel's corner
+        cy, cx = int(np.median(rows)), int(np.median(cols))
+        half = 260  # the README's still: the body and its construction, not the floor
+        _save(img[max(0, cy - half) : cy + half, max(0, cx - half) : cx + half], "poinsot", tmp_path)
+    finally:
+        app.enqueue("app", {"op": "present", "value": "Off"})
