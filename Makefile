@@ -37,7 +37,7 @@ bench-docs: $(VENV)/.installed-test
 
 screenshots: $(VENV)/.installed-test
 	MECHVIZ_WRITE_DOCS=1 MECHVIZ_ALL_DEMOS=1 $(BIN)/python -m pytest -q \
-		tests/test_viewer_browser.py tests/test_recording_browser.py
+		tests/test_viewer_browser.py tests/test_recording_browser.py tests/test_pictures_browser.py
 
 # The GIF in the README's "Use it in class": the radial-kick demo filmed in headless Chromium.
 README_GIF := docs/img/radial-kick.gif

@@ -11,7 +11,14 @@ import pytest
 
 import dynamics
 from dynamics import hoop as hp
-from viz.scene import CyclotronConfig, CyclotronExhibit, DiskConfig, DiskExhibit, HoopConfig, HoopExhibit
+from viz.scene import (
+    CyclotronConfig,
+    CyclotronExhibit,
+    DiskConfig,
+    DiskExhibit,
+    HoopConfig,
+    HoopExhibit,
+)
 from viz.scene.plot import PlotImage, Samples
 
 CASES = [
@@ -136,7 +143,8 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
         np.testing.assert_allclose(a * w[:, i] ** 2 + b * w[:, j] ** 2, c, atol=1e-9 * two_e * moments[k])
         (curve,) = DiskExhibit.plot_curves(cfg, x, y, smp)
         ok = np.isfinite(curve.x)
-        np.testing.assert_allclose(a * curve.x[ok] ** 2 + b * curve.y[ok] ** 2, c, atol=1e-9 * two_e * moments[k])
+        on_curve = a * curve.x[ok] ** 2 + b * curve.y[ok] ** 2
+        np.testing.assert_allclose(on_curve, c, atol=1e-9 * two_e * moments[k])
         reach = np.abs(np.column_stack([curve.x[ok], curve.y[ok]])).max()
         assert reach >= np.abs(w[:, [i, j]]).max()  # the curve reaches as far as the motion
 

@@ -460,3 +460,20 @@ def test_the_csv_holds_the_quantities_of_the_pictures_and_they_obey_their_physic
         q = np.array([float(r["q1"]), float(r["q2"])])
         theta = q @ shapes
         assert theta == pytest.approx([float(r["theta1"]), float(r["theta2"])], abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("name", "nodes"),
+    [
+        ("tumbling-disk", ("/disk/poinsot/ellipsoid", "/disk/invariable_plane/plane",
+                           "/disk/poinsot/polhode/c000001", "/disk/invariable_plane/herpolhode/c000001")),
+        ("hoop-mode1", ("/hoop/configuration_space/modes", "/hoop/configuration_space/path/c000001")),
+    ],
+)  # fmt: skip
+def test_the_3d_pictures_are_in_the_scene_recording(recorded, name, nodes):
+    """Poinsot's construction with its polhode and herpolhode traced, and configuration space
+    with the path drawn: their scene nodes are in the .viser."""
+    out, _ = recorded
+    messages = decode_recording((out / f"{name}.viser").read_bytes())["messages"]
+    names = {m.get("name") for _, m in messages if isinstance(m, dict)}
+    assert set(nodes) <= names, set(nodes) - names

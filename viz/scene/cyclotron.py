@@ -421,8 +421,8 @@ class CyclotronExhibit(Exhibit):
 
         out["r"] = Variable("distance from the axis r [m]", r)
         out["p_r"] = Variable("radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1])
-        out["p_phi"] = Variable("canonical angular momentum p_φ [kg m²/s]", p_phi)
-        out["V_eff"] = Variable("effective potential V_eff(r) [J]", v_eff)
+        out["p_phi"] = Variable("canonical ang. momentum p_φ [kg m²/s]", p_phi)
+        out["V_eff"] = Variable("V_eff(r) [J]", v_eff)
         return out
 
     @classmethod

@@ -431,8 +431,8 @@ class DiskExhibit(Exhibit):
             about = "A"
         else:
             out = common_variables({
-                "w1": "ω₁ (body, smallest moment) [rad/s]", "w2": "ω₂ (body, intermediate) [rad/s]",
-                "w3": "ω₃ (body, largest moment) [rad/s]",
+                # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
+                "w1": "body ω₁ [rad/s]", "w2": "body ω₂ [rad/s]", "w3": "body ω₃ [rad/s]",
                 **{f"q{k}": f"quaternion q{k}" for k in range(4)},
             })  # fmt: skip
             moments = dk.free_kernel_params(p)
@@ -442,7 +442,7 @@ class DiskExhibit(Exhibit):
 
             about = "CM"
         for k, axis in enumerate("xyz"):
-            out[f"L{axis}"] = Variable(f"L_{axis} about {about}, space [kg m²/s]",
+            out[f"L{axis}"] = Variable(f"L_{axis} about {about} [kg m²/s]",
                                        lambda s, k=k: L(s)[:, k])  # fmt: skip
         return out
 
@@ -612,7 +612,8 @@ class DiskExhibit(Exhibit):
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
         panel.on(follow, lambda v: panel.send({"op": "set", "follow_cm": bool(v)}))
         panel.plot(
-            "Released: the angular velocity in the body's principal frame. E and \\|L\\| are "
+            "Released: the angular velocity in the body's principal frame about the centre of "
+            "mass (axes 1, 2, 3 from the smallest moment to the largest). E and \\|L\\| are "
             "conserved, so its tip runs on the polhode, where the energy ellipsoid meets the "
             "sphere of \\|L\\|; seen along the intermediate axis it is a hyperbola whose "
             "asymptotes are the separatrix the tumble follows. Driven: L about A, whose tip "
