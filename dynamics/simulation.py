@@ -19,7 +19,10 @@ chunk; :meth:`Simulation.estimated_steps` says beforehand how much work a run is
 
 Fixed-step methods always take steps of exactly ``dt``: :meth:`Simulation.advance_to` takes
 the whole number of steps that fits and carries the remainder, so ``t`` is ``steps * dt``.
-Adaptive methods land exactly on the requested time.
+Adaptive methods land exactly on the requested time; the compiled ones (DOP853, Taylor's method)
+by their dense output: their steps are not cut at the times asked for (nor at the chunks'
+ends), the step that passes one is kept and evaluated there, and the next call goes on from its
+end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`).
 """
 
 from __future__ import annotations
@@ -32,8 +35,15 @@ import numpy as np
 
 from . import params as _v
 from .integrators import kernels
-from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
-from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
+from .integrators.base import (
+    IntegrationError,
+    Method,
+    get_method,
+    integration_error,
+    methods_for,
+    step_functions,
+)
+from .integrators.dop853 import Dop853Carry, run_dop853
 from .integrators.scipy_ivp import advance_scipy
 from .integrators.taylor import TaylorCarry, run_taylor
 from .systems import System
@@ -145,7 +155,8 @@ class Simulation:
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
         self._has_exact = system.exact(self.state0, 0.0) is not None
-        self._carry: TaylorCarry | None = None
+        # the compiled adaptive method's kept steps (made on its first call)
+        self._carry: TaylorCarry | Dop853Carry | None = None
         self._reference: Simulation | None = None
         #: Why the error is not measured although a reference was asked for ("" otherwise).
         self.reference_note = ""
@@ -202,7 +213,7 @@ class Simulation:
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
         self._has_exact = self.system.exact(self.state0, 0.0) is not None
         if self._carry is not None:
-            self._carry.forget()  # a kept step and its series belong to the old state
+            self._carry.forget()  # a kept step and its interpolant belong to the old state
         self._reference = None
         if self._reference_mode == "auto" and not self._has_exact:
             ref = Simulation(
@@ -324,24 +335,20 @@ class Simulation:
     def _dop853_to(self, t1: float) -> None:
         """One chunk of the compiled adaptive method (DOP853, or Taylor's method with its kept
         step) from ``t`` to ``t1``."""
-        if self.method.kernel == "taylor":
-            if self._carry is None:
-                self._carry = TaylorCarry(*self.state.shape)
+        taylor = self.method.kernel == "taylor"
+        if self._carry is None:
+            self._carry = (TaylorCarry if taylor else Dop853Carry)(*self.state.shape)
+        if taylor:
             run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
                        self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
         else:
             run_dop853(
                 kernels.RHS[self.system.sys_id], self.state, self.p, self.t, t1,
-                self.rtol, self.atol, self._H, self._F, self._stats, self._status,
+                self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
             )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
-            reason = (
-                "step size fell below round-off"
-                if self._status[0] == TOO_SMALL_STEP
-                else "state became non-finite"
-            )
-            raise IntegrationError(self.method.name, self.step_label(), self.t, reason)
+            raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
 
     def estimated_steps(self, t_end: float) -> float:
         """The steps a run from the current time to ``t_end`` [s] would take, summed over the
@@ -386,14 +393,19 @@ class Simulation:
             # Leave the run at the last state it reached before this call, not at garbage.
             self.state[:] = before
             t_fail = (self.steps + k + 1) * self.dt
-            reason = (
-                "implicit solve did not converge"
-                if code == kernels.NO_CONVERGENCE
-                else "state became non-finite (the method blew up)"
-            )
-            raise IntegrationError(self.method.name, self.step_label(), t_fail, reason)
+            raise integration_error(self.method.name, self.step_label(), t_fail, code)
         self.steps += n
         self.t = self.steps * self.dt
+
+    @property
+    def last_step(self) -> float | None:
+        """The length [s] of the step the compiled adaptive method kept at ``t`` (the step that
+        passed the last time asked for), averaged over the ensemble; ``None`` before the first
+        step, after a jump or a restart, and for the other methods (fixed steps: ``dt``)."""
+        carry = self._carry
+        if carry is None or not np.all(carry.span > 0.0):
+            return None
+        return float(np.mean(carry.span))
 
     # ------------------------------------------------------------------ measuring
     @property
