@@ -198,7 +198,8 @@ class Simulation:
         """Replace the state at the current time ``t`` without restarting the run: an impulse
         (a kick) or a new configuration that keeps the clock.
 
-        Time, the step and evaluation counters and the step size carry on. What the run is
+        Time, the step and evaluation counters and the step size carry on; a kept step (dense
+        output) is dropped, so the next step starts at ``t`` from the new state. What the run is
         measured against moves with the jump, because a jump is not an integration error: the
         energy reference becomes the new state's energy, and the error is measured against the
         exact solution from the new state (or a fresh tight reference run started at ``t``).
@@ -318,7 +319,9 @@ class Simulation:
 
     def _run_dop853(self, t_target: float) -> None:
         """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
-        length of a chunk from the last step size; Ctrl-C is seen between chunks)."""
+        length of a chunk from the last step size; Ctrl-C is seen between chunks). A chunk's end
+        is one more time asked for: the step across it is kept, not cut, so the chunks take the
+        steps of one call (three more evaluations per chunk, for the state at its end)."""
         while self.t < t_target:
             h = float(np.mean(self._H)) if np.all(self._H > 0) else 0.0
             if h <= 0.0:  # no step yet: guess one from the system's time scale
@@ -329,8 +332,8 @@ class Simulation:
             self.t = t_next
 
     def _dop853_to(self, t1: float) -> None:
-        """One chunk of the compiled adaptive method (DOP853, or Taylor's method with its kept
-        step) from ``t`` to ``t1``."""
+        """One chunk of the compiled adaptive method (DOP853 or Taylor's method, each with its
+        kept step) from ``t`` to ``t1``."""
         taylor = self.method.kernel == "taylor"
         if self._carry is None:
             self._carry = (TaylorCarry if taylor else Dop853Carry)(*self.state.shape)
