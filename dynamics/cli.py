@@ -32,7 +32,13 @@ import numpy as np
 from . import cyclotron, disk, hoop
 from .files import json_safe
 from .integrators import METHODS, IntegrationError, get_method
-from .simulation import MIN_COMPARED_TOL, REFERENCE_ACCURACY, REFERENCE_TOL, Simulation
+from .simulation import (
+    MIN_COMPARED_TOL,
+    REFERENCE_ACCURACY,
+    REFERENCE_ATOL,
+    REFERENCE_TOL,
+    Simulation,
+)
 from .systems import Cyclotron, DrivenDisk, Hoop, ReleasedDisk
 
 # flag -> (dataclass field) for each system; defaults come from the dataclasses.
@@ -423,7 +429,7 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     if sim.reference_note:
         raise CliError(
             f"--rtol {args.rtol:g}: the {sysm.name} has no exact solution here and the reference "
-            f"run (DOP853 at {REFERENCE_TOL:g}) must be clearly tighter; choose "
+            f"run (DOP853 at rtol {REFERENCE_TOL:g}) must be clearly tighter; choose "
             f"--rtol >= {MIN_COMPARED_TOL:g}"
         )
     steps = sim.estimated_steps(t_end)
@@ -461,7 +467,8 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         out["reference"] = (
             "exact solution (round-off only)"
             if sim.reference_kind == "exact"
-            else f"DOP853 at rtol = atol = {REFERENCE_TOL:g}, its own relative error below "
+            else f"DOP853 at rtol = {REFERENCE_TOL:g}, atol = {REFERENCE_ATOL:g}, its own "
+            f"relative error below "
             f"{REFERENCE_ACCURACY:g}"
         )
     if sysm.name == "driven-disk":

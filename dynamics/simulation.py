@@ -2,12 +2,12 @@
 
 The driver owns time, the step size or tolerance, the evaluation and step counters and the
 reference against which the error is measured: the exact solution where the system has one for
-this initial state, otherwise a DOP853 run at ``rtol = atol = 1e-14`` advanced in lock-step
-(measured against the exact solutions of the cyclotron and the hoop's mode 1, its own relative
-error stays below 5e-13 over 100 s; :data:`REFERENCE_ACCURACY`). A user's adaptive run must be at
-least 100 times looser (:data:`MIN_COMPARED_TOL`, ``1e-12``) to be compared with it; a tighter one
-reports no error rather than a meaningless one. The viewer and the recorder stream exactly what
-:meth:`Simulation.sample` returns.
+this initial state, otherwise a DOP853 run at ``rtol = 3e-15``, ``atol = 1e-17`` advanced in
+lock-step (measured against the exact solutions of the cyclotron and the hoop's mode 1, advanced in
+1/60 s frames, its own relative error stays below 5e-13 over 100 s; :data:`REFERENCE_ACCURACY`).
+A user's adaptive run must be at least 100 times looser (:data:`MIN_COMPARED_TOL`, ``1e-12``) to
+be compared with it; a tighter one reports no error rather than a meaningless one. The viewer and
+the recorder stream exactly what :meth:`Simulation.sample` returns.
 
 The relative energy error is ``(E - E0) / (E0 - E_floor)``, where ``E_floor`` is the lowest
 energy the system can have (``System.energy_floor()``): it measures the energy that moves, not
@@ -19,7 +19,10 @@ chunk; :meth:`Simulation.estimated_steps` says beforehand how much work a run is
 
 Fixed-step methods always take steps of exactly ``dt``: :meth:`Simulation.advance_to` takes
 the whole number of steps that fits and carries the remainder, so ``t`` is ``steps * dt``.
-Adaptive methods land exactly on the requested time.
+Adaptive methods land exactly on the requested time; the compiled ones (DOP853, Taylor's method)
+by their dense output: their steps are not cut at the times asked for (nor at the chunks'
+ends), the step that passes one is kept and evaluated there, and the next call goes on from its
+end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`).
 """
 
 from __future__ import annotations
@@ -32,18 +35,31 @@ import numpy as np
 
 from . import params as _v
 from .integrators import kernels
-from .integrators.base import IntegrationError, Method, get_method, methods_for, step_functions
-from .integrators.dop853 import TOO_SMALL_STEP, run_dop853
+from .integrators.base import (
+    IntegrationError,
+    Method,
+    get_method,
+    integration_error,
+    methods_for,
+    step_functions,
+)
+from .integrators.dop853 import Dop853Carry, run_dop853
 from .integrators.scipy_ivp import advance_scipy
 from .integrators.taylor import TaylorCarry, run_taylor
 from .systems import System
 
 DEFAULT_RTOL = 1e-9
-REFERENCE_TOL = 1e-14
+#: The reference run's rtol and atol. Its steps are not cut at each frame (dense output), so the
+#: tolerance alone sets its error: at rtol = atol = 1e-14 it reached 6e-12 on the hoop's mode 1 at
+#: 0.05 rad, where atol dominates the small state. These keep it below REFERENCE_ACCURACY with
+#: fewer steps than one per frame.
+REFERENCE_TOL = 3e-15
+REFERENCE_ATOL = 1e-17
 #: The reference run's own relative error, an upper bound measured over 100 s.
 REFERENCE_ACCURACY = 5e-13
-#: An adaptive run is compared with the reference only if its rtol and atol are at least this.
-MIN_COMPARED_TOL = 100 * REFERENCE_TOL
+#: An adaptive run is compared with the reference only if its rtol and atol are at least this
+#: (over 100 times REFERENCE_TOL).
+MIN_COMPARED_TOL = 1e-12
 #: Target wall time [s] of one call into compiled code; Ctrl-C is seen between calls.
 CHUNK_SECONDS = 0.1
 
@@ -145,7 +161,8 @@ class Simulation:
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
         self._has_exact = system.exact(self.state0, 0.0) is not None
-        self._carry: TaylorCarry | None = None
+        # the compiled adaptive method's kept steps (made on its first call)
+        self._carry: TaylorCarry | Dop853Carry | None = None
         self._reference: Simulation | None = None
         #: Why the error is not measured although a reference was asked for ("" otherwise).
         self.reference_note = ""
@@ -157,18 +174,11 @@ class Simulation:
         ):
             self.reference_note = (
                 f"no error: rtol/atol below {MIN_COMPARED_TOL:g} is not clearly looser than the "
-                f"reference run (DOP853 at {REFERENCE_TOL:g})"
+                f"reference run (DOP853 at rtol {REFERENCE_TOL:g})"
             )
             reference = None
         if reference == "auto" and not self._has_exact:
-            self._reference = Simulation(
-                system,
-                "dop853",
-                rtol=REFERENCE_TOL,
-                atol=REFERENCE_TOL,
-                state=self.state0,
-                reference=None,
-            )
+            self._reference = reference_run(system, self.state0)
         self._track_error = reference is not None and (self._has_exact or reference == "auto")
         self._reference_mode = reference
 
@@ -188,7 +198,8 @@ class Simulation:
         """Replace the state at the current time ``t`` without restarting the run: an impulse
         (a kick) or a new configuration that keeps the clock.
 
-        Time, the step and evaluation counters and the step size carry on. What the run is
+        Time, the step and evaluation counters and the step size carry on; a kept step (dense
+        output) is dropped, so the next step starts at ``t`` from the new state. What the run is
         measured against moves with the jump, because a jump is not an integration error: the
         energy reference becomes the new state's energy, and the error is measured against the
         exact solution from the new state (or a fresh tight reference run started at ``t``).
@@ -202,13 +213,10 @@ class Simulation:
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
         self._has_exact = self.system.exact(self.state0, 0.0) is not None
         if self._carry is not None:
-            self._carry.forget()  # a kept step and its series belong to the old state
+            self._carry.forget()  # a kept step and its interpolant belong to the old state
         self._reference = None
         if self._reference_mode == "auto" and not self._has_exact:
-            ref = Simulation(
-                self.system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_TOL,
-                state=self.state0, reference=None,
-            )  # fmt: skip
+            ref = reference_run(self.system, self.state0)
             ref.t = ref.clock = ref.t0 = self.t  # the systems are autonomous: start it now
             self._reference = ref
         self._track_error = self._reference_mode is not None and (
@@ -311,7 +319,9 @@ class Simulation:
 
     def _run_dop853(self, t_target: float) -> None:
         """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
-        length of a chunk from the last step size; Ctrl-C is seen between chunks)."""
+        length of a chunk from the last step size; Ctrl-C is seen between chunks). A chunk's end
+        is one more time asked for: the step across it is kept, not cut, so the chunks take the
+        steps of one call (three more evaluations per chunk, for the state at its end)."""
         while self.t < t_target:
             h = float(np.mean(self._H)) if np.all(self._H > 0) else 0.0
             if h <= 0.0:  # no step yet: guess one from the system's time scale
@@ -322,26 +332,22 @@ class Simulation:
             self.t = t_next
 
     def _dop853_to(self, t1: float) -> None:
-        """One chunk of the compiled adaptive method (DOP853, or Taylor's method with its kept
-        step) from ``t`` to ``t1``."""
-        if self.method.kernel == "taylor":
-            if self._carry is None:
-                self._carry = TaylorCarry(*self.state.shape)
+        """One chunk of the compiled adaptive method (DOP853 or Taylor's method, each with its
+        kept step) from ``t`` to ``t1``."""
+        taylor = self.method.kernel == "taylor"
+        if self._carry is None:
+            self._carry = (TaylorCarry if taylor else Dop853Carry)(*self.state.shape)
+        if taylor:
             run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
                        self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
         else:
             run_dop853(
                 kernels.RHS[self.system.sys_id], self.state, self.p, self.t, t1,
-                self.rtol, self.atol, self._H, self._F, self._stats, self._status,
+                self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
             )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
-            reason = (
-                "step size fell below round-off"
-                if self._status[0] == TOO_SMALL_STEP
-                else "state became non-finite"
-            )
-            raise IntegrationError(self.method.name, self.step_label(), self.t, reason)
+            raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
 
     def estimated_steps(self, t_end: float) -> float:
         """The steps a run from the current time to ``t_end`` [s] would take, summed over the
@@ -386,14 +392,19 @@ class Simulation:
             # Leave the run at the last state it reached before this call, not at garbage.
             self.state[:] = before
             t_fail = (self.steps + k + 1) * self.dt
-            reason = (
-                "implicit solve did not converge"
-                if code == kernels.NO_CONVERGENCE
-                else "state became non-finite (the method blew up)"
-            )
-            raise IntegrationError(self.method.name, self.step_label(), t_fail, reason)
+            raise integration_error(self.method.name, self.step_label(), t_fail, code)
         self.steps += n
         self.t = self.steps * self.dt
+
+    @property
+    def last_step(self) -> float | None:
+        """The length [s] of the step the compiled adaptive method kept at ``t`` (the step that
+        passed the last time asked for), averaged over the ensemble; ``None`` before the first
+        step, after a jump or a restart, and for the other methods (fixed steps: ``dt``)."""
+        carry = self._carry
+        if carry is None or not np.all(carry.span > 0.0):
+            return None
+        return float(np.mean(carry.span))
 
     # ------------------------------------------------------------------ measuring
     @property
@@ -460,6 +471,12 @@ class Simulation:
             self.nfev,
             self.steps,
         )
+
+
+def reference_run(system: System, state: np.ndarray) -> Simulation:
+    """The tight DOP853 run the error is measured against where there is no exact solution."""
+    return Simulation(system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL, state=state,
+                      reference=None)  # fmt: skip
 
 
 def _steps_per_period(method: Method, rtol: float) -> float:

@@ -302,7 +302,7 @@ def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout)
     assert 0.0 < r["error_vs_reference"] < 1e-9
-    assert "1e-14" in r["reference"]
+    assert "3e-15" in r["reference"]
 
 
 def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():

@@ -219,10 +219,13 @@ def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
     frames(app, 30)
     ex = app.exhibits["hoop"]
     assert ex.config.rtol == 1e-6 and ex.sim.rtol == 1e-6
-    loose_steps = ex.sim.steps
+    loose_steps, loose_h = ex.sim.steps, ex.sim.last_step
+    # the readout shows the length of the step DOP853 is in (not cut at the frames)
+    assert loose_h is not None and f"h = {loose_h:.2g} s" in ex.readout()
     w.value = "1e-12"
     frames(app, 30)
     assert ex.sim.rtol == 1e-12 and ex.sim.steps > loose_steps  # tighter: more steps, same time
+    assert ex.sim.last_step < loose_h
     app.enqueue("hoop", {"op": "set", "rtol": 3e-7})  # a value off the decades (a demo's)
     frames(app, 1)
     assert w.value == "3e-7" and "3e-7" in w.options

@@ -35,6 +35,19 @@ class IntegrationError(RuntimeError):
         super().__init__(f"{method} with {step}: {reason} at t = {t:.6g} s")
 
 
+#: What each failure code of the compiled loops (``status[0]``) means, in words.
+REASONS = {
+    _k.NONFINITE: "state became non-finite (the method blew up)",
+    _k.NO_CONVERGENCE: "implicit solve did not converge",
+    _k.TOO_SMALL_STEP: "step size fell below round-off",
+}
+
+
+def integration_error(method: str, step: str, t: float, code: int) -> IntegrationError:
+    """The :class:`IntegrationError` for a compiled loop's failure ``code`` at time ``t`` [s]."""
+    return IntegrationError(method, step, t, REASONS.get(int(code), f"failure code {code}"))
+
+
 @dataclass(frozen=True)
 class Method:
     """One integration method, described as data."""

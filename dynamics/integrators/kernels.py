@@ -34,8 +34,9 @@ from .._jit import njit
 # System ids: index into the tables at the bottom.
 CYCLOTRON, HOOP, FREE_BODY = 0, 1, 2
 
-# Status codes written to ``status[0]``.
-OK, NONFINITE, NO_CONVERGENCE = 0, 1, 2
+# Status codes written to ``status[0]`` (``status = [code, step index, member index]``);
+# :func:`dynamics.integrators.base.integration_error` words them.
+OK, NONFINITE, NO_CONVERGENCE, TOO_SMALL_STEP = 0, 1, 2, 3
 
 MIDPOINT_TOL = 1e-14
 MIDPOINT_MAX_ITER = 100
@@ -113,10 +114,16 @@ def _failed(y, e):
 
 
 @njit(cache=True)
-def _report(status, e, k, i):
-    status[0] = NO_CONVERGENCE if e < 0 else NONFINITE
+def report(status, code, k, i):
+    """Record a failure: ``code`` at step ``k`` of member ``i``."""
+    status[0] = code
     status[1] = k
     status[2] = i
+
+
+@njit(cache=True)
+def _report(status, e, k, i):
+    report(status, NO_CONVERGENCE if e < 0 else NONFINITE, k, i)
 
 
 @njit  # takes a compiled function: never disk-cached (see the module docstring)

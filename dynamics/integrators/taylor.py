@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
-from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK
+from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, report
 
 MAX_ORDER = 40
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
@@ -303,9 +303,7 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
                 stats[i, 0] += 1
                 stats[i, 1] += 1
                 if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
-                    status[0] = NONFINITE
-                    status[1] = stats[i, 1]
-                    status[2] = i
+                    report(status, NONFINITE, stats[i, 1], i)
                     return
                 if t + h >= t1:
                     base[i] = t
@@ -320,9 +318,7 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
             if not math.isfinite(y[j]):
                 finite = False
         if not finite:
-            status[0] = NONFINITE
-            status[1] = stats[i, 1]
-            status[2] = i
+            report(status, NONFINITE, stats[i, 1], i)
             return
 
 

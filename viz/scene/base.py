@@ -616,10 +616,13 @@ class Exhibit:
 
     def method_line(self, sim: dynamics.Simulation) -> str:
         """The method and its step setting; for an adaptive main run also the steps it took over
-        the last advance (a frame, live): the tolerance shows there."""
+        the last advance (a frame, live) and the length of the step it is in: the tolerance
+        shows there."""
         line = f"`{sim.method.name}` ({sim.step_label()})"
         if sim is self.sim and sim.method.adaptive:
             line += f", {self.steps_last_advance} steps in the last frame"
+            if sim.last_step is not None:
+                line += f", h = {fmt(sim.last_step, 2)} s"
         return line
 
     def work_line(self) -> str:
