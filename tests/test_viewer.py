@@ -700,3 +700,17 @@ def test_the_modal_coordinates_follow_linear_theory_at_small_amplitude(server):
     assert np.abs(q1).max() == pytest.approx(0.01, rel=1e-2)  # mix: half the amplitude each
     np.testing.assert_allclose(q1, l1, atol=2e-4)  # 2 % of the amplitude: linear theory holds
     np.testing.assert_allclose(q2, l2, atol=2e-4)
+
+
+def test_the_tolerance_sets_the_error_the_viewer_shows(server):
+    """DOP853's steps are not cut at the frames: after 10 s of frames the hoop's error against
+    the reference follows rtol (measured 1.4e-3 at 1e-3 and 7e-10 at 1e-9), where cutting a step
+    at every frame gave round-off at any tolerance."""
+    errors = {}
+    for rtol in (1e-3, 1e-9):
+        ex = HoopExhibit(server, HoopConfig(method="dop853", rtol=rtol))
+        for _ in range(600):
+            ex.advance(FRAME)
+        errors[rtol] = float(ex.sample.error[0])
+        assert ex.sim.steps < 600  # fewer steps than frames: several frames per step
+    assert errors[1e-3] > 1e-5 and errors[1e-9] < 1e-7
