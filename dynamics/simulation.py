@@ -342,7 +342,7 @@ class Simulation:
                        self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
         else:
             run_dop853(
-                kernels.RHS[self.system.sys_id], self.state, self.p, self.t, t1,
+                self.system.sys_id, self.state, self.p, self.t, t1,
                 self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
             )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))

@@ -40,7 +40,8 @@ def _one_step(system, y0, h):
         rhs(y, p, kout)
         K[s] = kout
     Q = np.empty((dop853.INTERPOLATOR_POWER, d))
-    dop853._dense_coefficients(rhs, p, y0, y, K, h, Q, np.empty(d), kout)
+    tab = dop853._A_DENSE, dop853._D
+    dop853._dense_coefficients(system.sys_id, p, y0, y, K, h, Q, np.empty(d), kout, *tab)
     return y, Q
 
 

@@ -36,8 +36,9 @@ from pathlib import Path
 import numpy as np
 import scipy
 
+from .. import cyclotron, disk, hoop
 from .._jit import njit
-from .kernels import NONFINITE, OK, TOO_SMALL_STEP, report
+from .kernels import CYCLOTRON, HOOP, NONFINITE, OK, TOO_SMALL_STEP, report
 
 
 def _scipy_tableau():
@@ -65,6 +66,9 @@ _E3 = np.ascontiguousarray(_coef.E3)
 _E5 = np.ascontiguousarray(_coef.E5)
 _A_DENSE = np.ascontiguousarray(_coef.A[:N_STAGES_EXTENDED, :N_STAGES_EXTENDED])
 _D = np.ascontiguousarray(_coef.D)  # (INTERPOLATOR_POWER - 3, N_STAGES_EXTENDED)
+# The tableau reaches the compiled loop as an argument: numba bakes a global array into the
+# machine code only below about 1 kB, and a function holding a larger one is not disk-cached.
+TABLEAU = (_A, _B, _E3, _E5, _A_DENSE, _D)
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERROR_EXPONENT = -1.0 / 8.0  # error estimator of order 7
@@ -73,60 +77,6 @@ ERROR_EXPONENT = -1.0 / 8.0  # error estimator of order 7
 @njit(cache=True)
 def _rms(x):
     return math.sqrt(np.sum(x * x) / x.size)
-
-
-@njit  # takes the right-hand side as an argument: not disk-cached (see kernels)
-def _initial_step(rhs, y0, f0, p, interval, rtol, atol, tmp, f1):
-    """scipy's ``select_initial_step`` (one extra evaluation)."""
-    d = y0.size
-    scale = atol + np.abs(y0) * rtol
-    d0 = _rms(y0 / scale)
-    d1 = _rms(f0 / scale)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    h0 = min(h0, interval)
-    for j in range(d):
-        tmp[j] = y0[j] + h0 * f0[j]
-    rhs(tmp, p, f1)
-    d2 = _rms((f1 - f0) / scale) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-    return min(100.0 * h0, h1, interval)
-
-
-@njit  # takes the right-hand side as an argument: not disk-cached (see kernels)
-def _dense_coefficients(rhs, p, y0, y1, K, h, Q, tmp, kout):
-    """The continuous extension of the step ``y0 -> y1`` of length ``h`` whose stages are
-    ``K[0 ... N_STAGES]`` (scipy's ``DOP853._dense_output_impl``): the three extra stages into
-    ``K[N_STAGES + 1:]``, the coefficients into ``Q`` (INTERPOLATOR_POWER, d)."""
-    d = y0.size
-    for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
-        for j in range(d):
-            tmp[j] = 0.0
-        for r in range(s):
-            a = _A_DENSE[s, r]
-            for j in range(d):
-                tmp[j] += a * K[r, j]
-        for j in range(d):
-            tmp[j] = y0[j] + h * tmp[j]
-        rhs(tmp, p, kout)
-        for j in range(d):
-            K[s, j] = kout[j]
-    for j in range(d):
-        dy = y1[j] - y0[j]
-        Q[0, j] = dy
-        Q[1, j] = h * K[0, j] - dy
-        Q[2, j] = 2.0 * dy - h * (K[N_STAGES, j] + K[0, j])
-    for k in range(INTERPOLATOR_POWER - 3):
-        for j in range(d):
-            tmp[j] = 0.0
-        for s in range(N_STAGES_EXTENDED):
-            c = _D[k, s]
-            for j in range(d):
-                tmp[j] += c * K[s, j]
-        for j in range(d):
-            Q[3 + k, j] = h * tmp[j]
 
 
 @njit(cache=True)
@@ -145,12 +95,82 @@ def _interpolate(Q, y0, x, out):
         out[j] = v + y0[j]
 
 
-def _build(d: int):
-    # Not cached on disk: numba compiles this loop once per right-hand side it is given anyway.
-    @njit
-    def run_dop853(rhs, Y, p, t0, t1, rtol, atol, H, F, stats, status, base, span, Y0, Y1, Q,
-                   dense, last):  # fmt: skip
-        """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place; ``rhs(y, p, out)``.
+@njit(cache=True)
+def _rhs(sys_id, y, p, out):
+    """The right-hand side of system ``sys_id`` (:mod:`.kernels`' ids). Called with a constant
+    ``sys_id``, the compiled loop keeps only its branch."""
+    if sys_id == CYCLOTRON:
+        cyclotron.rhs(y, p, out)
+    elif sys_id == HOOP:
+        hoop.rhs(y, p, out)
+    else:
+        disk.free_rhs(y, p, out)
+
+
+@njit(cache=True)
+def _initial_step(sys_id, y0, f0, p, interval, rtol, atol, tmp, f1):
+    """scipy's ``select_initial_step`` (one extra evaluation)."""
+    d = y0.size
+    scale = atol + np.abs(y0) * rtol
+    d0 = _rms(y0 / scale)
+    d1 = _rms(f0 / scale)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    for j in range(d):
+        tmp[j] = y0[j] + h0 * f0[j]
+    _rhs(sys_id, tmp, p, f1)
+    d2 = _rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return min(100.0 * h0, h1, interval)
+
+
+@njit(cache=True)
+def _dense_coefficients(sys_id, p, y0, y1, K, h, Q, tmp, kout, A_DENSE, D):
+    """The continuous extension of the step ``y0 -> y1`` of length ``h`` whose stages are
+    ``K[0 ... N_STAGES]`` (scipy's ``DOP853._dense_output_impl``): the three extra stages into
+    ``K[N_STAGES + 1:]``, the coefficients into ``Q`` (INTERPOLATOR_POWER, d)."""
+    d = y0.size
+    for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
+        for j in range(d):
+            tmp[j] = 0.0
+        for r in range(s):
+            a = A_DENSE[s, r]
+            for j in range(d):
+                tmp[j] += a * K[r, j]
+        for j in range(d):
+            tmp[j] = y0[j] + h * tmp[j]
+        _rhs(sys_id, tmp, p, kout)
+        for j in range(d):
+            K[s, j] = kout[j]
+    for j in range(d):
+        dy = y1[j] - y0[j]
+        Q[0, j] = dy
+        Q[1, j] = h * K[0, j] - dy
+        Q[2, j] = 2.0 * dy - h * (K[N_STAGES, j] + K[0, j])
+    for k in range(INTERPOLATOR_POWER - 3):
+        for j in range(d):
+            tmp[j] = 0.0
+        for s in range(N_STAGES_EXTENDED):
+            c = D[k, s]
+            for j in range(d):
+                tmp[j] += c * K[s, j]
+        for j in range(d):
+            Q[3 + k, j] = h * tmp[j]
+
+
+@functools.cache
+def _runner(sys_id: int, d: int):
+    """The loop compiled for system ``sys_id`` and states of ``d`` components (see
+    :func:`run_dop853`). Both are integers the closure holds, constants of its machine code, and
+    numba keys its disk cache on them."""
+
+    @njit(cache=True)
+    def run(Y, p, t0, t1, rtol, atol, H, F, stats, status, base, span, Y0, Y1, Q, dense, last,
+            tableau):  # fmt: skip
+        """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place; ``_rhs(sys_id, y, p, out)``.
 
         ``H`` (N,) carries each member's next step size between calls (0: choose one, as scipy does
         at start-up) and ``F`` (N, d) the derivative at the end of its last step (first-same-as-
@@ -158,7 +178,9 @@ def _build(d: int):
         as in ``run_fixed``, with code ``TOO_SMALL_STEP`` when the controller needs a step below
         10 ulp of ``t``. ``base``, ``span``, ``Y0``, ``Y1``, ``Q``, ``dense`` and ``last`` are a
         :class:`Dop853Carry`'s arrays: the last step of each member, carried to the next call.
+        ``tableau`` is :data:`TABLEAU`.
         """
+        A, B, E3, E5, A_DENSE, D = tableau
         n = Y.shape[0]
         K = np.empty((N_STAGES_EXTENDED, d))
         tmp = np.empty(d)
@@ -191,10 +213,10 @@ def _build(d: int):
                         y[j] = Y1[i, j]
                 else:  # a fresh start, or a state changed since the last call
                     t = t0
-                    rhs(y, p, F[i])
+                    _rhs(sys_id, y, p, F[i])
                     stats[i, 0] += 1
                     if H[i] <= 0.0:
-                        H[i] = _initial_step(rhs, y, F[i], p, abs(t1 - t0), rtol, atol, tmp, K[1])
+                        H[i] = _initial_step(sys_id, y, F[i], p, abs(t1 - t0), rtol, atol, tmp, K[1])
                         stats[i, 0] += 1
                 h_abs = H[i]
                 while True:
@@ -221,17 +243,17 @@ def _build(d: int):
                                 tmp[j] = 0.0
                             if s < N_STAGES:
                                 for r in range(s):
-                                    a = _A[s, r]
+                                    a = A[s, r]
                                     for j in range(d):
                                         tmp[j] += a * K[r, j]
                             else:  # the 8th-order solution; its derivative is the FSAL stage
                                 for r in range(N_STAGES):
-                                    b = _B[r]
+                                    b = B[r]
                                     for j in range(d):
                                         tmp[j] += b * K[r, j]
                             for j in range(d):
                                 tmp[j] = y[j] + h * tmp[j]
-                            rhs(tmp, p, kout)
+                            _rhs(sys_id, tmp, p, kout)
                             for j in range(d):
                                 K[s, j] = kout[j]
                         for j in range(d):
@@ -242,8 +264,8 @@ def _build(d: int):
                             tmp[j] = 0.0
                             err3[j] = 0.0
                         for r in range(N_STAGES + 1):
-                            c5 = _E5[r]
-                            c3 = _E3[r]
+                            c5 = E5[r]
+                            c3 = E3[r]
                             for j in range(d):
                                 tmp[j] += c5 * K[r, j]
                                 err3[j] += c3 * K[r, j]
@@ -294,7 +316,7 @@ def _build(d: int):
                         for j in range(d):
                             y[j] = y_new[j]
                     else:
-                        _dense_coefficients(rhs, p, Y0[i], y_new, K, h, Q[i], tmp, kout)
+                        _dense_coefficients(sys_id, p, Y0[i], y_new, K, h, Q[i], tmp, kout, A_DENSE, D)
                         stats[i, 0] += N_STAGES_EXTENDED - N_STAGES - 1
                         dense[i] = True
                         _interpolate(Q[i], Y0[i], (t1 - t) / h, y)
@@ -309,21 +331,7 @@ def _build(d: int):
                 report(status, NONFINITE, stats[i, 1], i)
                 return
 
-    return run_dop853
-
-
-@functools.cache
-def dop853_runner(d: int):
-    """The compiled loop for states of ``d`` components (built once per ``d`` and process).
-
-    ``d`` is a constant of the compiled code, not read from the array: every per-component loop
-    then has a known length and compiles to a few vector operations. Measured with
-    ``time.thread_time`` over 500 members (``rtol = atol = 1e-10``), this took DOP853 from 63 to
-    44 ns per evaluation on the hoop, 48 to 35 on the disk and 38 to 27 on the charge.
-    """
-    if not isinstance(d, int) or d < 1:
-        raise ValueError(f"d must be a positive int, got {d!r}")
-    return _build(d)
+    return run
 
 
 class Dop853Carry:
@@ -348,9 +356,19 @@ class Dop853Carry:
         self.span[:] = 0.0
 
 
-def run_dop853(rhs, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry: Dop853Carry) -> None:
-    """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` [s] (:func:`dop853_runner` for
-    ``d``), going on from ``carry``'s kept steps and keeping the last ones there."""
-    dop853_runner(int(Y.shape[1]))(rhs, Y, p, t0, t1, rtol, atol, H, F, stats, status,
-                                   carry.base, carry.span, carry.Y0, carry.Y1, carry.Q,
-                                   carry.dense, carry.last)  # fmt: skip
+def run_dop853(sys_id: int, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry: Dop853Carry) -> None:
+    """Advance every row of ``Y`` (N, d) of system ``sys_id`` from ``t0`` to ``t1`` [s], going on
+    from ``carry``'s kept steps and keeping the last ones there.
+
+    The loop is compiled for the system and for ``d`` as constants, and cached on disk: with the
+    right-hand side an argument (a first-class function), or any compiled function held by the
+    closure, numba would compile it afresh in every process (1.5-3 s), and with ``d`` read from
+    the array every per-component loop would have an
+    unknown length. Measured with ``time.thread_time`` over 500 members
+    (``rtol = atol = 1e-10``), the known ``d`` took DOP853 from 63 to 44 ns per evaluation on the
+    hoop, 48 to 35 on the disk and 38 to 27 on the charge.
+    """
+    _runner(int(sys_id), int(Y.shape[1]))(
+        Y, p, t0, t1, rtol, atol, H, F, stats, status, carry.base, carry.span, carry.Y0, carry.Y1,
+        carry.Q, carry.dense, carry.last, TABLEAU,
+    )  # fmt: skip
