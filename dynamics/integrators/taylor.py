@@ -271,9 +271,11 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
 
     ``kept`` (N, N_ROWS, MAX_ORDER + 1), ``base`` (N,), ``span`` (N,) and ``last`` (N, d) hold each
     member's last step (all series, base time, length; ``span <= 0``: none) and the state written
-    at ``t1``; they carry the step over to the next call (module docstring).
+    at ``t1``; they carry the step over to the next call (module docstring). Returns the steps
+    taken, summed over the members (also added to ``stats``).
     """
     n, d = Y.shape
+    total = 0
     tol = min(rtol, atol)
     scale_r, scale_a = rtol / tol, atol / tol
     inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
@@ -302,11 +304,12 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
                 h = _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor)
                 stats[i, 0] += 1
                 stats[i, 1] += 1
+                total += 1
                 if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
                     status[0] = NONFINITE
                     status[1] = stats[i, 1]
                     status[2] = i
-                    return
+                    return total
                 if t + h >= t1:
                     base[i] = t
                     span[i] = h
@@ -323,7 +326,8 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
             status[0] = NONFINITE
             status[1] = stats[i, 1]
             status[2] = i
-            return
+            return total
+    return total
 
 
 # the right-hand sides the expansions are written for (tests compare the two)
@@ -348,8 +352,9 @@ class TaylorCarry:
         self.span[:] = 0.0
 
 
-def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> None:
-    """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion."""
+def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
+    """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion; returns the
+    steps taken (summed over the members)."""
     order, a = order_for(rtol, atol, sys_id)
-    run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
+    return run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
                         carry.base, carry.span, carry.last)  # fmt: skip
