@@ -285,20 +285,23 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
     Touches only row ``i`` of every array, so that members may run on different threads."""
     d = Y.shape[1]
     y = Y[i]
-    A = kept[i]
+    K = kept[i]
     same = span[i] > 0.0 and base[i] <= t0 <= base[i] + span[i]
     if same:
         for j in range(d):
             if y[j] != last[i, j]:
                 same = False
     if same and t1 <= base[i] + span[i]:
-        _horner(A, d, order, t1 - base[i], y)
+        _horner(K, d, order, t1 - base[i], y)
     else:
         if same:  # finish the kept step, then go on from its end
             t = base[i] + span[i]
-            _horner(A, d, order, span[i], y)
+            _horner(K, d, order, span[i], y)
         else:
             t = t0
+        # The series of a step, auxiliary rows included, in scratch that fits in the L1 cache;
+        # only the state's rows of the last step are kept (every entry is written before read).
+        A = np.empty((N_ROWS, order + 1))
         # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
         # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
         c = 0.0
@@ -315,6 +318,9 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
             if h >= rest:
                 base[i] = t
                 span[i] = h
+                for j in range(d):
+                    for k in range(order + 1):
+                        K[j, k] = A[j, k]
                 _horner(A, d, order, rest, y)
                 break
             _horner(A, d, order, h, y)
@@ -337,10 +343,10 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring), one member after another; stops
     at the first member that fails (``status = (NONFINITE, its steps, its index)``).
 
-    ``kept`` (N, N_ROWS, MAX_ORDER + 1), ``base`` (N,), ``span`` (N,) and ``last`` (N, d) hold each
-    member's last step (all series, base time, length; ``span <= 0``: none) and the state written
-    at ``t1``; they carry the step over to the next call (module docstring). Returns the steps
-    taken, summed over the members (also added to ``stats``).
+    ``kept`` (N, d, MAX_ORDER + 1), ``base`` (N,), ``span`` (N,) and ``last`` (N, d) hold each
+    member's last step (the state's series, base time, length; ``span <= 0``: none) and the state
+    written at ``t1``; they carry the step over to the next call (module docstring). Returns the
+    steps taken, summed over the members (also added to ``stats``).
     """
     n = Y.shape[0]
     tol = min(rtol, atol)
@@ -400,7 +406,7 @@ class TaylorCarry:
     """What one run keeps between calls: each member's last step (see :func:`_run`)."""
 
     def __init__(self, n: int, d: int) -> None:
-        self.kept = np.zeros((n, N_ROWS, MAX_ORDER + 1))
+        self.kept = np.zeros((n, d, MAX_ORDER + 1))  # the state's series only: 1 kB a hoop
         self.base = np.zeros(n)
         self.span = np.zeros(n)
         self.last = np.zeros((n, d))
