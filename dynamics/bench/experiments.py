@@ -268,10 +268,6 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
             t_end = min(pb.t_end, max(0.2, per_member / 9.0))  # the hoop: ~9 steps/s at 1e-9
             sim = Simulation(pb.system, "taylor", rtol=ENSEMBLE_TOL, atol=ENSEMBLE_TOL,
                              state=states, reference=None)  # fmt: skip
-            # One call into compiled code per run: where the chunks of a long run end (they
-            # follow the time each takes) moves the state by round-off, and both modes must do
-            # the same arithmetic to be compared bit for bit.
-            sim._chunk_steps = 1 << 40
             best = {"serial": math.inf, "parallel": math.inf}
             finals = {}
             for r in range(rounds + 1):  # round 0 compiles (or loads) both loops, untimed

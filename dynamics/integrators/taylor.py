@@ -279,8 +279,16 @@ def _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor):
 
 
 @njit(cache=True)
+def _two_sum(a, b):
+    """Knuth's two-sum: ``a + b = s + e`` exactly, ``s`` the rounded sum."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+@njit(cache=True)
 def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b, factor,
-                    stats, kept, base, span, last):  # fmt: skip
+                    stats, kept, base, comp, span, last):  # fmt: skip
     """Advance member ``i`` (row ``Y[i]``) from ``t0`` to ``t1``; returns ``OK`` or ``NONFINITE``.
     Touches only row ``i`` of every array, so that members may run on different threads."""
     d = Y.shape[1]
@@ -292,19 +300,22 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
             if y[j] != last[i, j]:
                 same = False
     if same and t1 <= base[i] + span[i]:
-        _horner(K, d, order, t1 - base[i], y)
+        _horner(K, d, order, (t1 - base[i]) - comp[i], y)
     else:
+        # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
+        # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
+        # A kept step carries its start's compensation, so calls that end inside steps (samples,
+        # chunks) do the arithmetic of one call.
         if same:  # finish the kept step, then go on from its end
-            t = base[i] + span[i]
+            t, c = _two_sum(base[i], span[i])
+            c += comp[i]
             _horner(K, d, order, span[i], y)
         else:
             t = t0
+            c = 0.0
         # The series of a step, auxiliary rows included, in scratch that fits in the L1 cache;
         # only the state's rows of the last step are kept (every entry is written before read).
         A = np.empty((N_ROWS, order + 1))
-        # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
-        # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
-        c = 0.0
         while True:
             for j in range(d):
                 A[j, 0] = y[j]
@@ -317,6 +328,7 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
             rest = (t1 - t) - c
             if h >= rest:
                 base[i] = t
+                comp[i] = c
                 span[i] = h
                 for j in range(d):
                     for k in range(order + 1):
@@ -324,10 +336,8 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
                 _horner(A, d, order, rest, y)
                 break
             _horner(A, d, order, h, y)
-            s = t + h  # Knuth's two-sum: t + h = s + e exactly
-            hb = s - t
-            c += (t - (s - hb)) + (h - hb)
-            t = s
+            t, e = _two_sum(t, h)
+            c += e
     finite = True
     for j in range(d):
         last[i, j] = y[j]
@@ -338,15 +348,16 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
 
 @njit(cache=True)
 def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
-                        span, last):  # fmt: skip
+                        comp, span, last):  # fmt: skip
     """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place, at order ``order`` with
     steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring), one member after another; stops
     at the first member that fails (``status = (NONFINITE, its steps, its index)``).
 
-    ``kept`` (N, d, MAX_ORDER + 1), ``base`` (N,), ``span`` (N,) and ``last`` (N, d) hold each
-    member's last step (the state's series, base time, length; ``span <= 0``: none) and the state
-    written at ``t1``; they carry the step over to the next call (module docstring). Returns the
-    steps taken, summed over the members (also added to ``stats``).
+    ``kept`` (N, d, MAX_ORDER + 1), ``base``, ``comp`` and ``span`` (N,) and ``last`` (N, d) hold
+    each member's last step (the state's series, its start ``base + comp``, its length;
+    ``span <= 0``: none) and the state written at ``t1``; they carry the step over to the next
+    call (module docstring). Returns the steps taken, summed over the members (also added to
+    ``stats``).
     """
     n = Y.shape[0]
     tol = min(rtol, atol)
@@ -358,7 +369,7 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     for i in range(n):
         before = stats[i, 1]
         code = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b,
-                               factor, stats, kept, base, span, last)  # fmt: skip
+                               factor, stats, kept, base, comp, span, last)  # fmt: skip
         total += stats[i, 1] - before
         if code != OK:
             status[0] = code
@@ -370,7 +381,7 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
 
 @njit(cache=True, parallel=True)
 def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
-                        span, last):  # fmt: skip
+                        comp, span, last):  # fmt: skip
     """:func:`run_taylor_compiled` with the members spread over numba's threads. Each member's
     arithmetic is the serial loop's (bitwise the same result); a failure does not stop the other
     members, and ``status`` names the first member that failed."""
@@ -383,7 +394,7 @@ def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     codes = np.zeros(n, np.int64)
     for i in prange(n):
         codes[i] = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a,
-                                   inv_b, factor, stats, kept, base, span, last)  # fmt: skip
+                                   inv_b, factor, stats, kept, base, comp, span, last)  # fmt: skip
     status[0] = OK
     for i in range(n):
         if codes[i] != OK:
@@ -408,6 +419,7 @@ class TaylorCarry:
     def __init__(self, n: int, d: int) -> None:
         self.kept = np.zeros((n, d, MAX_ORDER + 1))  # the state's series only: 1 kB a hoop
         self.base = np.zeros(n)
+        self.comp = np.zeros(n)  # the base time's compensation: it is base + comp
         self.span = np.zeros(n)
         self.last = np.zeros((n, d))
 
@@ -423,4 +435,4 @@ def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCar
     order, a = order_for(rtol, atol, sys_id)
     run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
     return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
-                        carry.base, carry.span, carry.last)  # fmt: skip
+               carry.base, carry.comp, carry.span, carry.last)  # fmt: skip
