@@ -300,9 +300,10 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
         "cores": os.cpu_count(),
         "threads": numba.config.NUMBA_NUM_THREADS,
         "threading_layer": _threading_layer(),
-        "parallel_min": saved,
+        "parallel_min": saved if saved < 1 << 62 else None,
         "note": f"hoop, taylor at rtol = atol = {ENSEMBLE_TOL:g}, restart() + advance_to(T); "
-        "the driver runs ensembles of at least parallel_min members in parallel",
+        "the driver runs ensembles in parallel only from MECHVIZ_PARALLEL_MIN members "
+        + (f"(set: {saved})" if saved < 1 << 62 else "(not set: never)"),
     }
 
 
