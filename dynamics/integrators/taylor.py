@@ -174,8 +174,8 @@ def hoop_expand(A, p, order):
         else:
             su = cu = s1 = c1 = s2 = c2 = 0.0
             for j in range(1, k + 1):
-                t1 = j * A[0, j]
-                t2 = j * A[1, j]
+                t1 = A[2, j - 1]  # j th1^[j] = w1^[j-1]: th1' = w1
+                t2 = A[3, j - 1]
                 tu = t1 - t2
                 i = k - j
                 su += tu * A[CU, i]
