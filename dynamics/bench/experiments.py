@@ -302,8 +302,8 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
         "threading_layer": _threading_layer(),
         "parallel_min": saved if saved < 1 << 62 else None,
         "note": f"hoop, taylor at rtol = atol = {ENSEMBLE_TOL:g}, restart() + advance_to(T); "
-        "the driver runs ensembles in parallel only from MECHVIZ_PARALLEL_MIN members "
-        + (f"(set: {saved})" if saved < 1 << 62 else "(not set: never)"),
+        + (f"the driver runs ensembles of {saved} or more members in parallel"
+           if saved < 1 << 62 else "the driver never runs ensembles in parallel (turned off)"),
     }
 
 

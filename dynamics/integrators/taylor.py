@@ -45,12 +45,12 @@ MAX_ORDER = 40
 FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
 N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary functions
-# Ensembles of at least MECHVIZ_PARALLEL_MIN members run their members on numba's threads
-# (:func:`run_taylor_parallel`, bitwise the serial result). Off unless set: on the shared 2-core
-# VM it was measured on (``mechviz bench``, "Ensembles") the parallel loop was 2x faster at 10
-# members once and 0.5-1.2x at 100-10^5 most times; a thread descheduled by other load holds the
-# whole loop up.
-PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 1 << 62)
+# Ensembles of at least PARALLEL_MIN members run their members on numba's threads
+# (:func:`run_taylor_parallel`, bitwise the serial result): 2x faster from 10 to 10^5 members on
+# 2 idle cores (``mechviz bench``, "Ensembles"); a single member never pays for the threads. On a
+# machine loaded by other jobs a thread that loses its core holds the whole loop up (measured
+# down to 0.5x): ``MECHVIZ_PARALLEL_MIN`` sets the threshold, 0 turns it off.
+PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 16) or 1 << 62
 _THREADS = numba.config.NUMBA_NUM_THREADS
 
 
@@ -435,7 +435,7 @@ class TaylorCarry:
 def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
     """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion; returns the
     steps taken (summed over the members). An ensemble of at least :data:`PARALLEL_MIN` members
-    (``MECHVIZ_PARALLEL_MIN``; off by default) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
+    (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
     order, a = order_for(rtol, atol, sys_id)
     run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
     return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
