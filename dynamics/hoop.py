@@ -40,7 +40,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special
 
 from . import params as _v
 from ._jit import njit
@@ -161,6 +160,8 @@ def mode1_exact_solution(p: HoopParams, state0: np.ndarray, t: np.ndarray | floa
     tt = np.asarray(t, dtype=float)
     if k2 == 0.0:
         return np.zeros(tt.shape + (4,))
+    from scipy import special  # 0.1-0.4 s to import: only the exact mode-1 runs need it
+
     k = math.sqrt(k2)
     phi0 = math.atan2(sin_half / k, rate / k)  # amplitude: sn = sin(phi0), cn = cos(phi0)
     u0 = float(special.ellipkinc(phi0, k2))
@@ -172,6 +173,8 @@ def mode1_exact_solution(p: HoopParams, state0: np.ndarray, t: np.ndarray | floa
 
 def mode1_period(p: HoopParams, amplitude: float) -> float:
     """Period [s] of mode 1 at finite ``amplitude`` [rad]: ``4 K(k^2) / w0``, ``k = sin(A/2)``."""
+    from scipy import special  # deferred, as in mode1_exact_solution
+
     w0 = math.sqrt(p.gravity / (2 * p.radius))
     return 4.0 * float(special.ellipk(math.sin(0.5 * amplitude) ** 2)) / w0
 

@@ -45,7 +45,7 @@ from .integrators.base import (
 )
 from .integrators.dop853 import Dop853Carry, run_dop853
 from .integrators.scipy_ivp import advance_scipy
-from .integrators.taylor import TaylorCarry, run_taylor
+from .integrators.taylor import TaylorCarry, order_for, run_taylor
 from .systems import System
 
 DEFAULT_RTOL = 1e-9
@@ -160,9 +160,10 @@ class Simulation:
         self._F = np.zeros_like(self.state)
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
-        self._has_exact = system.exact(self.state0, 0.0) is not None
+        self._has_exact = system.has_exact(self.state0)
         # the compiled adaptive method's kept steps (made on its first call)
         self._carry: TaylorCarry | Dop853Carry | None = None
+        self._taylor_h: float | None = None  # mean Taylor step of the last chunk [s]
         self._reference: Simulation | None = None
         #: Why the error is not measured although a reference was asked for ("" otherwise).
         self.reference_note = ""
@@ -211,9 +212,10 @@ class Simulation:
         self.state = s.copy()
         self.t0 = self.t
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
-        self._has_exact = self.system.exact(self.state0, 0.0) is not None
+        self._has_exact = self.system.has_exact(self.state0)
         if self._carry is not None:
-            self._carry.forget()  # a kept step and its interpolant belong to the old state
+            self._carry.forget()  # a kept step and its series or interpolant belong to the old state
+        self._taylor_h = None
         self._reference = None
         if self._reference_mode == "auto" and not self._has_exact:
             ref = reference_run(self.system, self.state0)
@@ -235,6 +237,7 @@ class Simulation:
                 raise ValueError("state must be finite")
             self.state0 = s0.copy()
             self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+            self._taylor_h = None
         self.state = self.state0.copy()
         self.t = self.clock = self.t0 = 0.0
         self.steps = self.nfev = self.rejected = 0
@@ -281,6 +284,8 @@ class Simulation:
                 self.steps += steps
                 if failure:
                     raise IntegrationError(m.name, self.step_label(), t_target, failure)
+            elif m.kernel == "taylor":
+                self._run_taylor(t_target)
             else:
                 self._run_dop853(t_target)
             self.t = t_target
@@ -332,22 +337,49 @@ class Simulation:
             self.t = t_next
 
     def _dop853_to(self, t1: float) -> None:
-        """One chunk of the compiled adaptive method (DOP853 or Taylor's method, each with its
-        kept step) from ``t`` to ``t1``."""
-        taylor = self.method.kernel == "taylor"
+        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1``."""
         if self._carry is None:
-            self._carry = (TaylorCarry if taylor else Dop853Carry)(*self.state.shape)
-        if taylor:
-            run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
-                       self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
-        else:
-            run_dop853(
-                self.system.sys_id, self.state, self.p, self.t, t1,
-                self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
-            )  # fmt: skip
+            self._carry = Dop853Carry(*self.state.shape)
+        run_dop853(
+            self.system.sys_id, self.state, self.p, self.t, t1,
+            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
+        )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
             raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
+
+    def _run_taylor(self, t_target: float) -> None:
+        """Taylor's method to ``t_target`` in chunks of about ``_chunk_steps`` steps per member
+        (Ctrl-C is seen between chunks). A chunk's span is that many steps of the mean step of
+        the last chunk (at first a guess from the system's time scale); where the chunks end does
+        not change the steps taken (each call keeps its last step, :mod:`.integrators.taylor`).
+        Kept lean: a benchmark run is ``restart()`` and one call of a few microseconds."""
+        if self._carry is None:
+            self._carry = TaylorCarry(*self.state.shape)
+        members = len(self.state)
+        while self.t < t_target:
+            h = self._taylor_h
+            if h is None:
+                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+            span = self._chunk_steps * h
+            t1 = t_target if not span < t_target - self.t else self.t + span
+            start = time.perf_counter()
+            steps = run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
+                               self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
+            elapsed = time.perf_counter() - start
+            self.steps += steps
+            self.nfev += steps
+            if self._status[0] != kernels.OK:
+                raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
+            if steps:
+                self._taylor_h = (t1 - self.t) * members / steps
+            self.t = t1
+            if elapsed < CHUNK_SECONDS / 4 and steps >= self._chunk_steps * members:
+                self._chunk_steps = min(self._chunk_steps * 2, 1 << 40)
+            elif elapsed > CHUNK_SECONDS:
+                self._chunk_steps = max(1, self._chunk_steps // 2)
+            if self.on_chunk is not None:
+                self.on_chunk(self)
 
     def estimated_steps(self, t_end: float) -> float:
         """The steps a run from the current time to ``t_end`` [s] would take, summed over the
@@ -480,8 +512,10 @@ def reference_run(system: System, state: np.ndarray) -> Simulation:
 
 
 def _steps_per_period(method: Method, rtol: float) -> float:
-    """Roughly the steps an adaptive method of order p takes per period: ``2 rtol^(-1/p)``."""
-    return 2.0 * rtol ** (-1.0 / max(method.order, 1))
+    """Roughly the steps an adaptive method of order p takes per period: ``2 rtol^(-1/p)``
+    (Taylor's method: p the order it chooses for ``rtol``)."""
+    order = order_for(rtol, rtol)[0] if method.kernel == "taylor" else method.order
+    return 2.0 * rtol ** (-1.0 / max(order, 1))
 
 
 def _tolerance(name: str, value: float) -> float:

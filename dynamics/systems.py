@@ -63,6 +63,10 @@ class Cyclotron:
             "canonical_angular_momentum": cyclotron.canonical_angular_momentum(self.params, states),
         }
 
+    def has_exact(self, state0: np.ndarray) -> bool:
+        """Always: the helix is closed form from any state."""
+        return True
+
     def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
         return cyclotron.exact_solution(self.params, state0, t)
 
@@ -99,6 +103,10 @@ class Hoop:
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
+
+    def has_exact(self, state0: np.ndarray) -> bool:
+        """Whether :meth:`exact` has a closed form from ``state0``."""
+        return self.exact(state0, 0.0) is not None
 
     def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
         """Closed form only on the mode-1 manifold (the whole body a rigid pendulum)."""
@@ -151,6 +159,9 @@ class ReleasedDisk:
             "angular_momentum_norm": np.linalg.norm(L, axis=-1),
         }
 
+    def has_exact(self, state0: np.ndarray) -> bool:
+        return False
+
     def exact(self, state0: np.ndarray, t: float) -> np.ndarray | None:
         return None
 
@@ -187,6 +198,9 @@ class DrivenDisk:
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
+
+    def has_exact(self, state0: np.ndarray) -> bool:
+        return True
 
     def exact(self, state0: np.ndarray, t: float) -> np.ndarray:
         s0 = np.asarray(state0, dtype=float)

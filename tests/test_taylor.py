@@ -83,8 +83,8 @@ def test_tight_tolerance_lands_on_the_dop853_reference(sys_id):
 
 @pytest.mark.parametrize("sys_id", list(SYSTEMS))
 def test_sampling_does_not_add_steps(sys_id):
-    """The last step is carried to the next call: 200 samples take the steps of one run, and the
-    final state differs only by where the last step's polynomial is evaluated (round-off)."""
+    """The last step is carried to the next call, with its start time's compensation: 200
+    samples take the steps of one run and end on the same bits."""
     system = SYSTEMS[sys_id]
     y0 = _state(sys_id)
     one = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
@@ -92,7 +92,7 @@ def test_sampling_does_not_add_steps(sys_id):
     many = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=y0, reference=None)
     many.run(10.0, n_samples=200)
     assert many.steps == one.steps
-    np.testing.assert_allclose(many.state, one.state, rtol=1e-13, atol=1e-13)
+    np.testing.assert_array_equal(many.state, one.state)
 
 
 def test_a_state_changed_between_calls_starts_a_fresh_step():
@@ -141,3 +141,55 @@ def test_restart_repeats_the_run_of_a_fresh_simulation(method):
     np.testing.assert_array_equal(sim.state, first[0])
     assert (sim.steps, sim.nfev) == first[1:]
     assert sim.sample().error[0] < 1e-6
+
+
+def _ensemble_run(run, sys_id, Y0):
+    system = SYSTEMS[sys_id]
+    Y = Y0.copy()
+    n, d = Y.shape
+    carry = taylor.TaylorCarry(n, d)
+    stats = np.zeros((n, 3), dtype=np.int64)
+    status = np.zeros(3, dtype=np.int64)
+    order, a = taylor.order_for(1e-9, 1e-9, sys_id)
+    total = run(sys_id, Y, system.kernel_params(), 0.0, 3.0, 1e-9, 1e-9, order, a, stats, status,
+                carry.kept, carry.base, carry.comp, carry.span, carry.last)  # fmt: skip
+    return Y, stats, status, total
+
+
+@pytest.mark.parametrize("sys_id", list(SYSTEMS))
+def test_parallel_ensemble_is_bitwise_the_serial_one(sys_id):
+    """The members spread over threads do the serial loop's arithmetic: the same bits, the same
+    step counts."""
+    rng = np.random.default_rng(3)
+    y0 = _state(sys_id)
+    Y0 = y0 + 1e-2 * rng.standard_normal((40, y0.size))
+    serial = _ensemble_run(taylor.run_taylor_compiled, sys_id, Y0)
+    parallel = _ensemble_run(taylor.run_taylor_parallel, sys_id, Y0)
+    assert np.array_equal(serial[0], parallel[0])
+    assert np.array_equal(serial[1], parallel[1])
+    assert serial[3] == parallel[3] == serial[1][:, 1].sum()
+    assert serial[2][0] == parallel[2][0] == 0
+
+
+def test_parallel_ensemble_names_the_first_member_that_failed():
+    Y0 = np.tile(_state(HOOP), (20, 1))
+    Y0[[5, 12], 2] = 1e308  # overflows at the first step
+    serial = _ensemble_run(taylor.run_taylor_compiled, HOOP, Y0)
+    parallel = _ensemble_run(taylor.run_taylor_parallel, HOOP, Y0)
+    assert serial[2][0] == parallel[2][0] != 0
+    assert serial[2][2] == parallel[2][2] == 5
+    assert np.array_equal(serial[0][:5], parallel[0][:5])
+
+
+def test_a_large_ensemble_runs_in_parallel_with_the_serial_result(monkeypatch):
+    """Through the driver: above PARALLEL_MIN members the parallel loop runs, same result."""
+    y0 = _state(HOOP)
+    states = y0 + 1e-3 * np.arange(24)[:, None]
+    runs = []
+    for threshold in (1 << 62, 2):
+        monkeypatch.setattr(taylor, "PARALLEL_MIN", threshold)
+        sim = Simulation(SYSTEMS[HOOP], "taylor", rtol=1e-9, atol=1e-9, state=states,
+                         reference=None)  # fmt: skip
+        sim.run(2.0, n_samples=5)
+        runs.append((sim.state.copy(), sim.steps))
+    assert np.array_equal(runs[0][0], runs[1][0]) and runs[0][1] == runs[1][1]

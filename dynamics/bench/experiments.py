@@ -237,3 +237,80 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
         "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "
         "array every step, non-finite check every step); median of repeats.",
     }
+
+
+# ----------------------------------------------------------------------------- ensembles
+ENSEMBLE_SIZES = (1, 10, 100, 1000, 10_000, 100_000)
+ENSEMBLE_TOL = 1e-9
+ENSEMBLE_MEMBER_STEPS = 200_000  # about this many member-steps per timed run (hoop: ~0.1 s)
+
+
+def ensemble_costs(quick: bool = False, progress=None) -> dict:
+    """ns per member-step of Taylor's method on an ensemble of N hoops (N from 1 to 10^5), the
+    members run one after another (serial) and spread over numba's threads (parallel), timed in
+    interleaved rounds; the best round of each. The members start 1e-3 rad apart; the span
+    shrinks with N so that a run is about :data:`ENSEMBLE_MEMBER_STEPS` member-steps."""
+    import os
+
+    import numba
+
+    from ..integrators import taylor
+
+    rounds = 3 if quick else 5
+    pb = PROBLEMS["hoop"]
+    rng = np.random.default_rng(0)
+    rows = {}
+    saved = taylor.PARALLEL_MIN
+    try:
+        for n in ENSEMBLE_SIZES:
+            states = pb.y0 + 1e-3 * rng.standard_normal((n, pb.y0.size))
+            per_member = ENSEMBLE_MEMBER_STEPS / n
+            t_end = min(pb.t_end, max(0.2, per_member / 9.0))  # the hoop: ~9 steps/s at 1e-9
+            sim = Simulation(pb.system, "taylor", rtol=ENSEMBLE_TOL, atol=ENSEMBLE_TOL,
+                             state=states, reference=None)  # fmt: skip
+            best = {"serial": math.inf, "parallel": math.inf}
+            finals = {}
+            for r in range(rounds + 1):  # round 0 compiles (or loads) both loops, untimed
+                for mode, threshold in (("serial", 1 << 62), ("parallel", 1)):
+                    taylor.PARALLEL_MIN = threshold
+                    sim.restart()
+                    gc.disable()
+                    t0 = time.perf_counter()
+                    sim.advance_to(t_end)
+                    dt = time.perf_counter() - t0
+                    gc.enable()
+                    if r:
+                        best[mode] = min(best[mode], dt / sim.steps)
+                    finals[mode] = sim.state.copy()
+            rows[str(n)] = {
+                "members": n,
+                "t_end": t_end,
+                "member_steps": sim.steps,
+                "serial_ns": 1e9 * best["serial"],
+                "parallel_ns": 1e9 * best["parallel"],
+                "speedup": best["serial"] / best["parallel"],
+                "bitwise_equal": bool(np.array_equal(finals["serial"], finals["parallel"])),
+            }
+            if progress:
+                progress()
+    finally:
+        taylor.PARALLEL_MIN = saved
+    return {
+        "rows": rows,
+        "cores": os.cpu_count(),
+        "threads": numba.config.NUMBA_NUM_THREADS,
+        "threading_layer": _threading_layer(),
+        "parallel_min": saved if saved < 1 << 62 else None,
+        "note": f"hoop, taylor at rtol = atol = {ENSEMBLE_TOL:g}, restart() + advance_to(T); "
+        + (f"the driver runs ensembles of {saved} or more members in parallel"
+           if saved < 1 << 62 else "the driver never runs ensembles in parallel (turned off)"),
+    }
+
+
+def _threading_layer() -> str | None:
+    import numba
+
+    try:
+        return numba.threading_layer()
+    except ValueError:  # no parallel function has run in this process
+        return None

@@ -148,6 +148,23 @@ def long_run_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def ensemble_table(result: dict) -> str:
+    e = result["ensembles"]
+    lines = [
+        f"{e['note']}; {e['cores']} cores, {e['threads']} numba threads "
+        f"({e['threading_layer'] or 'no threading layer'}).",
+        "",
+        "| members N | member-steps per run | serial ns/member-step | parallel ns/member-step | "
+        "serial / parallel | bitwise equal |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in e["rows"].values():
+        lines.append(f"| {r['members']} | {r['member_steps']} | {r['serial_ns']:.0f} | "
+                     f"{r['parallel_ns']:.0f} | {r['speedup']:.2f} | "
+                     f"{'yes' if r['bitwise_equal'] else '**no**'} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 def markdown(result: dict) -> str:
     head = (f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
             f"load average {result['load_average']}; {result['machine'].get('cpu', '')}, "
@@ -169,6 +186,8 @@ def markdown(result: dict) -> str:
     ]  # fmt: skip
     if result.get("per_step"):
         parts += ["## Cost of one compiled step", step_table(result)]
+    if result.get("ensembles"):
+        parts += ["## Ensembles: cost per member-step against N", ensemble_table(result)]
     if result.get("long_run"):
         parts += ["## Energy error over 10^4 periods", long_run_table(result)]
     if result.get("exhibits"):

@@ -150,7 +150,9 @@ def run_bench(
     every = {**PROBLEMS, **VARIANTS}
     n_sweeps = sum(len(_fixed(pb, settings)) + len(ADAPTIVE_OURS) + len(settings.scipy_methods)
                    + len(peer_names) for pb in every.values())  # fmt: skip
-    total = len(PROBLEMS) + n_sweeps + 2 + (10 + 7 + len(experiments.STEP_CASES) + 3) * extra
+    total = len(PROBLEMS) + n_sweeps + 2 + (
+        10 + 7 + len(experiments.STEP_CASES) + len(experiments.ENSEMBLE_SIZES) + 3
+    ) * extra
     progress = Progress(total, show_progress)
     started = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     t_start = time.perf_counter()
@@ -181,7 +183,7 @@ def run_bench(
     peer_ratios = peer_table(points, ratios, peer_names, every, settings)
     progress()
 
-    long_run = stab = per_step = exhibit = None
+    long_run = stab = per_step = exhibit = ensembles = None
     if extra:
         progress.set("long runs (10^4 periods)")
         long_run = experiments.long_run_energy(1e4, 400, progress)
@@ -189,6 +191,8 @@ def run_bench(
         stab = experiments.stability_points(progress)
         progress.set("per-step cost (numba and C)")
         per_step = experiments.per_step_costs(quick, progress)
+        progress.set("ensembles (serial and parallel)")
+        ensembles = experiments.ensemble_costs(quick, progress)
         progress.set("exhibit defaults")
         exhibit = exhibits.choose_defaults(exhibit_cases, quick) if exhibit_cases else {}
         progress(3)
@@ -268,6 +272,7 @@ def run_bench(
         "long_run": long_run,
         "stability": stab,
         "per_step": per_step,
+        "ensembles": ensembles,
         "exhibits": exhibit,
     }
     if extras:
@@ -446,6 +451,10 @@ def summary(result: dict) -> dict:
         "per_step_ns": None if result["per_step"] is None else {
             k: {"numba": round(v["numba_ns"], 1), "c": v.get("c_ns")}
             for k, v in result["per_step"]["rows"].items()
+        },
+        "ensemble_ns_per_member_step": None if result.get("ensembles") is None else {
+            k: {"serial": round(v["serial_ns"], 1), "parallel": round(v["parallel_ns"], 1)}
+            for k, v in result["ensembles"]["rows"].items()
         },
         "exhibit_defaults": None if result["exhibits"] is None else {
             k: None

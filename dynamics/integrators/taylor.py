@@ -28,8 +28,11 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 
+import numba
 import numpy as np
+from numba import prange
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
@@ -42,12 +45,24 @@ MAX_ORDER = 40
 FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
 N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary functions
+# Ensembles of at least PARALLEL_MIN members run their members on numba's threads
+# (:func:`run_taylor_parallel`, bitwise the serial result). On 2 idle cores that was 2x faster
+# from 10 to 10^5 members (``mechviz bench``, "Ensembles"); on cores busy with other jobs a
+# thread that loses its core holds the whole loop up: from 100 members 0.7-1.2x, below that down
+# to 1/15 (threads waiting on each other in calls of a few milliseconds). Hence the threshold of
+# 1000 members (calls of about 0.1 s); ``MECHVIZ_PARALLEL_MIN`` sets it, 0 turns it off.
+PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 1000) or 1 << 62
+_THREADS = numba.config.NUMBA_NUM_THREADS
 
 
 # Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, per system: the step size and loop
 # (c0), Horner's evaluation and the linear recurrences (c1), the Cauchy products (c2). Measured
 # with the compiled pieces on a 2-core x86-64 VM; only their ratios matter.
 STEP_COST = {CYCLOTRON: (45.0, 5.6, 0.08), HOOP: (50.0, 17.3, 0.67), FREE_BODY: (55.0, 5.8, 1.0)}
+
+
+TIGHT_TOL = 1e-14
+TIGHT_A_MIN = 1.25
 
 
 @functools.lru_cache(maxsize=1024)
@@ -60,17 +75,22 @@ def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> tuple[int, float]
     here ``cost(p)`` is the system's :data:`STEP_COST`, whose constant and linear parts favour
     higher orders and longer steps (``a`` between 1 and 2; only linear terms, the charge: about
     0.7). ``a`` is kept at least 1 (a step at most ``rho / e``): the estimate from the last two
-    coefficients is trusted only well inside the radius of convergence.
+    coefficients is trusted only well inside the radius of convergence. Below
+    :data:`TIGHT_TOL` it is at least :data:`TIGHT_A_MIN`: there the round-off of the series' sum
+    matters, and on a long step of an entire solution (the charge's sines, whose estimated radius
+    grows with the order) the terms grow before they fall and cancel (the untuned charge's error
+    stopped at 3e-12 with a = 1, 5e-13 with 1.25).
     """
     tol = min(rtol, atol)
     c0, c1, c2 = STEP_COST[sys_id]
     L = -math.log(tol)
+    a_min = 1.0 if tol >= TIGHT_TOL else TIGHT_A_MIN
 
     def work(p: int) -> float:
-        return (c0 + c1 * p + c2 * p * p) * math.exp(max(1.0, L / (p - 1)))
+        return (c0 + c1 * p + c2 * p * p) * math.exp(max(a_min, L / (p - 1)))
 
     p = min(range(3, MAX_ORDER + 1), key=work)
-    return p, max(1.0, L / (p - 1))
+    return p, max(a_min, L / (p - 1))
 
 
 # --------------------------------------------------------------------------- expansions
@@ -155,8 +175,8 @@ def hoop_expand(A, p, order):
         else:
             su = cu = s1 = c1 = s2 = c2 = 0.0
             for j in range(1, k + 1):
-                t1 = j * A[0, j]
-                t2 = j * A[1, j]
+                t1 = A[2, j - 1]  # j th1^[j] = w1^[j-1]: th1' = w1
+                t2 = A[3, j - 1]
                 tu = t1 - t2
                 i = k - j
                 su += tu * A[CU, i]
@@ -264,62 +284,126 @@ def _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor):
 
 
 @njit(cache=True)
-def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
-                        span, last):  # fmt: skip
-    """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place, at order ``order`` with
-    steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring).
+def _two_sum(a, b):
+    """Knuth's two-sum: ``a + b = s + e`` exactly, ``s`` the rounded sum."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
 
-    ``kept`` (N, N_ROWS, MAX_ORDER + 1), ``base`` (N,), ``span`` (N,) and ``last`` (N, d) hold each
-    member's last step (all series, base time, length; ``span <= 0``: none) and the state written
-    at ``t1``; they carry the step over to the next call (module docstring).
+
+@njit(cache=True)
+def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b, factor,
+                    stats, kept, base, comp, span, last):  # fmt: skip
+    """Advance member ``i`` (row ``Y[i]``) from ``t0`` to ``t1``; returns ``OK`` or ``NONFINITE``.
+    Touches only row ``i`` of every array, so that members may run on different threads."""
+    d = Y.shape[1]
+    y = Y[i]
+    K = kept[i]
+    same = span[i] > 0.0 and base[i] <= t0 <= base[i] + span[i]
+    if same:
+        for j in range(d):
+            if y[j] != last[i, j]:
+                same = False
+    if same and t1 <= base[i] + span[i]:
+        _horner(K, d, order, (t1 - base[i]) - comp[i], y)
+    else:
+        # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
+        # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
+        # A kept step carries its start's compensation, so calls that end inside steps (samples,
+        # chunks) do the arithmetic of one call.
+        if same:  # finish the kept step, then go on from its end
+            t, c = _two_sum(base[i], span[i])
+            c += comp[i]
+            _horner(K, d, order, span[i], y)
+        else:
+            t = t0
+            c = 0.0
+        # The series of a step, auxiliary rows included, in scratch that fits in the L1 cache;
+        # only the state's rows of the last step are kept (every entry is written before read).
+        A = np.empty((N_ROWS, order + 1))
+        while True:
+            for j in range(d):
+                A[j, 0] = y[j]
+            _expand(sys_id, A, p, order)
+            h = _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor)
+            stats[i, 0] += 1
+            stats[i, 1] += 1
+            if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
+                return NONFINITE
+            rest = (t1 - t) - c
+            if h >= rest:
+                base[i] = t
+                comp[i] = c
+                span[i] = h
+                for j in range(d):
+                    for k in range(order + 1):
+                        K[j, k] = A[j, k]
+                _horner(A, d, order, rest, y)
+                break
+            _horner(A, d, order, h, y)
+            t, e = _two_sum(t, h)
+            c += e
+    finite = True
+    for j in range(d):
+        last[i, j] = y[j]
+        if not math.isfinite(y[j]):
+            finite = False
+    return OK if finite else NONFINITE
+
+
+@njit(cache=True)
+def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
+                        comp, span, last):  # fmt: skip
+    """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place, at order ``order`` with
+    steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring), one member after another; stops
+    at the first member that fails (``status = (NONFINITE, its steps, its index)``).
+
+    ``kept`` (N, d, MAX_ORDER + 1), ``base``, ``comp`` and ``span`` (N,) and ``last`` (N, d) hold
+    each member's last step (the state's series, its start ``base + comp``, its length;
+    ``span <= 0``: none) and the state written at ``t1``; they carry the step over to the next
+    call (module docstring). Returns the steps taken, summed over the members (also added to
+    ``stats``).
     """
-    n, d = Y.shape
+    n = Y.shape[0]
     tol = min(rtol, atol)
     scale_r, scale_a = rtol / tol, atol / tol
     inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
     factor = math.exp(-a - 0.7 / (order - 1))
     status[0] = OK
+    total = 0
     for i in range(n):
-        y = Y[i]
-        A = kept[i]
-        same = span[i] > 0.0 and base[i] <= t0 <= base[i] + span[i]
-        if same:
-            for j in range(d):
-                if y[j] != last[i, j]:
-                    same = False
-        if same and t1 <= base[i] + span[i]:
-            _horner(A, d, order, t1 - base[i], y)
-        else:
-            if same:  # finish the kept step, then go on from its end
-                t = base[i] + span[i]
-                _horner(A, d, order, span[i], y)
-            else:
-                t = t0
-            while True:
-                for j in range(d):
-                    A[j, 0] = y[j]
-                _expand(sys_id, A, p, order)
-                h = _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor)
-                stats[i, 0] += 1
-                stats[i, 1] += 1
-                if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
-                    report(status, NONFINITE, stats[i, 1], i)
-                    return
-                if t + h >= t1:
-                    base[i] = t
-                    span[i] = h
-                    _horner(A, d, order, t1 - t, y)
-                    break
-                _horner(A, d, order, h, y)
-                t += h
-        finite = True
-        for j in range(d):
-            last[i, j] = y[j]
-            if not math.isfinite(y[j]):
-                finite = False
-        if not finite:
-            report(status, NONFINITE, stats[i, 1], i)
-            return
+        before = stats[i, 1]
+        code = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b,
+                               factor, stats, kept, base, comp, span, last)  # fmt: skip
+        total += stats[i, 1] - before
+        if code != OK:
+            report(status, code, stats[i, 1], i)
+            break
+    return total
+
+
+@njit(cache=True, parallel=True)
+def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
+                        comp, span, last):  # fmt: skip
+    """:func:`run_taylor_compiled` with the members spread over numba's threads. Each member's
+    arithmetic is the serial loop's (bitwise the same result); a failure does not stop the other
+    members, and ``status`` names the first member that failed."""
+    n = Y.shape[0]
+    tol = min(rtol, atol)
+    scale_r, scale_a = rtol / tol, atol / tol
+    inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
+    factor = math.exp(-a - 0.7 / (order - 1))
+    before = stats[:, 1].copy()
+    codes = np.zeros(n, np.int64)
+    for i in prange(n):
+        codes[i] = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a,
+                                   inv_b, factor, stats, kept, base, comp, span, last)  # fmt: skip
+    status[0] = OK
+    for i in range(n):
+        if codes[i] != OK:
+            report(status, codes[i], stats[i, 1], i)
+            break
+    return int(np.sum(stats[:, 1] - before))
 
 
 # the right-hand sides the expansions are written for (tests compare the two)
@@ -334,8 +418,9 @@ class TaylorCarry:
     """What one run keeps between calls: each member's last step (see :func:`_run`)."""
 
     def __init__(self, n: int, d: int) -> None:
-        self.kept = np.zeros((n, N_ROWS, MAX_ORDER + 1))
+        self.kept = np.zeros((n, d, MAX_ORDER + 1))  # the state's series only: 1 kB a hoop
         self.base = np.zeros(n)
+        self.comp = np.zeros(n)  # the base time's compensation: it is base + comp
         self.span = np.zeros(n)
         self.last = np.zeros((n, d))
 
@@ -344,8 +429,11 @@ class TaylorCarry:
         self.span[:] = 0.0
 
 
-def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> None:
-    """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion."""
+def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
+    """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion; returns the
+    steps taken (summed over the members). An ensemble of at least :data:`PARALLEL_MIN` members
+    (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
     order, a = order_for(rtol, atol, sys_id)
-    run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
-                        carry.base, carry.span, carry.last)  # fmt: skip
+    run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
+    return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
+               carry.base, carry.comp, carry.span, carry.last)  # fmt: skip
