@@ -140,6 +140,7 @@ class Ring:
     allocates nothing and :meth:`array` copies one block. ``version`` changes on every change."""
 
     def __init__(self, shape: tuple[int, ...], maxlen: int) -> None:
+        self.shape = tuple(shape)  # of one row
         self.maxlen = max(2, int(maxlen))
         self._buf = np.full((2 * self.maxlen, *shape), math.nan)
         self._i = self._n = 0
@@ -524,7 +525,7 @@ class Exhibit:
         self._compare_sample = None
         self.history.clear()
         d = self.sim.state.shape[1]
-        if self.trace._buf.shape[1] != d + 4:
+        if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
             self.trace = Ring((d + 4,), self.history.maxlen)
         self.trace.clear()
 
