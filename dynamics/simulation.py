@@ -298,11 +298,16 @@ class Simulation:
         self.advance_to(self.clock + _v.finite("duration", duration))
 
     def _timed_chunk(self, run_chunk, steps: int) -> None:
-        """Run ``run_chunk(steps)``, then adapt the chunk size to :data:`CHUNK_SECONDS`."""
+        """Run ``run_chunk(steps)``, then adapt the chunk size (:meth:`_chunk_done`)."""
         t0 = time.perf_counter()
         run_chunk(steps)
-        elapsed = time.perf_counter() - t0
-        if elapsed < CHUNK_SECONDS / 4 and steps >= self._chunk_steps:
+        self._chunk_done(time.perf_counter() - t0, full=steps >= self._chunk_steps)
+
+    def _chunk_done(self, elapsed: float, full: bool) -> None:
+        """After a chunk that took ``elapsed`` seconds: double the chunk if it was ``full`` (as
+        long as asked) and took under a quarter of :data:`CHUNK_SECONDS`, halve it if it took
+        longer than that; then report to ``on_chunk``."""
+        if elapsed < CHUNK_SECONDS / 4 and full:
             self._chunk_steps = min(self._chunk_steps * 2, 1 << 40)
         elif elapsed > CHUNK_SECONDS:
             self._chunk_steps = max(1, self._chunk_steps // 2)
@@ -374,12 +379,7 @@ class Simulation:
             if steps:
                 self._taylor_h = (t1 - self.t) * members / steps
             self.t = t1
-            if elapsed < CHUNK_SECONDS / 4 and steps >= self._chunk_steps * members:
-                self._chunk_steps = min(self._chunk_steps * 2, 1 << 40)
-            elif elapsed > CHUNK_SECONDS:
-                self._chunk_steps = max(1, self._chunk_steps // 2)
-            if self.on_chunk is not None:
-                self.on_chunk(self)
+            self._chunk_done(elapsed, full=steps >= self._chunk_steps * members)
 
     def estimated_steps(self, t_end: float) -> float:
         """The steps a run from the current time to ``t_end`` [s] would take, summed over the

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from viz.chromium import CHROMIUM_ARGS, find_chromium
+from viz.chromium import CHROMIUM_ARGS, find_chromium, first_page, launch  # noqa: F401  (API above)
 
 REQUIRE_ENV = "MECHVIZ_REQUIRE_BROWSER"
 
@@ -95,15 +95,9 @@ def open_page(
     profile = tempfile.mkdtemp(prefix="mechviz-chromium-")
     try:
         with sync_playwright() as pw:
-            context = pw.chromium.launch_persistent_context(
-                profile,
-                executable_path=exe,
-                headless=True,
-                args=CHROMIUM_ARGS,
-                viewport={"width": width, "height": height},
-            )
+            context = launch(pw, profile, exe, width, height)
             try:
-                page = context.pages[0] if context.pages else context.new_page()
+                page = first_page(context)
                 page.goto(url)
                 if wait_connected:
                     page.get_by_text("Connected", exact=True).wait_for(timeout=timeout_s * 1000)

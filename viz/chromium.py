@@ -32,3 +32,20 @@ def find_chromium() -> str | None:
         if path and os.path.isfile(path) and os.access(path, os.X_OK):
             return path
     return shutil.which("chromium")
+
+
+def launch(pw, profile: str, executable: str, width: int, height: int):
+    """A headless Chromium context (``executable``, its profile in the empty folder ``profile``,
+    a ``width`` x ``height`` viewport) from playwright's ``pw``, with :data:`CHROMIUM_ARGS`."""
+    return pw.chromium.launch_persistent_context(
+        str(profile),
+        executable_path=executable,
+        headless=True,
+        args=CHROMIUM_ARGS,
+        viewport={"width": int(width), "height": int(height)},
+    )
+
+
+def first_page(context):
+    """The page a new context opened with, or a new one."""
+    return context.pages[0] if context.pages else context.new_page()

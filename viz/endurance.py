@@ -54,7 +54,7 @@ import numpy as np
 
 from dynamics.files import write_json_atomically
 
-from .chromium import CANDIDATES, CHROMIUM_ARGS, find_chromium
+from .chromium import CANDIDATES, find_chromium, first_page, launch
 
 DEFAULT_OUT = Path("docs/bench/endurance.json")
 TARGET_FPS = 59.0  # every window must reach this rate (the loop aims at 60)
@@ -418,15 +418,7 @@ def run_endurance(
             for _ in range(clients):
                 profile = tempfile.mkdtemp(prefix="mechviz-endurance-")
                 profiles.append(profile)
-                contexts.append(
-                    pw.chromium.launch_persistent_context(
-                        profile,
-                        executable_path=exe,
-                        headless=True,
-                        args=CHROMIUM_ARGS,
-                        viewport={"width": viewport[0], "height": viewport[1]},
-                    )
-                )
+                contexts.append(launch(pw, profile, exe, *viewport))
             if not parent_conn.poll(300):
                 raise RuntimeError("the viewer process did not start within 300 s")
             kind, value = parent_conn.recv()
@@ -436,7 +428,7 @@ def run_endurance(
             say(f"viewer at {url}; connecting {clients} Chromium client(s)")
             pages = []
             for c in contexts:
-                page = c.pages[0] if c.pages else c.new_page()
+                page = first_page(c)
                 page.goto(url)
                 pages.append(page)
             for page in pages:

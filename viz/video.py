@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from .chromium import CHROMIUM_ARGS, find_chromium
+from .chromium import find_chromium, first_page, launch
 
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
@@ -241,15 +241,9 @@ def render_frames(
         html_path = Path(tmp) / "recording.html"
         html_path.write_bytes(page_html)
         with sync_playwright() as pw:
-            context = pw.chromium.launch_persistent_context(
-                str(Path(tmp) / "profile"),
-                executable_path=exe,
-                headless=True,
-                args=CHROMIUM_ARGS,
-                viewport={"width": W, "height": H},
-            )
+            context = launch(pw, str(Path(tmp) / "profile"), exe, W, H)
             try:
-                page = context.pages[0] if context.pages else context.new_page()
+                page = first_page(context)
                 speed = frame_clock_ms(0, fps)[0]
                 clip = _open_player(page, html_path, W, H, speed)
                 cdp = context.new_cdp_session(page)
