@@ -122,6 +122,79 @@ def test_targets_name_each_miss_with_its_figure():
         "hoop 1e-12: scipy / ours = 30.0 < 50",
         "heyoka hoop 1e-12: heyoka / ours = 0.80 < 1",
     ]
+    # the first answer: the faster of ours against odeint
+    first = {"taylor": {"median_s": 0.6}, "dop853": {"median_s": 0.9},
+             "scipy-odeint": {"median_s": 0.4}}  # fmt: skip
+    t = _targets(ratios, None, peers, first)
+    assert t["first_answer_at_least_as_fast_as_odeint"] is False
+    assert t["missed"][-1] == "first answer: ours / odeint = 0.6 s / 0.4 s = 1.50 > 1"
+    first["dop853"]["median_s"] = 0.35
+    assert _targets(ratios, None, peers, first)["first_answer_at_least_as_fast_as_odeint"]
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _committed_result() -> dict:
+    import json
+
+    return json.loads((ROOT / "docs" / "bench" / "results.json").read_text())
+
+
+def test_the_readme_and_tables_quote_the_committed_run():
+    """Every figure of a run in the README and docs/bench/tables.md is rendered from
+    docs/bench/results.json (`make bench-docs`): hand edits or a stale render fail here."""
+    from dynamics.bench import docs, report
+
+    result = _committed_result()
+    readme = (ROOT / "README.md").read_text()
+    assert docs.splice(readme, result) == readme
+    assert (ROOT / "docs" / "bench" / "tables.md").read_text() == report.markdown(result)
+    # the README says which run it quotes, and the targets it reports are that run's
+    assert result["date"] in readme and result["command"] in readme
+
+
+def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
+    from dynamics.bench import docs
+
+    result = _committed_result()
+    blocks = "".join(f"<!-- bench:{n} -->\nold {n}\n<!-- /bench:{n} -->\ntext between\n"
+                     for n in docs.BLOCKS)  # fmt: skip
+    text = "# Title\n\nprose before\n" + blocks + "prose after\n"
+    once = docs.splice(text, result)
+    assert docs.splice(once, result) == once
+    assert once.startswith("# Title\n\nprose before\n") and once.endswith("prose after\n")
+    assert once.count("text between\n") == len(docs.BLOCKS) and "old " not in once
+    for name, render in docs.BLOCKS.items():
+        assert f"<!-- bench:{name} -->\n{render(result).rstrip()}\n<!-- /bench:{name} -->" in once
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda t: t.replace("<!-- /bench:peers -->", ""),  # a block not closed
+        lambda t: t.replace("<!-- bench:steps -->\n<!-- /bench:steps -->", ""),  # one missing
+        lambda t: t + "<!-- bench:steps -->\n<!-- /bench:steps -->\n",  # one twice
+        lambda t: t + "<!-- bench:speed -->\n<!-- /bench:speed -->\n",  # one unknown
+    ],
+)
+def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, capsys, damage):
+    import shutil
+
+    from dynamics.bench import docs
+
+    text = "".join(f"<!-- bench:{n} -->\n<!-- /bench:{n} -->\n" for n in docs.BLOCKS)
+    readme = tmp_path / "README.md"
+    readme.write_text(damage(text))
+    out = tmp_path / "bench"
+    out.mkdir()
+    shutil.copy(ROOT / "docs" / "bench" / "results.json", out / "results.json")
+    assert docs.main(["--check", str(readme)]) == 2
+    assert docs.main([str(out), str(readme)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("error: README: ") for line in err)
+    assert readme.read_text() == damage(text)
+    assert sorted(p.name for p in out.iterdir()) == ["results.json"]  # no tables.md written
 
 
 def test_a_peer_that_cannot_be_imported_is_skipped_with_the_reason(monkeypatch):

@@ -69,6 +69,81 @@ def targets_list(result: dict) -> str:
     return "\n".join(f"- missed: {m}" for m in missed)
 
 
+def _span(values: list[float], unit: str = "x") -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:.2f}{unit}" if f"{lo:.2f}" == f"{hi:.2f}" else f"{lo:.2f}-{hi:.2f}{unit}"
+
+
+def _more(n: int) -> str:
+    return f"{n} more {'has' if n == 1 else 'have'}"
+
+
+def targets_summary(result: dict) -> str:
+    """The targets in three lines (peers, scipy, first answer): how many measured cases met each,
+    every miss with its figure, and the range of the cases met."""
+    from .run import SCIPY_FACTOR
+
+    lines = []
+    h2h = result.get("peer_head_to_head") or {}
+    if h2h:
+        met, missed, unmeasured, spans = 0, [], 0, []
+        for peer, rows in h2h.items():
+            ratios = []
+            for key, row in rows.items():
+                for t, e in row.items():
+                    if e is None:
+                        unmeasured += 1
+                    elif e["ratio"] < 1.0:
+                        missed.append(f"{peer} on {key} at {t} ({e['ratio']:.2f})")
+                    else:
+                        met += 1
+                        ratios.append(e["ratio"])
+            if ratios:
+                spans.append(f"{peer} {_span(ratios)}")
+        n = met + len(missed)
+        lines.append(
+            f"- **Peers: met in {met} of {n} measured cases"
+            + (f", missed in {len(missed)}**: " + "; ".join(missed) + "." if missed else ".**")
+            + (f" {_more(unmeasured)} no figure (a sweep did not reach that accuracy)."
+               if unmeasured else "")
+            + " Where met, the peer takes this many times our time: " + "; ".join(spans) + "."
+        )  # fmt: skip
+    met, missed, unmeasured = 0, [], 0
+    for key, row in result["ratios"].items():
+        for t, e in row.items():
+            r = e.get("ratio")
+            if r is None:
+                unmeasured += 1
+            elif r < SCIPY_FACTOR:
+                missed.append((f"{key} at {t} ({r:.0f}x", e["scipy"]["method"]))
+            else:
+                met += 1
+    n = met + len(missed)
+    against = {m for _, m in missed}
+    if len(against) == 1:  # name the scipy option once
+        missed_s = "; ".join(f"{w})" for w, _ in missed) + f", all against {against.pop()}"
+    else:
+        missed_s = "; ".join(f"{w}, against {m})" for w, m in missed)
+    lines.append(
+        f"- **scipy: {SCIPY_FACTOR:g}x met in {met} of {n} measured cases"
+        + (f", missed in {len(missed)}**: {missed_s}." if missed else ".**")
+        + (f" {_more(unmeasured)} no figure (no method of ours reached that accuracy)."
+           if unmeasured else "")
+    )  # fmt: skip
+    fa = result.get("first_answer")
+    if fa:
+        ours = min(("taylor", "dop853"), key=lambda k: fa[k]["median_s"])
+        o, s = fa[ours]["median_s"], fa["scipy-odeint"]["median_s"]
+        verdict = "met" if o <= s else f"missed by {o / s:.1f}x"
+        lines.append(
+            f"- **First answer: {verdict}.** A fresh process reaches the hoop's state at 20 s at "
+            f"1e-9 in {fa['taylor']['median_s']} s with `taylor` and {fa['dop853']['median_s']} s "
+            f"with `dop853`, against {s} s with scipy's `odeint` (median of "
+            f"{len(fa['taylor']['runs_s'])} processes each)."
+        )
+    return "\n".join(lines)
+
+
 def method_table(result: dict) -> str:
     """Time each method needs to reach each accuracy (with its evaluations)."""
     lines = []
@@ -171,7 +246,7 @@ def markdown(result: dict) -> str:
             f"{result['machine']['cpus']} CPUs; versions {result['versions']}.")  # fmt: skip
     parts = [
         "# Benchmark tables", head,
-        "## Targets", targets_list(result),
+        "## Targets", targets_summary(result), targets_list(result),
         "## Time to reach each accuracy: fastest scipy over fastest of ours",
         "Each side's contenders (within 1.5x of its fastest sweep time) re-timed head to head in "
         "interleaved rounds; *sweep ratio* is the figure from the sweeps alone. Problems ending "
