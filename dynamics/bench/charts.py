@@ -55,7 +55,7 @@ def work_precision(result: dict, out: Path) -> list[Path]:
     plt = _plt()
     files = []
     for key, pb in result["problems"].items():
-        fig, axes = plt.subplots(1, 2, figsize=(13, 5.6))
+        fig, axes = plt.subplots(1, 2, figsize=(13, 7.2))
         by_method: dict[str, list] = {}
         outliers: dict[str, list] = {}
         above: dict[str, int] = {}
@@ -90,11 +90,15 @@ def work_precision(result: dict, out: Path) -> list[Path]:
             ax.set_xlabel(xl)
             ax.set_ylabel("relative final error")
             ax.grid(True, which="major", alpha=0.3)
-        axes[0].legend(fontsize=7, ncol=2)
+        # One legend under both panels: inside an axis it hid the fastest curves at the
+        # tightest errors, the corner a reader looks at first.
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, frameon=False)
         fig.suptitle(f"{pb['title']}: final error against wall time and evaluations (solid: ours, "
                      f"dashed: scipy, dotted: CyRK and heyoka); {result['date']}, "
                      f"{result['mode']} run", fontsize=10)  # fmt: skip
-        fig.tight_layout()
+        rows = -(-len(labels) // 5)
+        fig.tight_layout(rect=(0, 0.02 + 0.027 * rows, 1, 1))
         path = out / f"work_precision_{key}.png"
         _save(plt, fig, path)
         files.append(path)

@@ -1,17 +1,19 @@
-"""The benchmark's documents rendered from its ``results.json``: ``tables.md`` beside it and the
-README's benchmark blocks, so that every figure the README quotes from a run comes from that run.
+"""The benchmark's documents rendered from its ``results.json``: ``tables.md`` and the charts
+beside it and the README's benchmark blocks, so that every figure the README quotes from a run
+comes from that run, and a change to a chart's drawing needs no new run.
 
 A block in the README is the text between ``<!-- bench:NAME -->`` and ``<!-- /bench:NAME -->``
 (each marker on a line of its own); NAME is one of :data:`BLOCKS`. Everything outside the blocks
 is left as it is, and rendering twice changes nothing. ``make bench-docs`` runs the benchmark
 into ``docs/bench`` and then this module::
 
-    python -m dynamics.bench.docs docs/bench README.md          # render tables.md and README
+    python -m dynamics.bench.docs docs/bench README.md          # tables.md, charts, README
     python -m dynamics.bench.docs --check README.md             # only check the README's blocks
 
 A README whose blocks are missing, repeated or unknown is refused before anything is written
 (exit status 2). Each file is replaced whole (:func:`dynamics.files.write_files_atomically`),
-``tables.md`` first: rendering again from the same ``results.json`` repairs an interrupted run.
+``tables.md`` and the charts first: rendering again from the same ``results.json`` repairs an
+interrupted render.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import sys
 from pathlib import Path
 
 from ..files import WriteFailed, write_files_atomically
-from . import report
+from . import charts, report
 
 
 def run_line(result: dict) -> str:
@@ -88,10 +90,11 @@ def splice(text: str, result: dict) -> str:
 
 
 def render(out: Path, readme: Path) -> None:
-    """Write ``out/tables.md`` and the README's blocks from ``out/results.json``."""
+    """Write ``out/tables.md``, the charts and the README's blocks from ``out/results.json``."""
     result = json.loads((out / "results.json").read_text())
     text = splice(readme.read_text(), result)
     write_files_atomically(out, {"tables.md": report.markdown(result).encode()})
+    charts.all_charts(result, out)
     write_files_atomically(readme.parent, {readme.name: text.encode()})
 
 
