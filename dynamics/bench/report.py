@@ -69,6 +69,14 @@ def targets_list(result: dict) -> str:
     return "\n".join(f"- missed: {m}" for m in missed)
 
 
+def _near(r: float, limit: float, digits: int) -> str:
+    """``r`` to ``digits`` decimals, or more where that would print the limit it missed
+    (49.96 is "49.96", not "50")."""
+    while f"{r:.{digits}f}" == f"{limit:.{digits}f}" and digits < 6:
+        digits += 1
+    return f"{r:.{digits}f}"
+
+
 def _span(values: list[float], unit: str = "x") -> str:
     lo, hi = min(values), max(values)
     return f"{lo:.2f}{unit}" if f"{lo:.2f}" == f"{hi:.2f}" else f"{lo:.2f}-{hi:.2f}{unit}"
@@ -94,7 +102,7 @@ def targets_summary(result: dict) -> str:
                     if e is None:
                         unmeasured += 1
                     elif e["ratio"] < 1.0:
-                        missed.append(f"{peer} on {key} at {t} ({e['ratio']:.2f})")
+                        missed.append(f"{peer} on {key} at {t} ({_near(e['ratio'], 1.0, 2)})")
                     else:
                         met += 1
                         ratios.append(e["ratio"])
@@ -115,7 +123,7 @@ def targets_summary(result: dict) -> str:
             if r is None:
                 unmeasured += 1
             elif r < SCIPY_FACTOR:
-                missed.append((f"{key} at {t} ({r:.0f}x", e["scipy"]["method"]))
+                missed.append((f"{key} at {t} ({_near(r, SCIPY_FACTOR, 0)}x", e["scipy"]["method"]))
             else:
                 met += 1
     n = met + len(missed)
