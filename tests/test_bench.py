@@ -240,3 +240,25 @@ def test_an_adaptive_sweep_stops_where_the_error_stops_falling():
     assert not _stalled(jumpy)  # flat for a decade, then falling again: not a floor
     flat = [pt(10.0 ** (-k / 4), 1e-7 if k > 2 else 1e-3) for k in range(12)]
     assert _stalled(flat)  # two decades below the best without beating it
+
+
+def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
+    import warnings
+
+    from scipy.integrate import ODEintWarning, solve_ivp
+
+    from dynamics.bench.run import _quiet_scipy
+
+    def sweep_point():
+        solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], rtol=1e-16, atol=1e-16)
+        warnings.warn("Excess accuracy requested", ODEintWarning, stacklevel=1)
+        warnings.warn("something else", UserWarning, stacklevel=1)
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        _quiet_scipy(sweep_point)()
+    assert [str(w.message) for w in seen] == ["something else"]
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        sweep_point()  # without the filter all three are seen: the test can fail
+    assert len(seen) == 3

@@ -8,12 +8,14 @@ problems and timed head to head against our fastest method (``peer_ratios``).
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
 import platform
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from ..integrators.base import get_method
@@ -118,6 +120,29 @@ def _compile_times(progress: Progress, settings: Settings) -> dict:
     return out
 
 
+def _quiet_scipy(run):
+    """``run`` without scipy's warnings about the tolerances it is swept to.
+
+    A sweep asks scipy for tolerances below what it accepts, and it warns at every such point
+    (``solve_ivp``: rtol raised to 2.2e-14; ``odeint``: "excess accuracy requested", "illegal
+    input"): dozens of lines that bury the progress of a full run. Each point's outcome is
+    measured all the same: an ``odeint`` failure is read from its report and recorded as a
+    failed point, a raised rtol shows as an error that stops falling (the sweep stops there).
+    """
+
+    @functools.wraps(run)
+    def quiet(*args, **kwargs):
+        from scipy.integrate import ODEintWarning
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="At least one element of `rtol` is too small")
+            warnings.filterwarnings("ignore", category=ODEintWarning)
+            return run(*args, **kwargs)
+
+    return quiet
+
+
+@_quiet_scipy
 def run_bench(
     *, quick: bool = False, out: str | Path = "docs/bench", extras: dict | None = None,
     show_progress: bool | None = None, charts: bool = True, peers: bool = False,
