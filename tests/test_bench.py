@@ -262,3 +262,24 @@ def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
         warnings.simplefilter("always")
         sweep_point()  # without the filter all three are seen: the test can fail
     assert len(seen) == 3
+
+
+def test_no_cached_kernel_lives_in_the_benchmark_and_only_its_edits_keep_the_cache(tmp_path):
+    """The compiled-code cache is keyed on every dynamics source but the benchmark's
+    (``dynamics._jit.UNCACHED``): that holds only while no cached function is defined there."""
+    import shutil
+
+    from dynamics import _jit
+
+    for path in (ROOT / "dynamics" / "bench").rglob("*.py"):
+        assert "cache=True" not in path.read_text(), path
+    tree = tmp_path / "dynamics"
+    shutil.copytree(ROOT / "dynamics", tree, ignore=shutil.ignore_patterns("__pycache__"))
+    key = _jit._source_hash(tree)
+    assert key == _jit._source_hash(ROOT / "dynamics")
+    with open(tree / "bench" / "report.py", "a") as f:
+        f.write("# an edit to the benchmark\n")
+    assert _jit._source_hash(tree) == key
+    with open(tree / "integrators" / "taylor.py", "a") as f:
+        f.write("# an edit to an integrator\n")
+    assert _jit._source_hash(tree) != key
