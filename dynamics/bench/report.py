@@ -86,67 +86,70 @@ def _more(n: int) -> str:
     return f"{n} more {'has' if n == 1 else 'have'}"
 
 
+def _tally(verdicts: dict) -> tuple[int, list[str], int]:
+    """``(met, names missed, unmeasured)`` of a verdict table of :func:`.run._targets`."""
+    missed = [name for name, ok in verdicts.items() if ok is False]
+    met = sum(ok is True for ok in verdicts.values())
+    return met, missed, sum(ok is None for ok in verdicts.values())
+
+
 def targets_summary(result: dict) -> str:
     """The targets in three lines (peers, scipy, first answer): how many measured cases met each,
-    every miss with its figure, and the range of the cases met."""
+    every miss with its figure, and the range of the cases met. Met or missed is the run's own
+    verdict (``result["targets"]``, :func:`.run._targets`); only the figures are looked up here."""
     from .run import SCIPY_FACTOR
 
+    t = result["targets"]
     lines = []
     h2h = result.get("peer_head_to_head") or {}
     if h2h:
-        met, missed, unmeasured, spans = 0, [], 0, []
+        met, missed, unmeasured = _tally(t["ours_at_least_as_fast_as_every_peer"])
+        figures = []
+        for name in missed:
+            peer, key, acc = name.split(" ")
+            figures.append(f"{peer} on {key} at {acc} "
+                           f"({_near(h2h[peer][key][acc]['ratio'], 1.0, 2)})")  # fmt: skip
+        spans = []
         for peer, rows in h2h.items():
-            ratios = []
-            for key, row in rows.items():
-                for t, e in row.items():
-                    if e is None:
-                        unmeasured += 1
-                    elif e["ratio"] < 1.0:
-                        missed.append(f"{peer} on {key} at {t} ({_near(e['ratio'], 1.0, 2)})")
-                    else:
-                        met += 1
-                        ratios.append(e["ratio"])
+            ratios = [e["ratio"] for row in rows.values() for e in row.values()
+                      if e is not None and e["ratio"] >= 1.0]  # fmt: skip
             if ratios:
                 spans.append(f"{peer} {_span(ratios)}")
-        n = met + len(missed)
         lines.append(
-            f"- **Peers: met in {met} of {n} measured cases"
-            + (f", missed in {len(missed)}**: " + "; ".join(missed) + "." if missed else ".**")
+            f"- **Peers: met in {met} of {met + len(missed)} measured cases"
+            + (f", missed in {len(missed)}**: " + "; ".join(figures) + "." if missed else ".**")
             + (f" {_more(unmeasured)} no figure (a sweep did not reach that accuracy)."
                if unmeasured else "")
             + " Where met, the peer takes this many times our time: " + "; ".join(spans) + "."
         )  # fmt: skip
-    met, missed, unmeasured = 0, [], 0
-    for key, row in result["ratios"].items():
-        for t, e in row.items():
-            r = e.get("ratio")
-            if r is None:
-                unmeasured += 1
-            elif r < SCIPY_FACTOR:
-                missed.append((f"{key} at {t} ({_near(r, SCIPY_FACTOR, 0)}x", e["scipy"]["method"]))
-            else:
-                met += 1
-    n = met + len(missed)
-    against = {m for _, m in missed}
+    met, missed, unmeasured = _tally(t[f"ours_{SCIPY_FACTOR:g}x_faster_than_scipy"])
+    figures = []
+    for name in missed:
+        key, acc = name.split(" ")
+        e = result["ratios"][key][acc]
+        figures.append((f"{key} at {acc} ({_near(e['ratio'], SCIPY_FACTOR, 0)}x",
+                        e["scipy"]["method"]))  # fmt: skip
+    against = {m for _, m in figures}
     if len(against) == 1:  # name the scipy option once
-        missed_s = "; ".join(f"{w})" for w, _ in missed) + f", all against {against.pop()}"
+        missed_s = "; ".join(f"{w})" for w, _ in figures) + f", all against {against.pop()}"
     else:
-        missed_s = "; ".join(f"{w}, against {m})" for w, m in missed)
+        missed_s = "; ".join(f"{w}, against {m})" for w, m in figures)
     lines.append(
-        f"- **scipy: {SCIPY_FACTOR:g}x met in {met} of {n} measured cases"
+        f"- **scipy: {SCIPY_FACTOR:g}x met in {met} of {met + len(missed)} measured cases"
         + (f", missed in {len(missed)}**: {missed_s}." if missed else ".**")
         + (f" {_more(unmeasured)} no figure (no method of ours reached that accuracy)."
            if unmeasured else "")
     )  # fmt: skip
     fa = result.get("first_answer")
-    if fa:
-        ours = min(("taylor", "dop853"), key=lambda k: fa[k]["median_s"])
-        o, s = fa[ours]["median_s"], fa["scipy-odeint"]["median_s"]
-        verdict = "met" if o <= s else f"missed by {o / s:.1f}x"
+    first = t.get("first_answer_at_least_as_fast_as_odeint")
+    if fa and first is not None:
+        ours = min(fa["taylor"]["median_s"], fa["dop853"]["median_s"])
+        theirs = fa["scipy-odeint"]["median_s"]
+        verdict = "met" if first else f"missed by {ours / theirs:.1f}x"
         lines.append(
             f"- **First answer: {verdict}.** A fresh process reaches the hoop's state at 20 s at "
             f"1e-9 in {fa['taylor']['median_s']} s with `taylor` and {fa['dop853']['median_s']} s "
-            f"with `dop853`, against {s} s with scipy's `odeint` (median of "
+            f"with `dop853`, against {theirs} s with scipy's `odeint` (median of "
             f"{len(fa['taylor']['runs_s'])} processes each)."
         )
     return "\n".join(lines)
