@@ -603,17 +603,18 @@ def _run_simulate(args: argparse.Namespace) -> int:
         raise CliError(f"--samples: must be from 2 to {MAX_SAMPLES}, got {args.samples}")
     if args.max_steps < 1:
         raise CliError(f"--max-steps: must be at least 1, got {args.max_steps:g}")
-    with _ctrl_c_within_a_second():
+    with ctrl_c_within_a_second():
         result = simulate(args.system, args)
     _emit(result, args.json)
     return 0
 
 
 @contextlib.contextmanager
-def _ctrl_c_within_a_second():
+def ctrl_c_within_a_second():
     """Ctrl-C raises ``KeyboardInterrupt`` as usual, and if the process has not ended a second
     later (numba's compiler, which runs Python callbacks from C, swallows the exception), prints
-    the usual line and exits with status 130. Only for commands that write no files."""
+    the usual line and exits with status 130. Only around work that writes no files (the
+    bench wraps its measurements, not its writing)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

@@ -5,6 +5,7 @@ Nothing here times anything; the benchmark itself (``mechviz bench``) is not run
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -283,3 +284,45 @@ def test_no_cached_kernel_lives_in_the_benchmark_and_only_its_edits_keep_the_cac
     with open(tree / "integrators" / "taylor.py", "a") as f:
         f.write("# an edit to an integrator\n")
     assert _jit._source_hash(tree) != key
+
+
+def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_repeated():
+    from dynamics.bench.sweeps import Settings
+    from dynamics.bench.timing import time_calls
+
+    quick = Settings.for_mode(True)
+    calls = []
+
+    def timed(seconds):
+        def make():
+            return lambda: (calls.append(seconds), time.sleep(seconds))
+
+        return make
+
+    long_call = 1.5 * quick.one_sample_from
+    t = time_calls(timed(long_call), repeats=quick.repeats, min_sample=quick.min_sample,
+                   one_sample_from=quick.one_sample_from)  # fmt: skip
+    assert calls == [long_call] and t.samples == 1 and t.calls_per_sample == 1
+    assert t.median == t.first_call >= long_call
+    calls.clear()
+    short = quick.min_sample  # one call per sample, first call + repeats samples
+    t = time_calls(timed(short), repeats=quick.repeats, min_sample=quick.min_sample,
+                   one_sample_from=quick.one_sample_from)  # fmt: skip
+    assert t.samples == quick.repeats and len(calls) == 1 + quick.repeats * t.calls_per_sample
+    # a full run repeats every call
+    assert Settings.for_mode(False).one_sample_from == float("inf")
+
+
+def test_the_compile_cache_is_filled_by_worker_processes_once_per_checkout(tmp_path, monkeypatch):
+    import numba
+
+    from viz import warm
+
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))  # where the stamp goes
+    monkeypatch.setattr(warm, "every_method", lambda systems: [("hoop", "verlet"), ("hoop", "taylor")])
+    meanwhile = []
+    _, processes = warm.fill_cache_in_parallel(2, meanwhile=lambda: meanwhile.append(1))
+    assert processes == 2 and meanwhile == [1] and len(list(tmp_path.glob("filled-*"))) == 1
+    # filled: no process is started again, and this process's own compilation still runs
+    _, processes = warm.fill_cache_in_parallel(2, meanwhile=lambda: meanwhile.append(1))
+    assert processes == 0 and meanwhile == [1, 1]

@@ -325,7 +325,7 @@ def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
 
 _SWALLOWING_CALLBACK = """
 import ctypes, ctypes.util, sys, time
-from dynamics.cli import _ctrl_c_within_a_second
+from dynamics.cli import ctrl_c_within_a_second
 
 libc = ctypes.CDLL(ctypes.util.find_library("c"))
 CMP = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)
@@ -336,7 +336,7 @@ def slow(a, b):  # like numba's compiler: Python called from C, which drops its 
     time.sleep(30)
     return 0
 
-with _ctrl_c_within_a_second():
+with ctrl_c_within_a_second():
     items = (ctypes.c_int * 2)(2, 1)
     libc.qsort(items, 2, ctypes.sizeof(ctypes.c_int), slow)
     time.sleep(30)
@@ -355,3 +355,30 @@ def test_ctrl_c_inside_code_that_swallows_keyboard_interrupt_still_ends_the_run(
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and time.monotonic() - t0 < 3.0
     assert err.strip() == "mechviz: interrupted" and "not interrupted" not in out
+
+
+def test_ctrl_c_ends_a_bench_run_while_it_compiles_on_every_core_and_writes_nothing(tmp_path):
+    # From an empty compile cache the bench first compiles in worker processes; a terminal's
+    # Ctrl-C goes to the whole process group, and numba's compiler swallows KeyboardInterrupt.
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "bench", "--quick", "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        start_new_session=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "cache").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)  # the workers have begun to compile
+    time.sleep(1.0)
+    t0 = time.monotonic()
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and time.monotonic() - t0 < 5.0, err
+    assert err.strip().splitlines()[-1] == "mechviz: interrupted"
+    deadline = time.monotonic() + 10  # no worker is left compiling (reaped once it has ended)
+    with pytest.raises(ProcessLookupError):
+        while time.monotonic() < deadline:
+            os.killpg(proc.pid, 0)
+            time.sleep(0.2)
+    assert not out.exists()

@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import io
-from pathlib import Path
 
-from ..files import write_files_atomically
 from .sweeps import TARGETS
 
 OURS_STYLE = {"linestyle": "-", "marker": "o"}
@@ -33,12 +31,13 @@ def _plt():
     return plt
 
 
-def _save(plt, fig, path: Path) -> None:
-    """Render ``fig`` to PNG and write it atomically (no half-written chart if interrupted)."""
+def _png(plt, fig) -> bytes:
+    """``fig`` as PNG bytes (closed after): charts are written with the results they show, as
+    one set, so an interrupted run never leaves new charts beside old results."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
-    write_files_atomically(path.parent, {path.name: buf.getvalue()})
+    return buf.getvalue()
 
 
 def _style(m: str) -> dict:
@@ -51,9 +50,9 @@ def _style(m: str) -> dict:
     return OURS_STYLE
 
 
-def work_precision(result: dict, out: Path) -> list[Path]:
+def work_precision(result: dict) -> dict[str, bytes]:
     plt = _plt()
-    files = []
+    files: dict[str, bytes] = {}
     for key, pb in result["problems"].items():
         fig, axes = plt.subplots(1, 2, figsize=(13, 7.2))
         by_method: dict[str, list] = {}
@@ -80,7 +79,9 @@ def work_precision(result: dict, out: Path) -> list[Path]:
             axes[0].loglog([p["seconds"] for p in pts], [p["error"] for p in pts], "x",
                            color=COLORS.get(m), markersize=7,
                            label=f"{m}: timing outlier (flagged, not in the curve)")  # fmt: skip
-        for ax, xl in zip(axes, ("wall time per run [s] (median)",
+        single = result["settings"].get("one_sample_from_s")
+        timing = "median" + (f"; one call from {1e3 * single:g} ms" if single else "")
+        for ax, xl in zip(axes, (f"wall time per run [s] ({timing})",
                                  "right-hand-side evaluations (Runge-Kutta and fixed-step)"),
                           strict=True):  # fmt: skip
             for t in TARGETS:
@@ -99,13 +100,11 @@ def work_precision(result: dict, out: Path) -> list[Path]:
                      f"{result['mode']} run", fontsize=10)  # fmt: skip
         rows = -(-len(labels) // 5)
         fig.tight_layout(rect=(0, 0.02 + 0.027 * rows, 1, 1))
-        path = out / f"work_precision_{key}.png"
-        _save(plt, fig, path)
-        files.append(path)
+        files[f"work_precision_{key}.png"] = _png(plt, fig)
     return files
 
 
-def long_run(result: dict, out: Path) -> Path:
+def long_run(result: dict) -> dict[str, bytes]:
     plt = _plt()
     data = result["long_run"]
     fig, axes = plt.subplots(1, len(data), figsize=(16, 4.6))
@@ -128,12 +127,10 @@ def long_run(result: dict, out: Path) -> Path:
     fig.suptitle("Relative energy error over 10^4 periods at one loose step (bounded: the mean "
                  "of the last 10 % of samples within 2x of the first 10 %)")  # fmt: skip
     fig.tight_layout()
-    path = out / "energy_long_run.png"
-    _save(plt, fig, path)
-    return path
+    return {"energy_long_run.png": _png(plt, fig)}
 
 
-def stability(result: dict, out: Path) -> Path:
+def stability(result: dict) -> dict[str, bytes]:
     plt = _plt()
     data = result["stability"]
     fig, ax = plt.subplots(figsize=(10, 6))
@@ -161,12 +158,10 @@ def stability(result: dict, out: Path) -> Path:
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    path = out / "stability.png"
-    _save(plt, fig, path)
-    return path
+    return {"stability.png": _png(plt, fig)}
 
 
-def per_step(result: dict, out: Path) -> Path:
+def per_step(result: dict) -> dict[str, bytes]:
     plt = _plt()
     rows = result["per_step"]["rows"]
     names = list(rows)
@@ -182,18 +177,14 @@ def per_step(result: dict, out: Path) -> Path:
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
-    path = out / "per_step.png"
-    _save(plt, fig, path)
-    return path
+    return {"per_step.png": _png(plt, fig)}
 
 
-def all_charts(result: dict, out: Path) -> list[str]:
-    out.mkdir(parents=True, exist_ok=True)
-    files = work_precision(result, out)
-    if result.get("long_run"):
-        files.append(long_run(result, out))
-    if result.get("stability"):
-        files.append(stability(result, out))
-    if result.get("per_step"):
-        files.append(per_step(result, out))
-    return [str(f) for f in files]
+def render_charts(result: dict) -> dict[str, bytes]:
+    """Every chart of ``result``, file name -> PNG bytes, for the caller to write with the
+    files they belong with (:func:`dynamics.files.write_files_atomically`)."""
+    files = work_precision(result)
+    for part, chart in (("long_run", long_run), ("stability", stability), ("per_step", per_step)):
+        if result.get(part):
+            files.update(chart(result))
+    return files

@@ -12,7 +12,7 @@ into ``docs/bench`` and then this module::
 
 A README whose blocks are missing, repeated or unknown is refused before anything is written
 (exit status 2). Each file is replaced whole (:func:`dynamics.files.write_files_atomically`),
-``tables.md`` and the charts first: rendering again from the same ``results.json`` repairs an
+the charts and ``tables.md`` as one set first: rendering again from the same ``results.json`` repairs an
 interrupted render.
 """
 
@@ -93,8 +93,8 @@ def render(out: Path, readme: Path) -> None:
     """Write ``out/tables.md``, the charts and the README's blocks from ``out/results.json``."""
     result = json.loads((out / "results.json").read_text())
     text = splice(readme.read_text(), result)
-    write_files_atomically(out, {"tables.md": report.markdown(result).encode()})
-    charts.all_charts(result, out)
+    files = {**charts.render_charts(result), "tables.md": report.markdown(result).encode()}
+    write_files_atomically(out, files)
     write_files_atomically(readme.parent, {readme.name: text.encode()})
 
 

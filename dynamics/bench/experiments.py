@@ -249,14 +249,16 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
     """ns per member-step of Taylor's method on an ensemble of N hoops (N from 1 to 10^5), the
     members run one after another (serial) and spread over numba's threads (parallel), timed in
     interleaved rounds; the best round of each. The members start 1e-3 rad apart; the span
-    shrinks with N so that a run is about :data:`ENSEMBLE_MEMBER_STEPS` member-steps."""
+    shrinks with N so that a run is about :data:`ENSEMBLE_MEMBER_STEPS` member-steps (half as
+    many in a quick run)."""
     import os
 
     import numba
 
     from ..integrators import taylor
 
-    rounds = 3 if quick else 5
+    rounds = 2 if quick else 5
+    member_steps = ENSEMBLE_MEMBER_STEPS // (2 if quick else 1)
     pb = PROBLEMS["hoop"]
     rng = np.random.default_rng(0)
     rows = {}
@@ -264,7 +266,7 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
     try:
         for n in ENSEMBLE_SIZES:
             states = pb.y0 + 1e-3 * rng.standard_normal((n, pb.y0.size))
-            per_member = ENSEMBLE_MEMBER_STEPS / n
+            per_member = member_steps / n
             t_end = min(pb.t_end, max(0.2, per_member / 9.0))  # the hoop: ~9 steps/s at 1e-9
             sim = Simulation(pb.system, "taylor", rtol=ENSEMBLE_TOL, atol=ENSEMBLE_TOL,
                              state=states, reference=None)  # fmt: skip

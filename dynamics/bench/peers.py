@@ -237,6 +237,15 @@ def prepare(peer: str, problem: Problem, tol: float) -> PeerRun:
     return cyrk_run(problem, tol, method)
 
 
+def compile_ahead() -> None:
+    """Compile what the installed peers compile in every process (CyRK's ``nbsolve2_ivp`` is a
+    numba function without an on-disk cache: about 13 s here), before anything is timed."""
+    from .problems import PROBLEMS
+
+    if available()["cyrk"] is None:
+        cyrk_run(PROBLEMS["charge"], 1e-3).run()
+
+
 def tolerances(peer: str, settings_tolerances: tuple[float, ...]) -> tuple[float, ...]:
     """The tolerance sweep (the same grid as ours; heyoka's error stays near its tolerance, so
     its sweep stops one decade past the tightest target)."""

@@ -8,6 +8,7 @@ problems and timed head to head against our fastest method (``peer_ratios``).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
@@ -41,6 +42,22 @@ from .sweeps import (
     sweep_fixed,
     sweep_peer,
 )
+
+
+class Phases:
+    """Wall seconds per phase of a run, in the order run: ``with timer("name"): ...``.
+    What makes a run long is then in its own results file, not guessed afterwards."""
+
+    def __init__(self, before: dict[str, float] | None = None) -> None:
+        self.seconds: dict[str, float] = dict(before or {})
+
+    @contextlib.contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = round(self.seconds.get(name, 0.0) + time.perf_counter() - t0, 2)
 
 
 class Progress:
@@ -142,23 +159,45 @@ def _quiet_scipy(run):
     return quiet
 
 
-@_quiet_scipy
 def run_bench(
     *, quick: bool = False, out: str | Path = "docs/bench", extras: dict | None = None,
     show_progress: bool | None = None, charts: bool = True, peers: bool = False,
-    extra: bool = True, exhibit_cases: dict | None = None,
+    extra: bool = True, exhibit_cases: dict | None = None, phases: dict | None = None,
+    interruptible=contextlib.nullcontext,
 ) -> dict:  # fmt: skip
-    """Run everything; write ``out/results.json`` and charts; return the result dict.
+    """Run everything; write ``out/results.json``, ``tables.md`` and the charts as one set;
+    return the result dict.
 
     ``peers``: sweep CyRK and heyoka too (skipped, with the reason, when not installed).
     ``extra``: the long runs, stability, per-step and exhibit measurements (``False`` runs only
     the work-precision part). ``exhibit_cases``: the viewer's exhibits as
     :func:`.exhibits.choose_defaults` takes them (the viewer owns its defaults; ``mechviz
-    bench`` passes them); ``None`` skips that part.
+    bench`` passes them); ``None`` skips that part. ``phases``: wall seconds of the caller's own
+    measurements made before this call, listed first in ``phases_s``. ``interruptible``: a
+    context manager around everything but the writing (the command line's makes Ctrl-C end
+    the run even inside numba's compiler, which swallows ``KeyboardInterrupt``).
     """
+    out = Path(out)
+    with interruptible():
+        result, pictures = _measure(
+            quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases
+        )
+    from ..files import write_files_atomically
+    from .report import markdown
+
+    results = json.dumps(result, indent=1, default=_json_default) + "\n"
+    # one set, results.json last: an interrupted run leaves the folder as it was
+    write_files_atomically(
+        out, {**pictures, "tables.md": markdown(result).encode(), "results.json": results.encode()}
+    )
+    return result
+
+
+@_quiet_scipy
+def _measure(quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases):
+    """``run_bench`` but the writing: (the result dict, chart name -> PNG bytes)."""
     from . import peers as _peers
 
-    out = Path(out)
     settings = Settings.for_mode(quick)
     refs = load_references()
     peer_names: list[str] = []
@@ -183,46 +222,61 @@ def run_bench(
     t_start = time.perf_counter()
     load_before = _load()
 
-    compile_s = _compile_times(progress, settings)
+    timer = Phases(phases)
+    with timer("compile"):
+        compile_s = _compile_times(progress, settings)
     points = []
     for key, pb in every.items():
-        for m in _fixed(pb, settings):
-            progress.set(f"{key}: {m}")
-            points += sweep_fixed(pb, m, settings)
-            progress()
-        for m in ADAPTIVE_OURS + settings.scipy_methods:
-            progress.set(f"{key}: {m}")
-            points += sweep_adaptive(pb, m, settings)
-            progress()
-        for m in peer_names:
-            progress.set(f"{key}: {m}")
-            points += sweep_peer(pb, m, settings)
-            progress()
+        with timer(f"sweeps: {key}, our fixed-step methods"):
+            for m in _fixed(pb, settings):
+                progress.set(f"{key}: {m}")
+                points += sweep_fixed(pb, m, settings)
+                progress()
+        for side, methods in (("ours", ADAPTIVE_OURS), ("scipy", settings.scipy_methods)):
+            with timer(f"sweeps: {key}, {side} adaptive"):
+                for m in methods:
+                    progress.set(f"{key}: {m}")
+                    points += sweep_adaptive(pb, m, settings)
+                    progress()
+        with timer(f"sweeps: {key}, peers"):
+            for m in peer_names:
+                progress.set(f"{key}: {m}")
+                points += sweep_peer(pb, m, settings)
+                progress()
         flag_outliers([p for p in points if p.problem == key], pb, settings)
     ours = {m for pb in every.values() for m in pb.fixed} | set(ADAPTIVE_OURS)
     ratios = ratio_table(points, ours, set(ADAPTIVE_SCIPY))
     progress.set("ratios head to head")
-    retime_ratios(ratios, points, every, settings)
+    with timer("scipy head to head"):
+        retime_ratios(ratios, points, every, settings)
     progress()
     progress.set("peers head to head")
-    peer_ratios = peer_table(points, ratios, peer_names, every, settings)
+    with timer("peers head to head"):
+        peer_ratios = peer_table(points, ratios, peer_names, every, settings)
     progress()
 
     long_run = stab = per_step = exhibit = ensembles = None
     if extra:
         progress.set("long runs (10^4 periods)")
-        long_run = experiments.long_run_energy(1e4, 400, progress)
+        with timer("long runs"):
+            long_run = experiments.long_run_energy(1e4, 400, progress)
         progress.set("stability")
-        stab = experiments.stability_points(progress)
+        with timer("stability"):
+            stab = experiments.stability_points(progress)
         progress.set("per-step cost (numba and C)")
-        per_step = experiments.per_step_costs(quick, progress)
+        with timer("per-step cost"):
+            per_step = experiments.per_step_costs(quick, progress)
         progress.set("ensembles (serial and parallel)")
-        ensembles = experiments.ensemble_costs(quick, progress)
+        with timer("ensembles"):
+            ensembles = experiments.ensemble_costs(quick, progress)
         progress.set("exhibit defaults")
-        exhibit = exhibits.choose_defaults(exhibit_cases, quick) if exhibit_cases else {}
+        with timer("exhibit defaults"):
+            exhibit = exhibits.choose_defaults(exhibit_cases, quick) if exhibit_cases else {}
         progress(3)
-    construction = _construction_costs()
-    first_answer = _first_answer(2 if quick else 3) if extra else None
+    with timer("construction"):
+        construction = _construction_costs()
+    with timer("first answer"):
+        first_answer = _first_answer(2 if quick else 3) if extra else None
     progress.close()
 
     result = {
@@ -237,6 +291,7 @@ def run_bench(
         "mode": "quick" if quick else "full",
         "date": started,
         "duration_s": round(time.perf_counter() - t_start, 1),
+        "phases_s": timer.seconds,
         "machine": machine(),
         "versions": {**versions(), **_peers.versions()},
         "load_average": {"before": load_before, "after": _load()},
@@ -248,6 +303,7 @@ def run_bench(
             "fixed_step_factor": math.sqrt(2) if settings.half_steps else 2,
             "tolerances": list(settings.tolerances),
             "head_to_head_rounds": settings.head_to_head_rounds,
+            "one_sample_from_s": None if math.isinf(settings.one_sample_from) else settings.one_sample_from,
             "scipy_methods": list(settings.scipy_methods),
             "skipped_fixed_methods": list(settings.skip_fixed),
             "targets": [f"{t:.0e}" for t in TARGETS],
@@ -302,19 +358,14 @@ def run_bench(
     }
     if extras:
         result.update(extras)
-    out.mkdir(parents=True, exist_ok=True)
+    pictures: dict[str, bytes] = {}
     if charts:
         from . import charts as _charts
 
-        result["charts"] = _charts.all_charts(result, out)
-    from ..files import write_files_atomically
-    from .report import markdown
-
-    results = json.dumps(result, indent=1, default=_json_default) + "\n"
-    write_files_atomically(
-        out, {"tables.md": markdown(result).encode(), "results.json": results.encode()}
-    )
-    return result
+        with timer("charts"):  # result["phases_s"] is this same dict: the time lands in it
+            pictures = _charts.render_charts(result)
+        result["charts"] = [str(out / name) for name in pictures]
+    return result, pictures
 
 
 def _json_default(x):

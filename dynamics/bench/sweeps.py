@@ -67,6 +67,7 @@ class Settings:
     head_to_head_rounds: int = 9
     scipy_methods: tuple[str, ...] = ADAPTIVE_SCIPY
     skip_fixed: tuple[str, ...] = ()
+    one_sample_from: float = math.inf  # a call at least this long [s] is timed once
 
     @classmethod
     def for_mode(cls, quick: bool) -> Settings:
@@ -84,6 +85,7 @@ class Settings:
             scipy_methods=("scipy-dop853", "scipy-lsoda", "odeint"),
             # Never fastest at any target, and each costs ~1 s of compilation per system.
             skip_fixed=("euler", "midpoint"),
+            one_sample_from=0.02,
         )
 
 
@@ -156,6 +158,7 @@ def run_point(
         repeats=settings.repeats,
         min_sample=settings.min_sample,
         first_call=first if adaptive else None,
+        one_sample_from=settings.one_sample_from,
     )
     return Point(
         problem.key,
@@ -400,7 +403,8 @@ def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) 
         return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, None, None, None,
                      None, first, 0, 0, "failed: non-finite final state")  # fmt: skip
     timing = time_calls(lambda: prepared.run, repeats=settings.repeats,
-                        min_sample=settings.min_sample, first_call=first)  # fmt: skip
+                        min_sample=settings.min_sample, first_call=first,
+                        one_sample_from=settings.one_sample_from)  # fmt: skip
     return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, err, None, timing.median,
                  timing.best, timing.first_call, timing.samples, timing.calls_per_sample, "ok")  # fmt: skip
 
