@@ -39,8 +39,8 @@ def time_calls(
     ``first_call`` is the duration of an untimed call the caller already made (measured here
     otherwise). A call that took at least ``one_sample_from`` seconds is that one sample: a
     quick run's sweeps only place the points (its ratios are timed again head to head), and
-    repeating the slowest calls, scipy's at tight tolerances, was most of its time. The first
-    call may then include no compilation: the bench compiles every method before it sweeps.
+    repeating the slowest calls, scipy's at tight tolerances, was most of its time. Such a first
+    call compiles nothing: the bench compiles every method before it sweeps.
     """
     if first_call is None:
         fn = make()
