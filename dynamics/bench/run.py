@@ -17,6 +17,7 @@ import platform
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 from ..integrators.base import get_method
@@ -163,7 +164,7 @@ def run_bench(
     *, quick: bool = False, out: str | Path = "docs/bench", extras: dict | None = None,
     show_progress: bool | None = None, charts: bool = True, peers: bool = False,
     extra: bool = True, exhibit_cases: dict | None = None, phases: dict | None = None,
-    interruptible=contextlib.nullcontext,
+    interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
 ) -> dict:  # fmt: skip
     """Run everything; write ``out/results.json``, ``tables.md`` and the charts as one set;
     return the result dict.
@@ -194,7 +195,10 @@ def run_bench(
 
 
 @_quiet_scipy
-def _measure(quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases):
+def _measure(
+    quick: bool, out: Path, extras: dict | None, show_progress: bool | None, charts: bool,
+    peers: bool, extra: bool, exhibit_cases: dict | None, phases: dict | None,
+) -> tuple[dict, dict[str, bytes]]:  # fmt: skip
     """``run_bench`` but the writing: (the result dict, chart name -> PNG bytes)."""
     from . import peers as _peers
 
