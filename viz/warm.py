@@ -71,16 +71,13 @@ def _end_on_ctrl_c() -> None:
 
 
 def _warm_chunk(pairs: list[tuple[str, str]]) -> float:
-    """In a worker process: compile ``pairs``, and Taylor's parallel ensemble loop for them."""
+    """In a worker process: compile ``pairs``, Taylor's parallel ensemble loop included."""
     from dynamics.integrators import taylor
 
-    seconds = warm_all(pairs)
-    taylor.PARALLEL_MIN = 2  # this process only: the two-member warm-up takes the parallel loop
-    for system_name, method in pairs:
-        if method == "taylor":
-            _done.discard((system_name, method))
-            seconds += warm_method(system_name, method)
-    return seconds
+    # this process only: the single-state warm-up takes the serial loop, the two-member one
+    # the parallel loop (which ensembles of ``PARALLEL_MIN`` members or more use)
+    taylor.PARALLEL_MIN = 2
+    return warm_all(pairs)
 
 
 def fill_cache_in_parallel(

@@ -12,8 +12,8 @@ into ``docs/bench`` and then this module::
 
 A README whose blocks are missing, repeated or unknown is refused before anything is written
 (exit status 2). Each file is replaced whole (:func:`dynamics.files.write_files_atomically`),
-the charts and ``tables.md`` as one set first: rendering again from the same ``results.json`` repairs an
-interrupted render.
+the charts and ``tables.md`` as one set first: rendering again from the same ``results.json``
+repairs an interrupted render.
 """
 
 from __future__ import annotations
