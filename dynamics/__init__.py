@@ -2,7 +2,9 @@
 
 Modules: :mod:`.cyclotron`, :mod:`.disk`, :mod:`.hoop` (one system each: parameters, equations of
 motion, invariants, exact and analytic results); :mod:`.integrators` (methods as data, compiled
-kernels, scipy behind the same interface); :mod:`.systems` (the registry :data:`SYSTEMS`);
+kernels, scipy behind the same interface); :mod:`.spec` and :mod:`.systems` (each system
+described once, :data:`SPECS`, and as the driver sees it, :data:`SYSTEMS`); :mod:`.steps` (step
+control as one value); :mod:`.params` (one error type and one rule for typed numbers);
 :mod:`.simulation` (the driver); :mod:`.measure` (estimators of sampled motion, shared by the
 viewer and the recorder).
 This package never imports viser.
@@ -16,20 +18,32 @@ from . import (
     measure,
 )
 from .integrators import METHODS, IntegrationError, Method, get_method, methods_for
+from .params import SettingError, parse_number
 from .simulation import Sample, Simulation, Trajectory
-from .systems import SYSTEMS, Cyclotron, DrivenDisk, Hoop, ReleasedDisk
+from .spec import Setting, Setup, SystemSpec
+from .steps import Exact, Fixed, Step, Tolerance, step_control
+from .systems import SPECS, SYSTEMS, Cyclotron, DrivenDisk, Hoop, ReleasedDisk
 
 __all__ = [
     "METHODS",
+    "SPECS",
     "SYSTEMS",
     "Cyclotron",
     "DrivenDisk",
+    "Exact",
+    "Fixed",
     "Hoop",
     "IntegrationError",
     "Method",
     "ReleasedDisk",
     "Sample",
+    "Setting",
+    "SettingError",
+    "Setup",
     "Simulation",
+    "Step",
+    "SystemSpec",
+    "Tolerance",
     "Trajectory",
     "cyclotron",
     "disk",
@@ -37,4 +51,6 @@ __all__ = [
     "hoop",
     "measure",
     "methods_for",
+    "parse_number",
+    "step_control",
 ]

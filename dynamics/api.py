@@ -16,32 +16,30 @@ Units are SI and the conventions are those of each system's module (:mod:`dynami
 [2.21..., 3.83...]
 >>> df = run.to_dataframe()             # needs pandas: t, the state, energy, errors
 
-Systems: ``"cyclotron"``, ``"hoop"``, ``"disk"`` (``motion="driven"``, the exact uniform rotation
-about the axle, or ``"released"``, the free body after the axle is removed). Methods:
-:func:`methods` (``mechviz simulate --list-methods``). Bad input raises ``ValueError`` naming
-the argument; a run that blows up raises :class:`dynamics.IntegrationError`.
+Systems: :data:`SYSTEM_NAMES` (the disk with ``motion="driven"``, the exact uniform rotation
+about the axle, or ``"released"``, the free body after the axle is removed). Every default
+(parameters, start, method, step) is the one the command line, the viewer and the demo files
+use. Methods: :func:`methods` (``mechviz simulate --list-methods``). Bad input raises
+:class:`dynamics.params.SettingError` (a ``ValueError``) whose ``field`` names the argument; a
+run that blows up raises :class:`dynamics.IntegrationError`.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 
-from . import cyclotron, disk, hoop
-from .integrators import methods_for
+from . import analysis
+from . import params as _v
+from .params import SettingError
 from .simulation import Simulation
-from .systems import Cyclotron, DrivenDisk, Hoop, ReleasedDisk
+from .systems import SPECS
 
-SYSTEM_NAMES = ("cyclotron", "hoop", "disk")
-_PARAMS = {
-    "cyclotron": cyclotron.CyclotronParams,
-    "hoop": hoop.HoopParams,
-    "disk": disk.DiskParams,
-}
+#: The systems by the names the API, the command line and the demo files use.
+SYSTEM_NAMES = tuple(SPECS)
 
 __all__ = ["SYSTEM_NAMES", "Run", "analyze", "methods", "parameters", "simulate"]
 
@@ -51,9 +49,10 @@ class Run:
     """A finished run sampled at ``len(t)`` times.
 
     ``states`` is ``(K, d)`` for one initial state and ``(K, N, d)`` for an ensemble of ``N``;
-    ``energy``, ``energy_error`` (relative, ``(E - E0)/|E0|``) and ``error`` (against the exact
-    solution, or a DOP853 reference at ``rtol = atol = 1e-12`` where there is none; ``None`` if
-    not measured) drop the last axis likewise."""
+    ``energy`` [J], ``energy_error`` (relative to the energy that moves,
+    ``(E - E0) / (E0 - E_floor)``, as in :class:`dynamics.Simulation`) and ``error`` (relative,
+    against the exact solution, or a DOP853 reference at ``rtol = 3e-15``, ``atol = 1e-17``
+    where there is none; ``None`` if not measured) drop the last axis likewise."""
 
     system: str
     method: str
@@ -69,6 +68,7 @@ class Run:
     steps: int
     rhs_evaluations: int
     invariants: dict[str, np.ndarray] = field(default_factory=dict)
+    start: dict[str, Any] = field(default_factory=dict)  # the start settings, defaults filled in
 
     def column(self, name: str) -> np.ndarray:
         """One state variable over time, e.g. ``run.column("theta1")``."""
@@ -116,81 +116,70 @@ class Run:
 
 
 def parameters(system: str, **params: float) -> dict[str, float]:
-    """The physical parameters of ``system`` with the defaults filled in (``ValueError`` for an
-    unknown name or a bad value)."""
-    return dataclasses.asdict(_params(_check_system(system), params))
+    """The physical parameters of ``system`` with the defaults filled in (``ValueError`` naming
+    an unknown name or a bad value)."""
+    return dataclasses.asdict(_spec(system).parameters(params))
 
 
-def methods(system: str, motion: Literal["driven", "released"] = "released") -> list[str]:
-    """Names of the methods that apply to ``system``."""
-    return [m.name for m in methods_for(_adapter(_check_system(system), {}, motion).name)]
+def methods(system: str, motion: Literal["driven", "released"] | None = None) -> list[str]:
+    """Names of the methods that apply to ``system`` (the disk's: for its ``motion``)."""
+    spec = _spec(system)
+    start = {} if motion is None else {"motion": motion}
+    return [m.name for m in spec.methods(start)]
 
 
-def analyze(system: str, *, speed: float = 1.0, **params: float) -> dict[str, Any]:
+def analyze(system: str, **settings: float) -> dict[str, Any]:
     """The seed's analytic results for ``system`` (what ``mechviz analyze SYSTEM --json``
-    prints): cyclotron gyrofrequency, period, radius for ``speed`` [m/s], canonical momentum and
-    effective potential; disk inertia tensor, principal moments and axes, bearing forces; hoop
-    normal-mode frequencies, periods and shapes."""
-    from .cli import PARAM_FLAGS, CliError
-    from .cli import analyze as _analyze
-
-    system = _check_system(system)
-    _params(system, params)  # names and values checked here, with the argument's name
-    ns = argparse.Namespace(speed=speed, **{n: params.get(n) for n in PARAM_FLAGS[system].values()})
-    try:
-        return _analyze(system, ns)
-    except CliError as exc:
-        raise ValueError(str(exc).replace("--", "", 1)) from None
+    prints): cyclotron gyrofrequency, period, radius for ``speed`` [m/s] (default 1), canonical
+    momentum and effective potential; disk inertia tensor, principal moments and axes, bearing
+    forces; hoop normal-mode frequencies, periods and shapes. ``settings`` are the system's
+    parameters (:func:`parameters`) and the cyclotron's ``speed``."""
+    _spec(system)
+    return analysis.analyze(system, settings)
 
 
 def simulate(
     system: str,
     *,
-    method: str = "rk4",
     t_end: float,
+    method: str | None = None,
     dt: float | None = None,
     rtol: float | None = None,
+    atol: float | None = None,
     samples: int = 501,
     state: Any = None,
-    motion: Literal["driven", "released"] = "released",
-    speed: float | None = None,
-    modes: tuple[float, float] | None = None,
-    extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0),
     reference: Literal["auto", "exact"] | None = "auto",
-    **params: float,
+    **settings: Any,
 ) -> Run:
     """Run ``system`` with ``method`` to ``t_end`` [s] and sample it ``samples`` times (first
     and last included; a fixed-step sample falls on the last step at or before its time).
 
-    The start: ``state`` (``(d,)`` or an ensemble ``(N, d)``, layout :attr:`Run.columns`), or
-    the cyclotron's circle of transverse ``speed`` [m/s] (default 1), the hoop's ``modes``
-    (amplitudes of mode 1 and mode 2 [rad], at rest; default hanging at rest), the released
-    disk's ``extra_spin`` [rad/s] (disk-frame components) on top of its spin about the axle.
-    ``params`` are the system's physical parameters (:func:`parameters`). ``dt`` is required for
-    fixed-step methods, ``rtol`` (default 1e-9) is for adaptive ones. ``reference`` as in
-    :class:`dynamics.Simulation` (``None`` skips the error measurement, which for systems
-    without an exact solution runs a tight DOP853 beside the method)."""
-    system = _check_system(system)
-    sysm = _adapter(system, params, motion, extra_spin)
-    p = sysm.params
-    if state is None:
-        if system == "cyclotron":
-            state = cyclotron.circular_orbit_state(p, 1.0 if speed is None else speed)
-        elif system == "hoop" and modes is not None:
-            state = hoop.mode_state(p, tuple(modes))
-    elif speed is not None or modes is not None:
-        raise ValueError("state gives the whole start; leave out speed and modes")
-    if speed is not None and system != "cyclotron":
-        raise ValueError("speed is for the cyclotron only")
-    if modes is not None and system != "hoop":
-        raise ValueError("modes is for the hoop only")
-    if samples < 2:
-        raise ValueError(f"samples must be at least 2, got {samples}")
-    sim = Simulation(sysm, method, dt=dt, rtol=rtol, state=state, reference=reference)
-    K = int(samples)
-    single = np.asarray(sim.state0).shape[0] == 1 and (state is None or np.ndim(state) == 1)
+    ``settings`` are the system's physical parameters (:func:`parameters`) and the settings of
+    its start, each defaulting as everywhere else in mechviz (``mechviz simulate SYSTEM --help``
+    lists them): the cyclotron's transverse ``speed`` [m/s], ``centre`` (x, y) [m] and ``vz``
+    [m/s]; the hoop's ``modes`` (amplitudes of mode 1 and mode 2 [rad], at rest); the disk's
+    ``motion`` (``"driven"`` or ``"released"``) and ``extra_spin`` [rad/s] (disk-frame
+    components, added at release). ``state`` (``(d,)`` or an ensemble ``(N, d)``, layout
+    :attr:`Run.columns`) replaces the start. ``method`` defaults to the system's, ``dt`` to its
+    step for fixed-step methods, ``rtol`` (1e-9) and ``atol`` (``rtol``) are for adaptive ones.
+    ``reference`` as in :class:`dynamics.Simulation` (``None`` skips the error measurement, which
+    for systems without an exact solution runs a tight DOP853 beside the method)."""
+    spec = _spec(system)
+    start_names = {s.name for s in spec.start}
+    start = {k: v for k, v in settings.items() if k in start_names}
+    params = {k: v for k, v in settings.items() if k not in start_names}
+    if state is not None and start:
+        raise SettingError(next(iter(start)), "state gives the whole start; leave out "
+                           + ", ".join(start))
+    setup = spec.setup(params, start, method=method, dt=dt, rtol=rtol, atol=atol, state=state)
+    t_end = _v.positive("t_end", t_end)
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
+        raise SettingError("samples", f"samples must be a whole number of at least 2, got {samples!r}")
+    sim = Simulation(setup.system, setup.method, step=setup.step, state=setup.state,
+                     reference=reference)  # fmt: skip
+    single = np.ndim(setup.state) == 1
     ts, S, E, EE, ERR, INV = [], [], [], [], [], []
-    for k, t in enumerate(np.linspace(0.0, float(t_end), K)):
+    for k, t in enumerate(np.linspace(0.0, t_end, samples)):
         if k:
             sim.advance_to(float(t))
         s = sim.sample()
@@ -208,41 +197,15 @@ def simulate(
     err = None if ERR[0] is None else stack(ERR)
     inv = {name: stack([i[name] for i in INV]) for name in INV[0]}
     return Run(
-        system=sysm.name, method=sim.method.name, step=sim.step_label(),
-        params=dataclasses.asdict(p), columns=tuple(sysm.state_names),
+        system=spec.name, method=sim.method.name, step=sim.step_label(),
+        params=dataclasses.asdict(setup.params), columns=tuple(setup.system.state_names),
         t=np.asarray(ts), states=stack(S), energy=stack(E), energy_error=stack(EE), error=err,
         reference=sim.reference_kind, steps=sim.steps, rhs_evaluations=sim.nfev, invariants=inv,
+        start=dict(setup.start),
     )  # fmt: skip
 
 
-# --------------------------------------------------------------------------- helpers
-def _check_system(system: str) -> str:
-    if system not in SYSTEM_NAMES:
-        raise ValueError(f"system must be one of {', '.join(SYSTEM_NAMES)}; got {system!r}")
-    return system
-
-
-def _params(system: str, params: dict[str, float]):
-    cls = _PARAMS[system]
-    names = [f.name for f in dataclasses.fields(cls)]
-    unknown = sorted(set(params) - set(names))
-    if unknown:
-        raise ValueError(
-            f"{unknown[0]} is not a parameter of the {system}; choose from {', '.join(names)}"
-        )
-    return cls(**params)
-
-
-def _adapter(system: str, params: dict[str, float], motion: str, extra_spin=(0.0, 0.0, 0.0)):
-    p = _params(system, params)
-    if system == "cyclotron":
-        return Cyclotron(p)
-    if system == "hoop":
-        return Hoop(p)
-    if motion == "driven":
-        if any(extra_spin):
-            raise ValueError("extra_spin is for motion='released' only")
-        return DrivenDisk(p)
-    if motion != "released":
-        raise ValueError(f"motion must be 'driven' or 'released'; got {motion!r}")
-    return ReleasedDisk(p, tuple(float(x) for x in extra_spin))
+def _spec(system: str):
+    if system not in SPECS:
+        raise SettingError("system", f"system must be one of {', '.join(SPECS)}; got {system!r}")
+    return SPECS[system]

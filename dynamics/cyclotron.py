@@ -274,3 +274,27 @@ def exact_step(y, p, h):
     y[3] = vx * c + vy * s
     y[4] = -vx * s + vy * c
     return 0
+
+
+def analysis(p: CyclotronParams, speed: float = 1.0) -> dict:
+    """The seed's results for a charge of transverse ``speed`` [m/s], JSON-ready: gyrofrequency
+    (and its sign), period, kinetic energy, radius, canonical angular momentum, the effective
+    potential's minimum and the radial oscillation frequency about it. A result a double cannot
+    hold is NaN (:func:`dynamics.params.guarded`)."""
+    g = _v.guarded
+    ke = g(lambda: 0.5 * p.mass * speed**2)
+    state = g(lambda: circular_orbit_state(p, speed), np.full(6, math.nan))
+    p_phi = g(lambda: float(canonical_angular_momentum(p, state)))
+    w = g(lambda: signed_gyrofrequency(p))
+    return {
+        "parameters": {"charge": p.charge, "mass": p.mass, "field": p.field, "speed": speed},
+        "gyrofrequency": abs(w),
+        "signed_gyrofrequency": w,
+        "rotation_seen_from_plus_z": "clockwise" if w > 0 else "anticlockwise",
+        "period": g(lambda: period(p)),
+        "kinetic_energy": ke,
+        "radius": g(lambda: orbit_radius(p, ke)),
+        "canonical_angular_momentum": p_phi,
+        "effective_potential_minimum_radius": g(lambda: effective_potential_minimum(p, p_phi)),
+        "radial_oscillation_frequency": g(lambda: radial_oscillation_frequency(p, p_phi)),
+    }

@@ -54,14 +54,23 @@ class DiskParams:
     disk_mass: float = 1.0
     radius: float = 1.0
     bead_mass: float | None = field(default=None)
-    omega: float = 1.0
+    omega: float = 2.0
 
     def __post_init__(self) -> None:
         if self.bead_mass is None:
-            object.__setattr__(self, "bead_mass", 1.25 * _v.positive("disk_mass", self.disk_mass))
+            bead = 1.25 * _v.positive("disk_mass", self.disk_mass)
+            if not math.isfinite(bead):
+                raise _v.SettingError(
+                    "disk_mass", f"disk_mass {self.disk_mass:g}: the default bead mass 5/4 of it "
+                    "is beyond the largest double",
+                )
+            object.__setattr__(self, "bead_mass", bead)
         _v.coerce(
             self,
-            {"disk_mass": _v.positive, "radius": _v.positive, "bead_mass": _v.positive},
+            {
+                "disk_mass": _v.positive, "radius": _v.positive, "bead_mass": _v.positive,
+                "omega": _v.nonzero,  # without a spin nothing moves and nothing is measured
+            },
         )
 
     @property
@@ -504,3 +513,33 @@ def splitting_step(y, p, h):
     w2, w3, q0, q1, q2, q3 = _rotation(w1 * hh, i2 * w2, i3 * w3, i2, i3, q0, q1, q2, q3)
     y[0], y[1], y[2], y[3], y[4], y[5], y[6] = w1, w2, w3, q0, q1, q2, q3
     return 5
+
+
+def analysis(p: DiskParams) -> dict:
+    """The seed's results, JSON-ready: inertia tensors about A (disk, bead, both), principal
+    moments and axes about A and about the centre of mass, the angular momentum and torque of the
+    uniform rotation, and the bearing forces' amplitudes. A result a double cannot hold is NaN
+    (:func:`dynamics.params.guarded`)."""
+    g = _v.guarded
+    nan3 = (np.full(3, np.nan), np.full((3, 3), np.nan))
+    moments, axes = g(lambda: principal_axes(p), nan3)
+    moments_cm, axes_cm = g(lambda: principal_axes_cm(p), nan3)
+    return {
+        "parameters": {
+            "disk_mass": p.disk_mass, "radius": p.radius, "bead_mass": p.bead_mass,
+            "omega": p.omega,
+        },
+        "inertia_tensor": g(lambda: inertia_tensor(p).tolist()),
+        "inertia_tensor_disk": g(lambda: inertia_tensor_disk(p).tolist()),
+        "inertia_tensor_bead": g(lambda: inertia_tensor_bead(p).tolist()),
+        "principal_moments": moments.tolist(),
+        "principal_axes": axes.tolist(),
+        "centre_of_mass": centre_of_mass(p).tolist(),
+        "angular_momentum": g(lambda: angular_momentum(p).tolist()),
+        "required_torque": g(lambda: required_torque(p).tolist()),
+        "axle_force_amplitude": g(lambda: axle_force_amplitude(p)),
+        "bearing_force_a_amplitude": g(lambda: float(np.linalg.norm(bearing_force_a(p)))),
+        "net_bearing_force_amplitude": g(lambda: float(np.linalg.norm(net_bearing_force(p)))),
+        "principal_moments_cm": moments_cm.tolist(),
+        "principal_axes_cm": axes_cm.tolist(),
+    }

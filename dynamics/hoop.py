@@ -296,3 +296,19 @@ def verlet_step(y, p, h):
     y[0], y[1] = n_th1, n_th2
     y[2], y[3] = _velocities(M, m, a, n_th1, n_th2, q1, q2)
     return evals
+
+
+def analysis(p: HoopParams) -> dict:
+    """The seed's results, JSON-ready: the normal-mode frequencies [rad/s], periods [s] and
+    shapes (rows). A result a double cannot hold is NaN (:func:`dynamics.params.guarded`)."""
+    g = _v.guarded
+    freqs, shapes = g(lambda: normal_modes(p), (np.full(2, np.nan), np.full((2, 2), np.nan)))
+    return {
+        "parameters": {
+            "hoop_mass": p.hoop_mass, "bead_mass": p.bead_mass, "radius": p.radius,
+            "gravity": p.gravity,
+        },
+        "mode_frequencies": freqs.tolist(),
+        "mode_periods": g(lambda: (2 * np.pi / freqs).tolist()),
+        "mode_shapes": shapes.tolist(),
+    }

@@ -1,33 +1,94 @@
-"""Validation shared by the parameter dataclasses of every system.
+"""Validation shared by every setting of every system: one error type, one rule per kind of value,
+and one rule for a number a person types.
 
 Each system keeps its parameters in a frozen dataclass whose ``__post_init__`` calls these
-helpers, so an invalid value is rejected where it is made, with a message that names the field
-and the value (the CLI and the viewer show that message as is).
+helpers, so an invalid value is rejected where it is made. A refusal is a :class:`SettingError`:
+a ``ValueError`` that carries the *field* it is about (``"mass"``, ``"dt"``, ``"initial.modes"``)
+beside its message. Each front end maps the field to its own label (a flag ``--mass``, a demo key
+``parameters.mass``, a panel label "Mass m [kg]") without reading the message.
 """
 
 from __future__ import annotations
 
 import math
+import sys
+from collections.abc import Callable
 from dataclasses import fields
 from typing import Any
 
+import numpy as np
 
-def finite(name: str, value: Any) -> float:
-    """Return ``value`` as a float, or raise ``ValueError`` if it is not a finite real number."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+#: The smallest normal double (2.2e-308): a typed value closer to 0 has lost precision.
+TINY = sys.float_info.min
+
+
+class SettingError(ValueError):
+    """A setting that cannot be used: ``field`` names it, ``str(err)`` says why in one line."""
+
+    def __init__(self, field: str, message: str, *, fields: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.field = field
+        #: Every setting to blame, ``field`` first (several when only together they fail).
+        self.fields = fields or (field,)
+
+
+def parse_number(field: str, text: Any) -> float:
+    """What a person typed as a number, read by the one rule every front end uses.
+
+    The text is read as Python reads a float (``0.025``, ``2.5e-2``, ``2.5E-2``; a typographic
+    minus ``−`` counts as ``-``); surrounding blanks are ignored. Refused with a
+    :class:`SettingError` naming ``field``: anything else, ``nan`` and ``inf``, and a value so
+    close to 0 that it is below the smallest normal double (a subnormal has lost its digits).
+    A number (``int`` or ``float``) passes through the same checks."""
+    if isinstance(text, bool):
+        raise SettingError(field, f"{field} must be a number, got {text!r}")
+    if isinstance(text, int | float):
+        x = float(text)
+    else:
+        raw = str(text).strip().replace("\u2212", "-")
+        try:
+            x = float(raw)
+        except ValueError:
+            raise SettingError(
+                field, f"{field} must be a number, got {str(text)!r} (write e.g. 0.025 or 2.5e-2)"
+            ) from None
     if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x}")
+        raise SettingError(field, f"{field} must be finite, got {text!r}")
+    if 0.0 < abs(x) < TINY:
+        raise SettingError(
+            field, f"{field} {x:.3g} is below the smallest normal double ({TINY:.3g}); "
+            "use 0 or a larger value",
+        )
     return x
 
 
+def guarded(fn: Callable[[], Any], fallback: Any = math.nan) -> Any:
+    """``fn()``, or ``fallback`` (NaN) if its arithmetic overflows, divides by zero or leaves its
+    domain: a derived result that cannot be represented then shows as NaN, which
+    :func:`dynamics.analysis.unrepresentable` reports, instead of a traceback."""
+    try:
+        with np.errstate(all="ignore"):
+            return fn()
+    except (OverflowError, ZeroDivisionError, ValueError, np.linalg.LinAlgError):
+        return fallback  # ValueError: math domain, or a helper's finite-input check
+
+
+def finite(name: str, value: Any) -> float:
+    """``value`` as a finite float (:func:`parse_number`), else :class:`SettingError`."""
+    try:
+        x = float(value) if not isinstance(value, str | bool) else value
+    except (TypeError, ValueError):
+        raise SettingError(name, f"{name} must be a number, got {value!r}") from None
+    if isinstance(x, float) and not math.isfinite(x):
+        raise SettingError(name, f"{name} must be finite, got {x}")
+    return parse_number(name, x)
+
+
 def positive(name: str, value: Any) -> float:
-    """A finite number > 0 (masses, lengths, gravity)."""
+    """A finite number > 0 (masses, lengths, gravity, steps)."""
     x = finite(name, value)
     if x <= 0.0:
-        raise ValueError(f"{name} must be positive, got {x}")
+        raise SettingError(name, f"{name} must be positive, got {x}")
     return x
 
 
@@ -35,8 +96,27 @@ def nonzero(name: str, value: Any) -> float:
     """A finite number != 0 (charge and field: their signs are physical, zero is degenerate)."""
     x = finite(name, value)
     if x == 0.0:
-        raise ValueError(f"{name} must be nonzero, got {x}")
+        raise SettingError(name, f"{name} must be nonzero, got {x}")
     return x
+
+
+def below_one(name: str, value: Any) -> float:
+    """A tolerance: a finite number in (0, 1)."""
+    x = positive(name, value)
+    if x >= 1.0:
+        raise SettingError(name, f"{name} must be below 1, got {x}")
+    return x
+
+
+def numbers(name: str, values: Any, n: int) -> tuple[float, ...]:
+    """``values`` as ``n`` finite floats, else :class:`SettingError` naming ``name``."""
+    try:
+        out = tuple(values)
+    except TypeError:
+        raise SettingError(name, f"{name} must be {n} numbers, got {values!r}") from None
+    if len(out) != n or any(isinstance(v, str) for v in out):
+        raise SettingError(name, f"{name} must be {n} numbers, got {values!r}")
+    return tuple(finite(name, v) for v in out)
 
 
 def coerce(obj: Any, rules: dict[str, Any]) -> None:

@@ -46,9 +46,12 @@ from .integrators.base import (
 from .integrators.dop853 import Dop853Carry, run_dop853
 from .integrators.scipy_ivp import advance_scipy
 from .integrators.taylor import TaylorCarry, order_for, run_taylor
+from .params import SettingError
+from .spec import checked_state
+from .steps import DEFAULT_RTOL, Fixed, Step, Tolerance, step_control
 from .systems import System
 
-DEFAULT_RTOL = 1e-9
+__all__ = ["DEFAULT_RTOL", "Sample", "Simulation", "Trajectory", "reference_run"]
 #: The reference run's rtol and atol. Its steps are not cut at each frame (dense output), so the
 #: tolerance alone sets its error: at rtol = atol = 1e-14 it reached 6e-12 on the hoop's mode 1 at
 #: 0.05 rad, where atol dominates the small state. These keep it below REFERENCE_ACCURACY with
@@ -104,6 +107,7 @@ class Simulation:
     method : a name from :data:`dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
     dt : step size [s] for fixed-step methods (must be > 0 and finite).
     rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``).
+    step : the step control as one value (:mod:`dynamics.steps`), instead of dt/rtol/atol.
     state : initial state(s); default the system's ``default_state()``.
     reference : measure the error against the exact solution, or a tight DOP853 run when there
         is none (``"auto"``; not for an adaptive run tighter than :data:`MIN_COMPARED_TOL`, see
@@ -126,23 +130,23 @@ class Simulation:
         atol: float | None = None,
         state: np.ndarray | None = None,
         reference: str | None = "auto",
+        step: Step | None = None,
     ) -> None:
         self.system = system
         self.method = method if isinstance(method, Method) else get_method(method)
         if not self.method.applies_to(system.name):
-            raise ValueError(
+            raise SettingError(
+                "method",
                 f"method {self.method.name!r} does not apply to {system.name}; "
-                f"choose one of {', '.join(m.name for m in methods_for(system.name))}"
+                f"choose one of {', '.join(m.name for m in methods_for(system.name))}",
             )
-        self.dt: float | None = None
-        self.rtol = self.atol = None
-        if self.method.adaptive:
-            self.rtol = _tolerance("rtol", DEFAULT_RTOL if rtol is None else rtol)
-            self.atol = _tolerance("atol", self.rtol if atol is None else atol)
-        elif self.method.backend != "exact" or dt is not None:
-            if dt is None:
-                raise ValueError(f"dt is required for the fixed-step method {self.method.name}")
-            self.dt = _v.positive("dt", dt)
+        if step is None:
+            step = step_control(self.method, dt, rtol, atol)
+        #: The step control in force (:mod:`dynamics.steps`).
+        self.step = step
+        self.dt: float | None = step.dt if isinstance(step, Fixed) else None
+        self.rtol = step.rtol if isinstance(step, Tolerance) else None
+        self.atol = step.atol if isinstance(step, Tolerance) else None
         s0 = self._checked_state(system.default_state() if state is None else state)
         self._single = s0.ndim == 1
         self.state0 = np.atleast_2d(s0).astype(np.float64).copy()
@@ -184,16 +188,7 @@ class Simulation:
         self._reference_mode = reference
 
     def _checked_state(self, state) -> np.ndarray:
-        s = np.asarray(state, dtype=float)
-        d = len(self.system.state_names)
-        if s.shape[-1:] != (d,) or s.ndim not in (1, 2):
-            raise ValueError(
-                f"state must have shape (d,) or (N, d) with d = {d} "
-                f"({', '.join(self.system.state_names)}); got {s.shape}"
-            )
-        if not np.all(np.isfinite(s)):
-            raise ValueError("state must be finite")
-        return s
+        return checked_state(self.system, state)
 
     def jump(self, state: np.ndarray) -> None:
         """Replace the state at the current time ``t`` without restarting the run: an impulse
@@ -249,9 +244,7 @@ class Simulation:
             self._reference.restart(state)
 
     def step_label(self) -> str:
-        if self.method.adaptive:
-            return f"rtol={self.rtol:g}, atol={self.atol:g}"
-        return "exact flow" if self.dt is None else f"dt={self.dt:g} s"
+        return self.step.label()
 
     def advance_to(self, t_target: float) -> None:
         """Advance to ``t_target`` (fixed step: the last whole step at or before it)."""
@@ -517,9 +510,3 @@ def _steps_per_period(method: Method, rtol: float) -> float:
     order = order_for(rtol, rtol)[0] if method.kernel == "taylor" else method.order
     return 2.0 * rtol ** (-1.0 / max(order, 1))
 
-
-def _tolerance(name: str, value: float) -> float:
-    x = _v.positive(name, value)
-    if x >= 1.0:
-        raise ValueError(f"{name} must be below 1, got {x}")
-    return x

@@ -195,8 +195,8 @@ def _default_system(name: str):
         "cyclotron": Cyclotron,
         "charge": Cyclotron,
         "hoop": Hoop,
-        "free-body": lambda: ReleasedDisk(DiskParams(), extra_spin=(0.01, 0.0, 0.01)),
-        "disk": lambda: ReleasedDisk(DiskParams(), extra_spin=(0.01, 0.0, 0.01)),
+        "free-body": lambda: ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
+        "disk": lambda: ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
     }
     try:
         return table[name]()

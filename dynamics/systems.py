@@ -17,7 +17,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import cyclotron, disk, hoop
+from . import params as _v
 from .integrators import kernels
+from .spec import Setting, SystemSpec, param
+
+#: The default starts, shared by the adapters and the descriptions below: the cyclotron's
+#: (speed [m/s], centre (x, y) [m], vz [m/s]), the hoop's mode amplitudes [rad], the disk's
+#: extra spin at release [rad/s] (disk frame; it seeds the tumble).
+CYCLOTRON_START = (1.0, (0.0, 0.0), 0.05)
+HOOP_MODES = (0.25, 0.25)
+DISK_EXTRA_SPIN = (0.0, 0.0, 0.02)
 
 
 def _period(omega: float) -> float:
@@ -26,13 +35,21 @@ def _period(omega: float) -> float:
     return 2.0 * np.pi / w if w > 0.0 else float("inf")
 
 
+class _Adapter:
+    """What every adapter has unless it says more."""
+
+    def report(self, t: float) -> dict[str, list[float]]:
+        """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
+        return {}
+
+
 def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:
     d = np.linalg.norm(np.asarray(y) - ref, axis=-1)
     return d / np.maximum(np.linalg.norm(ref, axis=-1), 1e-300)
 
 
 @dataclass(frozen=True)
-class Cyclotron:
+class Cyclotron(_Adapter):
     """Charge in a uniform field (:mod:`dynamics.cyclotron`)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
@@ -44,7 +61,8 @@ class Cyclotron:
         return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
-        return np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.1])
+        """The start of :data:`CYCLOTRON`: the circle of transverse speed 1 m/s about the axis."""
+        return cyclotron.circular_orbit_state(self.params, *CYCLOTRON_START)
 
     def energy(self, states: np.ndarray) -> np.ndarray:
         return cyclotron.energy(self.params, states)
@@ -76,7 +94,7 @@ class Cyclotron:
 
 
 @dataclass(frozen=True)
-class Hoop:
+class Hoop(_Adapter):
     """Bead on a hanging hoop (:mod:`dynamics.hoop`)."""
 
     params: hoop.HoopParams = hoop.HoopParams()
@@ -88,7 +106,8 @@ class Hoop:
         return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
-        return hoop.mode_state(self.params, (0.3, 0.0))
+        """The start of :data:`HOOP`: both normal modes, at rest."""
+        return hoop.mode_state(self.params, HOOP_MODES)
 
     def energy(self, states: np.ndarray) -> np.ndarray:
         return hoop.energy(self.params, states)
@@ -124,11 +143,11 @@ class Hoop:
 
 
 @dataclass(frozen=True)
-class ReleasedDisk:
+class ReleasedDisk(_Adapter):
     """The disk with its bead after the axle is removed: a free rigid body (:mod:`dynamics.disk`)."""
 
     params: disk.DiskParams = disk.DiskParams()
-    extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
     name = "free-body"
     sys_id = kernels.FREE_BODY
     state_names = disk.FREE_STATE_NAMES
@@ -170,7 +189,7 @@ class ReleasedDisk:
 
 
 @dataclass(frozen=True)
-class DrivenDisk:
+class DrivenDisk(_Adapter):
     """The disk turned uniformly about its axle: exact, state ``(angle, omega)``."""
 
     params: disk.DiskParams = disk.DiskParams()
@@ -211,8 +230,121 @@ class DrivenDisk:
     def error(self, y: np.ndarray, ref: np.ndarray) -> np.ndarray:
         return _relative(y, ref)
 
+    def report(self, t: float) -> dict[str, list[float]]:
+        """The bearing forces [N] at time ``t`` [s], for a run's summary."""
+        return {
+            "bearing_force_b": disk.bearing_force_b(self.params, t).tolist(),
+            "bearing_force_a": disk.bearing_force_a(self.params, t).tolist(),
+        }
+
 
 System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk
 
 # Every system by the name the methods and the driver know it by (``Method.systems``).
 SYSTEMS: dict[str, type] = {s.name: s for s in (Cyclotron, Hoop, ReleasedDisk, DrivenDisk)}
+
+
+# =========================================================================== descriptions
+def _angle_pair(name: str, value) -> tuple[float, float]:
+    a = _v.numbers(name, value, 2)
+    if any(abs(x) >= 3.0 for x in a):
+        raise _v.SettingError(name, f"{name} must be angles below 3 rad, got {value!r}")
+    return a
+
+
+def _choice(*options: str):
+    def rule(name: str, value) -> str:
+        if value not in options:
+            raise _v.SettingError(name, f"{name} must be one of {', '.join(options)}; got {value!r}")
+        return value
+
+    return rule
+
+
+def _build_cyclotron(p: cyclotron.CyclotronParams, start: dict) -> tuple[Cyclotron, np.ndarray]:
+    state = cyclotron.circular_orbit_state(p, start["speed"], start["centre"], start["vz"])
+    return Cyclotron(p), state
+
+
+def _build_hoop(p: hoop.HoopParams, start: dict) -> tuple[Hoop, np.ndarray]:
+    return Hoop(p), hoop.mode_state(p, start["modes"])
+
+
+def _build_disk(p: disk.DiskParams, start: dict) -> tuple[DrivenDisk | ReleasedDisk, np.ndarray]:
+    system = DrivenDisk(p) if start["motion"] == "driven" else ReleasedDisk(p, start["extra_spin"])
+    return system, system.default_state()
+
+
+CYCLOTRON = SystemSpec(
+    name="cyclotron",
+    title="Charge in a uniform magnetic field",
+    Params=cyclotron.CyclotronParams,
+    params=(
+        param(cyclotron.CyclotronParams, "charge", "Charge q", "C", "charge q [C] (signed, nonzero)"),
+        param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]"),
+        param(cyclotron.CyclotronParams, "field", "Field B", "T", "field B [T] along +z (nonzero)"),
+    ),
+    start=(
+        Setting("speed", "Speed v⊥", "m/s", CYCLOTRON_START[0], _v.positive,
+                "speed in the plane normal to B [m/s]"),
+        Setting("centre", "Centre (x, y)", "m", CYCLOTRON_START[1],
+                lambda n, v: _v.numbers(n, v, 2), "centre of the circle (x, y) [m]"),
+        Setting("vz", "Speed along B", "m/s", CYCLOTRON_START[2], _v.finite,
+                "speed along B [m/s]"),
+    ),
+    build=_build_cyclotron,
+    default_method=lambda start: "exact",
+    dt=0.01,
+    analysis=cyclotron.analysis,
+    analysis_start=("speed",),
+    state_overrides=cyclotron.STATE_NAMES,
+)
+
+HOOP = SystemSpec(
+    name="hoop",
+    title="Bead on a hanging hoop",
+    Params=hoop.HoopParams,
+    params=(
+        param(hoop.HoopParams, "hoop_mass", "Hoop mass M", "kg", "hoop mass M [kg]"),
+        param(hoop.HoopParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]"),
+        param(hoop.HoopParams, "radius", "Radius a", "m", "hoop radius a [m]"),
+        param(hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]"),
+    ),
+    start=(
+        Setting("modes", "Mode amplitudes (1, 2)", "rad", HOOP_MODES, _angle_pair,
+                "amplitudes of mode 1 and mode 2 [rad], at rest"),
+    ),
+    build=_build_hoop,
+    default_method=lambda start: "rk4",
+    dt=1 / 60,
+    analysis=hoop.analysis,
+    state_overrides=hoop.STATE_NAMES,
+)
+
+DISK = SystemSpec(
+    name="disk",
+    title="Spinning disk with a bead",
+    Params=disk.DiskParams,
+    params=(
+        param(disk.DiskParams, "disk_mass", "Disk mass M", "kg", "disk mass M [kg]"),
+        param(disk.DiskParams, "radius", "Radius R", "m", "disk radius R [m]"),
+        param(disk.DiskParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]"),
+        param(disk.DiskParams, "omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]"),
+    ),
+    start=(
+        Setting("motion", "Motion", "", "driven", _choice("driven", "released"),
+                "driven: uniform rotation about the axle (exact); released: the axle removed "
+                "at t = 0 (a free rigid body)", choices=("driven", "released")),
+        Setting("extra_spin", "Extra spin at release", "rad/s", DISK_EXTRA_SPIN,
+                lambda n, v: _v.numbers(n, v, 3),
+                "spin added at release (disk-frame components) [rad/s]",
+                components=("wx", "wy", "wz")),
+    ),
+    build=_build_disk,
+    default_method=lambda start: "exact" if start["motion"] == "driven" else "rk4",
+    dt=1 / 60,
+    analysis=disk.analysis,
+)
+
+#: Every system by the name a person uses (the CLI's, the API's and the demo files').
+SPECS: dict[str, SystemSpec] = {s.name: s for s in (CYCLOTRON, DISK, HOOP)}

@@ -42,7 +42,9 @@ def test_driven_disk_analysis_gives_the_seeds_bearing_force():
 
 
 def test_released_disk_keeps_its_angular_momentum():
-    run = api.simulate("disk", method="rk4", dt=0.01, t_end=5.0, extra_spin=(1e-3, 0, 0))
+    run = api.simulate(
+        "disk", motion="released", method="rk4", dt=0.01, t_end=5.0, extra_spin=(1e-3, 0, 0)
+    )
     L = run.invariants["angular_momentum"]
     assert L.shape == (501, 3)
     assert np.max(np.abs(L - L[0])) < 1e-6 * np.linalg.norm(L[0])

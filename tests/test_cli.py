@@ -42,7 +42,7 @@ def test_analyze_cyclotron_json_gives_the_seed_results():
 
 
 def test_analyze_disk_json_gives_the_seed_results():
-    out = mechviz("analyze", "disk", "--json")
+    out = mechviz("analyze", "disk", "--omega", "1", "--json")
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout)
     np.testing.assert_allclose(r["inertia_tensor"], [[2.5, -1.25, 0], [-1.25, 1.5, 0], [0, 0, 4]])
@@ -124,7 +124,8 @@ def test_simulate_cyclotron_and_disk():
     assert r["error_vs_exact"] < 1e-3 and abs(r["energy_drift"]) < 1e-13
     assert r["final_state"]["z"] == pytest.approx(0.2 * 2 * math.pi, rel=1e-9)
     r = json.loads(mechviz("simulate", "disk", "--t-end", "2", "--json").stdout)
-    assert r["method"] == "exact" and r["final_state"]["angle"] == pytest.approx(2.0)
+    omega = r["parameters"]["omega"]  # the description's default spin, driven by default
+    assert r["method"] == "exact" and r["final_state"]["angle"] == pytest.approx(2.0 * omega)
     r = json.loads(
         mechviz(
             "simulate",
@@ -179,7 +180,7 @@ def test_list_methods_shows_every_method_with_its_properties():
         (["simulate", "hoop", "--t-end", "1", "--method", "rk4", "--dt", "-0.1"], "--dt"),
         (["simulate", "hoop", "--t-end", "1", "--method", "boris", "--dt", "0.1"], "--method"),
         (["simulate", "hoop", "--t-end", "1", "--method", "warp", "--dt", "0.1"], "--method"),
-        (["simulate", "hoop", "--t-end", "1", "--method", "rk4"], "--dt"),
+        (["simulate", "hoop", "--t-end", "1", "--method", "rk4", "--dt", "abc"], "--dt"),
         (["simulate", "cyclotron", "--t-end", "1", "--method", "dop853", "--rtol", "5"], "--rtol"),
         (["simulate", "cyclotron", "--t-end", "-1", "--method", "rk4", "--dt", "0.1"], "--t-end"),
         (

@@ -31,7 +31,7 @@ from dynamics.integrators import kernels
 PROBLEMS = {
     "cyclotron": (Cyclotron(), np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.1]), 2 * math.pi),
     "hoop": (Hoop(HoopParams()), np.array([0.5, -0.3, 0.0, 0.0]), 2.0),
-    "free-body": (ReleasedDisk(DiskParams(), (0.3, 0.0, 0.2)), None, 4.0),
+    "free-body": (ReleasedDisk(DiskParams(omega=1.0), (0.3, 0.0, 0.2)), None, 4.0),
 }
 
 
@@ -103,7 +103,7 @@ def test_boris_keeps_the_speed_to_round_off_at_any_step():
 
 
 def test_rotation_splitting_keeps_angular_momentum_to_round_off():
-    sysm = ReleasedDisk(DiskParams(), (0.01, 0.0, 0.01))
+    sysm = ReleasedDisk(DiskParams(omega=1.0), (0.01, 0.0, 0.01))
     traj = Simulation(sysm, "splitting", dt=0.2).run(2000.0, 21)
     L = disk.free_angular_momentum_space(sysm.kernel_params(), traj.states[:, 0])
     norms = np.linalg.norm(L, axis=1)
@@ -123,7 +123,7 @@ def _energy_trend(system, method, dt, T, s0=None):
     [
         (Hoop(), "verlet", 0.05),
         (Hoop(), "yoshida4", 0.05),
-        (ReleasedDisk(DiskParams(), (0.01, 0, 0.01)), "splitting", 0.2),
+        (ReleasedDisk(DiskParams(omega=1.0), (0.01, 0, 0.01)), "splitting", 0.2),
     ],
 )
 def test_symplectic_energy_error_stays_bounded_while_rk4_drifts(system, symplectic, dt):
@@ -302,7 +302,7 @@ def test_uncompiled_source_gives_bit_identical_results():
 _EVERY_METHOD = """
 import dynamics
 from dynamics.disk import DiskParams
-systems = [dynamics.Cyclotron(), dynamics.Hoop(), dynamics.ReleasedDisk(DiskParams())]
+systems = [dynamics.Cyclotron(), dynamics.Hoop(), dynamics.ReleasedDisk(DiskParams(omega=1.0))]
 for system in systems:
     for m in dynamics.methods_for(system.name):
         if m.backend == "scipy":

@@ -299,7 +299,7 @@ BAD_ARGS = [
     (["record", "nosuchdemo", "--out", "X"], "unknown demo 'nosuchdemo'"),
     (["record", "helix"], "--out DIR is required"),
     (["record", "--out", "X"], "give one DEMO or --all"),
-    (["record", "helix", "--out", "X", "--dt", "-1"], "--dt: dt must be a positive, finite number"),
+    (["record", "helix", "--out", "X", "--dt", "-1"], "--dt: dt must be positive"),
     (
         ["record", "helix", "--out", "X", "--duration", "0"],
         "--duration: duration must be a positive",

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from dynamics import stability
+from dynamics.disk import DiskParams
 from dynamics.hoop import mode_state, normal_modes
 from dynamics.integrators import IntegrationError
 from dynamics.simulation import Simulation
@@ -207,7 +208,9 @@ HOOP_PERIOD = 2.0 * math.pi / float(normal_modes(HOOP.params)[0][0])
 LONG = {
     # system, step, 10^4 periods of the slowest motion
     "hoop": (Hoop(), 0.02, 1e4 * HOOP_PERIOD),
-    "free-body": (ReleasedDisk(extra_spin=(0.01, 0.0, 0.01)), 0.2, 1e4 * 2.0 * math.pi),
+    "free-body": (
+        ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)), 0.2, 1e4 * 2.0 * math.pi
+    ),
     "cyclotron": (Cyclotron(), 0.1, 1e4 * 2.0 * math.pi),
 }
 # In the plane normal to B. With a drift along B, z grows to ~6e3 and the midpoint solve's

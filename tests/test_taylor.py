@@ -14,7 +14,7 @@ from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
 SYSTEMS = {
     CYCLOTRON: Cyclotron(),
     HOOP: Hoop(),
-    FREE_BODY: ReleasedDisk(DiskParams(), (0.3, 0.0, 0.2)),
+    FREE_BODY: ReleasedDisk(DiskParams(omega=1.0), (0.3, 0.0, 0.2)),
 }
 STATES = {
     CYCLOTRON: np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1]),

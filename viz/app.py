@@ -275,7 +275,7 @@ class MechvizApp:
                 if target in self.exhibits:
                     panel = self.panels.get(target)
                     title = self.exhibits[target].title
-                    self.notify(f"Invalid value ({title})", panel.explain(str(exc)) if panel else str(exc))
+                    self.notify(f"Invalid value ({title})", panel.explain(exc) if panel else str(exc))
                     self._sync_widgets(target)
                 else:
                     self.notify("Invalid value", str(exc), color="red")

@@ -48,11 +48,11 @@ def add_commands(sub) -> None:
 
 # =========================================================================== record
 def _option_error(exc: ValueError, args) -> CliError:
-    msg = str(exc)
-    for opt in ("duration", "fps", "method", "dt"):
-        if getattr(args, opt) is not None and msg.startswith(opt):
-            return CliError(f"--{opt}: {msg}")
-    return CliError(msg)
+    """The one line for an override the demo refused, naming the flag it came from."""
+    field = getattr(exc, "field", None)
+    if field in ("duration", "fps", "method", "dt") and getattr(args, field) is not None:
+        return CliError(f"--{field}: {exc}")
+    return CliError(str(exc))
 
 
 def run_record(args: argparse.Namespace) -> int:

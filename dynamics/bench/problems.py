@@ -103,8 +103,8 @@ PROBLEMS: dict[str, Problem] = {
     "disk": Problem(
         "disk",
         "Released disk with bead (50 s)",
-        ReleasedDisk(DiskParams(), extra_spin=(0.01, 0.0, 0.01)),
-        tuple(ReleasedDisk(DiskParams(), extra_spin=(0.01, 0.0, 0.01)).default_state()),
+        ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
+        tuple(ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)).default_state()),
         50.0,
         ("rk4", "splitting", "yoshida4", "midpoint", "euler"),
         32,

@@ -85,11 +85,11 @@ class Initial(_Struct):
 class Demo(_Struct):
     """One demo file (see the module docstring); ``name`` and ``source`` come from the file."""
 
-    title: str
-    description: str
-    exhibit: Literal["cyclotron", "disk", "hoop"]
-    method: str
+    exhibit: str
     duration: float
+    title: str = ""
+    description: str = ""
+    method: str = ""
     fps: int = 30
     speed: float = 1.0
     dt: float | None = None
@@ -126,7 +126,10 @@ class Demo(_Struct):
             changes["fps"] = fps
         if method is not None and method != self.method:
             changes["method"] = method
-            m = dynamics.get_method(method)
+            try:
+                m = dynamics.get_method(method)
+            except ValueError as exc:
+                raise dynamics.SettingError("method", str(exc)) from None
             if m.adaptive:
                 changes["dt"] = None
             else:
@@ -150,7 +153,7 @@ class Demo(_Struct):
         cls = EXHIBITS[self.exhibit].Config
         base = cls()
         kw: dict[str, Any] = {"params": {**base.params, **self.parameters}}
-        if self.exhibit != "disk" or self.motion == "released":
+        if self.motion != "driven":
             kw["method"] = self.method
         kw.update({k: v for k, v in (("dt", self.dt), ("rtol", self.rtol)) if v is not None})
         if self.compare is not None:
@@ -229,12 +232,21 @@ def parse_demo(raw: dict[str, Any], *, name: str, source: str | None = None) -> 
     where = f"{name}.toml" if source is None else Path(source).name
     if "name" in raw or "source" in raw:
         raise ValueError(f"{where}: unknown key {'name' if 'name' in raw else 'source'!r}")
+    params = raw.get("parameters")
+    for key, value in params.items() if isinstance(params, dict) else ():
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise dynamics.SettingError(
+                f"parameters.{key}", f"{where}: parameters.{key} must be a number, got {value!r}"
+            )
     try:
         demo = msgspec.convert({**raw, "name": name, "source": source}, Demo, strict=True)
     except msgspec.ValidationError as exc:
         raise ValueError(f"{where}: {_schema_message(str(exc))}") from None
     try:
+        demo = with_defaults(demo)
         check(demo)
+    except dynamics.SettingError as exc:
+        raise dynamics.SettingError(exc.field, f"{where}: {exc}", fields=exc.fields) from None
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
     return msgspec.structs.replace(demo, events=tuple(sorted(demo.events, key=lambda e: e.t)))
@@ -254,9 +266,39 @@ def _schema_message(text: str) -> str:
 
 
 # =========================================================================== checks
+def with_defaults(d: Demo) -> Demo:
+    """``d`` with what it leaves out taken from its system's description
+    (:data:`dynamics.SPECS`): the title, the disk's motion and the method."""
+    if d.exhibit not in dynamics.SPECS:
+        raise dynamics.SettingError(
+            "exhibit", f"exhibit must be one of {', '.join(dynamics.SPECS)}; got {d.exhibit!r}"
+        )
+    spec = dynamics.SPECS[d.exhibit]
+    changes: dict[str, Any] = {}
+    if not d.title:
+        changes["title"] = spec.title
+    if d.motion is None and any(s.name == "motion" for s in spec.start):
+        changes["motion"] = spec.setting("motion").default
+    if not d.method:
+        start = {"motion": changes.get("motion", d.motion)} if "motion" in changes or d.motion else {}
+        changes["method"] = spec.default_method(spec.start_values(start))
+    return msgspec.structs.replace(d, **changes) if changes else d
+
+
+def demo_key(d: Demo, field: str) -> str:
+    """The demo key of a setting (:class:`dynamics.SettingError` ``field``): a physical
+    parameter under ``parameters.``, a start setting under ``initial.``, the rest as named."""
+    spec = dynamics.SPECS[d.exhibit]
+    if field in {s.name for s in spec.params}:
+        return f"parameters.{field}"
+    if field == "initial.motion":
+        return "motion"
+    return field
+
+
 def _finite_positive(key: str, value: float) -> None:
     if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{key} must be a positive, finite number, got {value!r}")
+        raise dynamics.SettingError(key, f"{key} must be a positive, finite number, got {value!r}")
 
 
 def check(d: Demo) -> None:
@@ -264,14 +306,14 @@ def check(d: Demo) -> None:
     _finite_positive("duration", d.duration)
     _finite_positive("speed", d.speed)
     if not 1 <= d.fps <= 240:
-        raise ValueError(f"fps must be a whole number from 1 to 240, got {d.fps!r}")
+        raise dynamics.SettingError("fps", f"fps must be a whole number from 1 to 240, got {d.fps!r}")
     if not d.duration * d.fps < MAX_FRAMES:  # before counting frames: 1e308 x 30 overflows
-        raise ValueError(
+        raise dynamics.SettingError(
+            "duration",
             f"duration x fps gives {d.duration * d.fps:.3g} frames; the limit is {MAX_FRAMES}"
         )
-    if d.exhibit == "disk" and d.motion is None:
-        raise ValueError("motion must be driven or released for the disk")
-    if d.exhibit != "disk" and d.motion is not None:
+    has_motion = any(s.name == "motion" for s in dynamics.SPECS[d.exhibit].start)
+    if not has_motion and d.motion is not None:
         raise ValueError(f"motion is for the disk only, not the {d.exhibit}")
     if d.ghost is not None and d.exhibit != "hoop":
         raise ValueError(f"ghost is for the hoop only, not the {d.exhibit}")
@@ -309,29 +351,31 @@ def check(d: Demo) -> None:
         _check_run(d, "compare.", c.method, c.dt, c.rtol, eff_dt, eff_rtol)
     try:
         d.config()
+    except dynamics.SettingError as exc:
+        key = demo_key(d, exc.field)
+        message = str(exc)
+        shown = message if message.startswith(key) else f"{key}: {message}"
+        raise dynamics.SettingError(key, shown) from None
     except (ValueError, TypeError) as exc:
         raise ValueError(str(exc)) from None
 
 
 def _check_run(d: Demo, where: str, method: str, dt, rtol, eff_dt, eff_rtol) -> None:
-    """``dt`` / ``rtol``: what the run's own table gives; ``eff_*``: what it runs with."""
-    system = "driven-disk" if d.motion == "driven" else EXHIBITS[d.exhibit].Config.system_name
-    names = [m.name for m in dynamics.methods_for(system)]
-    if method not in names:
-        if method in dynamics.METHODS:
-            raise ValueError(
-                f"{where}method {method!r} does not apply to the {system}; choose one of "
-                f"{', '.join(names)}"
-            )
-        raise ValueError(f"{where}method must be one of {', '.join(names)}; got {method!r}")
-    m = dynamics.get_method(method)
-    if m.adaptive and dt is not None:
-        raise ValueError(f"{where}dt: {method} is adaptive; give rtol instead")
-    if not m.adaptive and rtol is not None:
-        raise ValueError(f"{where}rtol: {method} takes a fixed step; give dt instead")
-    if not m.adaptive and m.backend != "exact" and eff_dt is None:
-        raise ValueError(f"{where}dt: required for the fixed-step method {method}")
-    if eff_dt is not None:
-        _finite_positive(f"{where}dt", eff_dt)
-    if eff_rtol is not None and not (math.isfinite(eff_rtol) and 0 < eff_rtol < 1):
-        raise ValueError(f"{where}rtol must lie in (0, 1), got {eff_rtol!r}")
+    """``dt`` / ``rtol``: what the run's own table gives; ``eff_*``: what it runs with. The
+    method and step are checked by the system's description (:meth:`dynamics.SystemSpec.setup`),
+    as everywhere else; a refusal names the key here (``compare.dt``)."""
+    spec = dynamics.SPECS[d.exhibit]
+    m = dynamics.METHODS.get(method)
+    if m is not None and m.adaptive and dt is not None:
+        raise dynamics.SettingError(
+            f"{where}dt", f"{where}dt: {method} is adaptive; give rtol instead"
+        )
+    if m is not None and not m.adaptive and rtol is not None:
+        raise dynamics.SettingError(
+            f"{where}rtol", f"{where}rtol: {method} takes a fixed step; give dt instead"
+        )
+    start = {"motion": d.motion} if d.motion else {}
+    try:
+        spec.setup(start=start, method=method, dt=eff_dt, rtol=eff_rtol)
+    except dynamics.SettingError as exc:
+        raise dynamics.SettingError(f"{where}{exc.field}", f"{where}{exc}") from None

@@ -37,6 +37,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 import dynamics
+from dynamics import params as _v
 
 from .plot import Curve, Samples, Variable, common_variables
 
@@ -55,25 +56,8 @@ def fmt(x: float | None, digits: int = 4) -> str:
     return "—" if x is None else f"{x:.{digits}g}"
 
 
-def positive(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(x) or x <= 0.0:
-        raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return x
-
-
-def finite_numbers(name: str, values, n: int) -> tuple[float, ...]:
-    """``values`` as ``n`` finite floats, or ``ValueError`` naming ``name``."""
-    try:
-        out = tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {n} numbers, got {values!r}") from None
-    if len(out) != n or not all(math.isfinite(v) for v in out):
-        raise ValueError(f"{name} must be {n} finite numbers, got {values!r}")
-    return out
+positive = _v.positive
+finite_numbers = _v.numbers
 
 
 # =========================================================================== settings
@@ -86,8 +70,8 @@ class ExhibitConfig:
     parameters by name (its ``Params`` dataclass checks them). Validated on construction, so an
     instance always holds settings a run can start from."""
 
-    system_name: ClassVar[str]
-    Params: ClassVar[type]
+    system_name: ClassVar[str]  # the driver's name of the system (:data:`dynamics.SYSTEMS`)
+    spec: ClassVar[dynamics.SystemSpec]  # the system's description: parameters, start, step
 
     method: str = "rk4"
     dt: float = 1 / 60
@@ -95,42 +79,39 @@ class ExhibitConfig:
     params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.physics()  # ValueError naming the parameter
+        self.physics()  # SettingError naming the parameter
         names = [m.name for m in dynamics.methods_for(self.system_name)]
         for fld in ("method", *(["compare_method"] if hasattr(self, "compare_method") else [])):
             m = getattr(self, fld)
             if m is not None and m not in names:
-                raise ValueError(f"{fld} must be one of {', '.join(names)}; got {m!r}")
-        # the step settings every run takes, and those of a comparison run where there is one
+                raise dynamics.SettingError(fld, f"{fld} must be one of {', '.join(names)}; got {m!r}")
+        # the step settings every run takes, and those of a comparison run where there is one,
+        # by the rules of dynamics.steps
         for name in ("dt", "compare_dt"):
             if getattr(self, name, None) is not None:
-                positive(name, getattr(self, name))
+                _v.positive(name, getattr(self, name))
         for name in ("rtol", "compare_rtol"):
-            if getattr(self, name, None) is not None and positive(name, getattr(self, name)) >= 1:
-                raise ValueError(f"{name} must be below 1, got {getattr(self, name)!r}")
+            if getattr(self, name, None) is not None:
+                _v.below_one(name, getattr(self, name))
         cap = getattr(self, "trail_cap", 2)
         if not (isinstance(cap, int) and cap >= 2):
-            raise ValueError(f"trail_cap must be a whole number of at least 2, got {cap!r}")
+            raise dynamics.SettingError(
+                "trail_cap", f"trail_cap must be a whole number of at least 2, got {cap!r}"
+            )
         self._validate()
 
     def _validate(self) -> None:
         pass
 
     def physics(self):
-        """The validated parameter dataclass of :mod:`dynamics` for ``params``."""
-        names = {f.name for f in dataclasses.fields(self.Params)}
-        unknown = set(self.params) - names
-        if unknown:
-            raise ValueError(
-                f"{sorted(unknown)[0]} is not a parameter of the {self.system_name}; "
-                f"choose from {', '.join(sorted(names))}"
-            )
-        return self.Params(**self.params)
+        """The validated parameter dataclass of :mod:`dynamics` for ``params``
+        (:meth:`dynamics.SystemSpec.parameters`)."""
+        return self.spec.parameters(self.params)
 
 
-def default_params(params) -> dict:
-    """A parameter dataclass instance as the ``params`` dict of a config."""
-    return dataclasses.asdict(params)
+def default_params(spec: dynamics.SystemSpec) -> dict:
+    """The default parameters of a system as the ``params`` dict of a config."""
+    return spec.default_params()
 
 
 # =========================================================================== sample buffers

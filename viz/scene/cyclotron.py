@@ -21,6 +21,7 @@ import numpy as np
 import dynamics
 from dynamics import cyclotron as cy
 from dynamics import measure
+from dynamics.systems import CYCLOTRON
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt, positive
@@ -38,15 +39,15 @@ class CyclotronConfig(ExhibitConfig):
     ``compare_dt`` / ``compare_rtol`` if given (else the main run's). ``kick`` [m/s] is the
     radial kick the Kick button gives."""
 
-    system_name: ClassVar[str] = "cyclotron"
-    Params: ClassVar[type] = cy.CyclotronParams
+    system_name: ClassVar[str] = dynamics.Cyclotron.name
+    spec: ClassVar[dynamics.SystemSpec] = CYCLOTRON
 
-    method: str = "exact"
-    dt: float = 0.01
-    params: dict = field(default_factory=lambda: default_params(cy.CyclotronParams()))
-    speed: float = 1.0
-    vz: float = 0.05
-    centre: tuple = (0.0, 0.0)
+    method: str = CYCLOTRON.default_method({})
+    dt: float = CYCLOTRON.dt
+    params: dict = field(default_factory=lambda: default_params(CYCLOTRON))
+    speed: float = CYCLOTRON.setting("speed").default
+    vz: float = CYCLOTRON.setting("vz").default
+    centre: tuple = CYCLOTRON.setting("centre").default
     state: tuple | None = None
     beam: bool = False
     beam_size: int = 16
@@ -462,7 +463,7 @@ class CyclotronExhibit(Exhibit):
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
         panel.readout_and_chart(compare=True)
-        panel.param_inputs({"charge": "Charge q [C]", "mass": "Mass m [kg]", "field": "Field B [T]"})
+        panel.param_inputs()
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
             strength = panel.slider("kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None)

@@ -24,6 +24,7 @@ import numpy as np
 import dynamics
 from dynamics import disk as dk
 from dynamics import measure
+from dynamics.systems import DISK
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
@@ -32,7 +33,7 @@ from .plot import Curve, Variable, common_variables
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
 LIFT = np.array([0.0, 0.0, 0.4])
-MODES = ("driven", "released")
+MODES = DISK.setting("motion").choices
 
 
 @dataclass(frozen=True)
@@ -42,26 +43,20 @@ class DiskConfig(ExhibitConfig):
     added at release in the disk frame (seeds the tumble), ``follow_cm`` (a view option: draw
     the released body in the frame moving with its centre of mass)."""
 
-    system_name: ClassVar[str] = "free-body"
-    Params: ClassVar[type] = dk.DiskParams
+    system_name: ClassVar[str] = dynamics.ReleasedDisk.name
+    spec: ClassVar[dynamics.SystemSpec] = DISK
 
-    # RK4 at one step per frame: the cheapest method keeping the on-screen error below 1e-3 of
-    # the exhibit over 10 minutes (docs/bench/defaults.md)
-    method: str = "rk4"
-    params: dict = field(default_factory=lambda: default_params(dk.DiskParams(omega=2.0)))
-    mode: str = "driven"
-    extra_spin: tuple = (0.0, 0.0, 0.02)
+    # The method when released: RK4 at one step per frame, the cheapest keeping the on-screen
+    # error below 1e-3 of the exhibit over 10 minutes (docs/bench/defaults.md).
+    method: str = DISK.default_method({"motion": "released"})
+    dt: float = DISK.dt
+    params: dict = field(default_factory=lambda: default_params(DISK))
+    mode: str = DISK.setting("motion").default
+    extra_spin: tuple = DISK.setting("extra_spin").default
     follow_cm: bool = True
 
-    def physics(self) -> dk.DiskParams:
-        p = super().physics()
-        if not math.isfinite(p.omega) or p.omega == 0.0:
-            raise ValueError(f"omega must be finite and nonzero, got {p.omega!r}")
-        return p
-
     def _validate(self) -> None:
-        if self.mode not in MODES:
-            raise ValueError(f"mode must be one of {', '.join(MODES)}; got {self.mode!r}")
+        DISK.setting("motion").check(self.mode)
         finite_numbers("extra_spin", self.extra_spin, 3)
 
 
@@ -619,10 +614,7 @@ class DiskExhibit(Exhibit):
             "asymptotes are the separatrix the tumble follows. Driven: L about A, whose tip "
             "circles the axle."
         )
-        panel.param_inputs({
-            "disk_mass": "Disk mass M [kg]", "radius": "Radius R [m]",
-            "bead_mass": "Bead mass m [kg]", "omega": "Spin ω [rad/s]",
-        })  # fmt: skip
+        panel.param_inputs()
         panel.integrator_inputs(compare=False)
 
 

@@ -20,6 +20,7 @@ import numpy as np
 import dynamics
 from dynamics import hoop as hp
 from dynamics import measure
+from dynamics.systems import HOOP, HOOP_MODES
 
 from .. import geometry as geo
 from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt
@@ -93,15 +94,17 @@ class HoopConfig(ExhibitConfig):
     overrides them all. ``compare_method`` runs beside the main one with ``compare_dt`` /
     ``compare_rtol`` if given; ``ghost`` draws linear theory from the same start."""
 
-    system_name: ClassVar[str] = "hoop"
-    Params: ClassVar[type] = hp.HoopParams
+    system_name: ClassVar[str] = dynamics.Hoop.name
+    spec: ClassVar[dynamics.SystemSpec] = HOOP
 
     # RK4 at one step per frame: as cheap as it gets below 1e-3 over 10 minutes
     # (docs/bench/defaults.md)
-    method: str = "rk4"
-    params: dict = field(default_factory=lambda: default_params(hp.HoopParams()))
+    method: str = HOOP.default_method({})
+    dt: float = HOOP.dt
+    params: dict = field(default_factory=lambda: default_params(HOOP))
+    # The description's default start: both modes at rest, each at half the amplitude ("mix")
     mode: str = "mix"
-    amplitude: float = 0.5
+    amplitude: float = HOOP_MODES[0] + HOOP_MODES[1]
     angles: tuple = (0.4, -0.3)
     state: tuple | None = None
     compare_method: str | None = None
@@ -477,10 +480,7 @@ class HoopExhibit(Exhibit):
                 scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(-1.0, 1.0))},
                 aspect=1.6,
             ))  # fmt: skip
-        panel.param_inputs({
-            "hoop_mass": "Hoop mass M [kg]", "bead_mass": "Bead mass m [kg]",
-            "radius": "Radius a [m]", "gravity": "Gravity g [m/s²]",
-        })  # fmt: skip
+        panel.param_inputs()
         panel.integrator_inputs(compare=True)
 
     def sync_panel(self, panel) -> None:

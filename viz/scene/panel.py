@@ -6,11 +6,12 @@ threads and only queue commands; the app applies them between frames and then ca
 :meth:`Panel.sync` so every widget shows the setting actually in force (a refused value
 springs back).
 
-One rule for every number a person types (:func:`parse_number`): what a person writes is read
-as Python reads a float (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus);
-anything else, a non-finite value or one outside the control's range is refused with a
-notification that names the field as the panel labels it, and the box goes back to the value in
-force. Number fields are text boxes for that reason: the browser's own number input rewrites
+One rule for every number a person types, the command line's and the demo files' too
+(:func:`dynamics.params.parse_number`): what a person writes is read as Python reads a float
+(``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
+non-finite or subnormal value or one outside the control's range is refused with a notification
+that names the field as the panel labels it, and the box goes back to the value in force.
+Number fields are text boxes for that reason: the browser's own number input rewrites
 scientific notation as it is typed.
 """
 
@@ -46,17 +47,12 @@ def rtol_options(current: float) -> tuple[str, ...]:
 
 
 def parse_number(label: str, text, lo: float | None = None, hi: float | None = None) -> float:
-    """The number typed into the field ``label`` (see the module docstring), or ``ValueError``
-    with one line naming the field."""
-    raw = str(text).strip().replace("\u2212", "-")
-    try:
-        x = float(raw)
-    except ValueError:
-        raise ValueError(f"{label}: {str(text)!r} is not a number (write e.g. 0.025 or 2.5e-2)") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{label} must be a finite number, got {str(text)!r}")
+    """The number typed into the field ``label``, read by the one rule for typed numbers
+    (:func:`dynamics.params.parse_number`) and held to the control's range, or a
+    :class:`dynamics.params.SettingError` with one line naming the field as the panel labels it."""
+    x = dynamics.parse_number(label, text)
     if (lo is not None and x < lo) or (hi is not None and x > hi):
-        raise ValueError(f"{label} must lie between {lo:g} and {hi:g}, got {x:g}")
+        raise dynamics.SettingError(label, f"{label} must lie between {lo:g} and {hi:g}, got {x:g}")
     return x
 
 
@@ -182,13 +178,15 @@ class Panel:
             "y": uplot.Scale(auto=False, range=tuple(y_range)),
         }
 
-    def explain(self, message: str) -> str:
-        """A settings error as the panel names things: ``mass must be ...`` -> ``Mass m [kg] must
-        be ...``."""
-        for name, label in sorted(self.labels.items(), key=lambda kv: -len(kv[0])):
-            if message.startswith(name + " ") or message.startswith(name + ":"):
-                return label + message[len(name) :]
-        return message
+    def explain(self, exc: ValueError) -> str:
+        """A settings error as the panel names things: the field of a
+        :class:`dynamics.params.SettingError` (``mass``) by its label (``Mass m [kg]``)."""
+        message = str(exc)
+        field = getattr(exc, "field", "").removeprefix("initial.")
+        label = self.labels.get(field)
+        if label is None:
+            return message
+        return label + message[len(field):] if message.startswith(field) else f"{label}: {message}"
 
     # ------------------------------------------------------------------ building blocks
     def readout_and_chart(self, compare: bool) -> None:
@@ -221,9 +219,12 @@ class Panel:
             ),
         )
 
-    def param_inputs(self, labels: dict[str, str], step: float = 0.01) -> None:
+    def param_inputs(self) -> None:
+        """A number field for each physical parameter of the exhibit's system, labelled as its
+        description says (:attr:`dynamics.spec.SystemSpec.params`)."""
         with self.gui.add_folder("Physical parameters"):
-            for name, label in labels.items():
+            for setting in self.exhibit.Config.spec.params:
+                name, label = setting.name, setting.panel_label
                 value = self.exhibit.config.params[name]
                 self.number(
                     f"params.{name}", label, value,

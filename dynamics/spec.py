@@ -1,0 +1,222 @@
+"""What a system is, written once: its parameters, its start, its methods and default step.
+
+A :class:`SystemSpec` describes one system as a person meets it: the physical parameters (with
+units, the label a panel shows and the rule that checks them), the settings of its start (the
+cyclotron's speed, the hoop's mode amplitudes, the disk's motion and extra spin), the default
+method and step, and how to build the driver's system and initial state from them. The command
+line's flags, the Python API's keyword arguments, the demo files' keys and the viewer's panels
+are generated from it, so one default and one range hold everywhere.
+
+:meth:`SystemSpec.setup` turns settings (any subset; the rest default) into a :class:`Setup`: the
+system, its initial state, the method and its step control, all checked, or a
+:class:`dynamics.params.SettingError` naming the setting (a parameter's name, ``initial.<name>``
+for a start setting, ``method``, ``dt``, ``rtol``, ``atol``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from . import params as _v
+from .integrators.base import Method, get_method, methods_for
+from .steps import Step, step_control
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One setting a person can give: ``name`` (a Python identifier: the API's keyword, the demo
+    key, the flag ``--name-with-dashes``), ``label`` and ``unit`` (what a panel shows),
+    ``default``, and ``rule(name, value)`` that returns the checked value or raises
+    :class:`dynamics.params.SettingError` naming ``name``."""
+
+    name: str
+    label: str
+    unit: str
+    default: Any
+    rule: Callable[[str, Any], Any]
+    help: str = ""
+    #: Names of a tuple setting's components where each may be given alone (``wx``, ``wy``, ``wz``).
+    components: tuple[str, ...] = ()
+    #: The values a word setting takes (``motion``: driven, released).
+    choices: tuple[str, ...] = ()
+
+    @property
+    def flag(self) -> str:
+        return "--" + self.name.replace("_", "-")
+
+    @property
+    def panel_label(self) -> str:
+        return f"{self.label} [{self.unit}]" if self.unit else self.label
+
+    def check(self, value: Any) -> Any:
+        return self.rule(self.name, value)
+
+
+def param(Params: type, name: str, label: str, unit: str, help: str = "") -> Setting:
+    """The :class:`Setting` of the physical parameter ``name`` of the dataclass ``Params``: its
+    default and its check are the dataclass's own (one default, one rule)."""
+    default = next(f.default for f in fields(Params) if f.name == name)
+
+    def rule(n: str, value: Any) -> Any:
+        return getattr(Params(**{n: value}), n)
+
+    return Setting(name, label, unit, default, rule, help)
+
+
+@dataclass(frozen=True)
+class Setup:
+    """Everything a run starts from: the driver's system, its initial state, method and step."""
+
+    spec: SystemSpec
+    params: Any  # the system's parameter dataclass
+    start: dict[str, Any]  # the checked start settings, defaults filled in
+    system: Any  # a dynamics.systems adapter
+    state: np.ndarray
+    method: Method
+    step: Step
+
+
+@dataclass(frozen=True)
+class SystemSpec:
+    """One system as a person meets it (see the module docstring).
+
+    ``build(params, start)`` returns the driver's system and the initial state for checked
+    settings; ``default_method(start)`` the method a run takes when none is given (the disk's
+    depends on its motion); ``analysis(params, **start)`` the seed's analytic results (a
+    JSON-ready dict), taking the start settings named in ``analysis_start``."""
+
+    name: str
+    title: str
+    Params: type
+    params: tuple[Setting, ...]
+    start: tuple[Setting, ...]
+    build: Callable[[Any, dict[str, Any]], tuple[Any, np.ndarray]]
+    default_method: Callable[[dict[str, Any]], str]
+    dt: float
+    analysis: Callable[..., dict[str, Any]]
+    analysis_start: tuple[str, ...] = ()
+    #: State variables a command line may set one by one over the default start.
+    state_overrides: tuple[str, ...] = ()
+    rtol: float = 1e-9
+
+    def __post_init__(self) -> None:
+        names = [f.name for f in fields(self.Params)]
+        if [s.name for s in self.params] != names:
+            raise TypeError(f"{self.name}: params must describe {names} in order")
+
+    # ------------------------------------------------------------------ settings
+    def setting(self, name: str) -> Setting:
+        """The parameter or start setting called ``name``."""
+        for s in (*self.params, *self.start):
+            if s.name == name:
+                return s
+        raise KeyError(name)
+
+    def default_params(self) -> dict[str, Any]:
+        """The parameters a run takes when none is given, by name (as the dataclass fills them)."""
+        p = self.Params()
+        return {s.name: getattr(p, s.name) for s in self.params}
+
+    def parameters(self, values: Mapping[str, Any] | None = None) -> Any:
+        """The checked parameter dataclass for ``values`` (names of :attr:`params`; the rest
+        default). An unknown name or a bad value raises :class:`SettingError` naming it."""
+        values = dict(values or {})
+        known = [s.name for s in self.params]
+        for name in values:
+            if name not in known:
+                raise _v.SettingError(
+                    name, f"{name} is not a parameter of the {self.name}; choose from "
+                    f"{', '.join(known)}",
+                )
+        return self.Params(**values)
+
+    def start_values(self, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The checked start settings, defaults filled in (:class:`SettingError` naming
+        ``initial.<name>`` otherwise)."""
+        values = dict(values or {})
+        known = [s.name for s in self.start]
+        out = {}
+        for name in values:
+            if name not in known:
+                raise _v.SettingError(
+                    f"initial.{name}", f"{name} is not a start setting of the {self.name}; "
+                    f"choose from {', '.join(known)}",
+                )
+        for s in self.start:
+            try:
+                out[s.name] = s.check(values.get(s.name, s.default))
+            except _v.SettingError as exc:
+                raise _v.SettingError(f"initial.{s.name}", str(exc)) from None
+        return out
+
+    def analyze(self, values: Mapping[str, Any]) -> dict[str, Any]:
+        """``analysis`` for ``values`` (parameters and the start settings it takes, by name),
+        with the system's name first; :class:`SettingError` names a bad or unknown setting."""
+        values = dict(values)
+        start = {k: values.pop(k) for k in self.analysis_start if k in values}
+        p = self.parameters(values)
+        st = self.start_values(start)
+        return {"system": self.name, **self.analysis(p, **{k: st[k] for k in self.analysis_start})}
+
+    def methods(self, start: Mapping[str, Any] | None = None) -> list[Method]:
+        """The methods that apply for these start settings."""
+        system, _ = self.build(self.parameters(), self.start_values(start))
+        return methods_for(system.name)
+
+    def setup(
+        self,
+        params: Mapping[str, Any] | None = None,
+        start: Mapping[str, Any] | None = None,
+        *,
+        method: str | None = None,
+        dt: float | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        state: Any = None,
+    ) -> Setup:
+        """Check the settings (any subset; the rest default) and build the run's start. ``dt``
+        defaults to :attr:`dt` for a fixed-step method, ``rtol`` to :attr:`rtol` for an adaptive
+        one; ``state`` replaces the start settings' initial state."""
+        p = self.parameters(params)
+        st = self.start_values(start)
+        system, s0 = self.build(p, st)
+        name = self.default_method(st) if method is None else method
+        try:
+            m = get_method(name)
+        except ValueError as exc:
+            raise _v.SettingError("method", str(exc)) from None
+        if not m.applies_to(system.name):
+            names = ", ".join(x.name for x in methods_for(system.name))
+            raise _v.SettingError(
+                "method", f"method {m.name!r} does not apply to the {self.name} here; "
+                f"choose one of {names}",
+            )
+        if m.backend == "exact":
+            step = step_control(m, dt, None, None)
+        else:
+            step = step_control(m, self.dt if dt is None else dt, rtol, atol)
+        if state is not None:
+            s0 = checked_state(system, state)
+        return Setup(self, p, st, system, s0, m, step)
+
+
+def checked_state(system: Any, state: Any) -> np.ndarray:
+    """``state`` as a finite float array of shape ``(d,)`` or ``(N, d)`` for ``system``, else
+    :class:`SettingError` naming ``state``."""
+    d = len(system.state_names)
+    try:
+        s = np.asarray(state, dtype=float)
+    except (TypeError, ValueError):
+        raise _v.SettingError("state", f"state must be numbers, got {state!r}") from None
+    if s.shape[-1:] != (d,) or s.ndim not in (1, 2):
+        raise _v.SettingError(
+            "state", f"state must have shape (d,) or (N, d) with d = {d} "
+            f"({', '.join(system.state_names)}); got {s.shape}",
+        )
+    if not np.all(np.isfinite(s)):
+        raise _v.SettingError("state", "state must be finite")
+    return s
