@@ -13,8 +13,8 @@ import browser
 import numpy as np
 import pytest
 
-from viz.app import FrameLog
 from viz.endurance import frame_windows, rss_trend
+from viz.frames import FrameLog
 
 
 def test_frame_log_returns_every_frame_once_and_skips_what_was_overwritten():

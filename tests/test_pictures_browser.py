@@ -92,7 +92,7 @@ MODE_1 = {"op": "set", "mode": "mode 1", "amplitude": 1.5}
     ],
 )
 def test_the_plot_shows_the_motion_and_its_exact_curve(viewer, tmp_path, tab, key, pair, name, start):
-    from viz.scene.plot import CURVE_COLOURS, PATH_COLOUR
+    from viz.model.plot import CURVE_COLOURS, PATH_COLOUR
 
     app, page = viewer
     for command in start:

@@ -1,4 +1,4 @@
-"""Any variable against any other (viz.scene.plot): the quantities each exhibit plots, the exact
+"""Any variable against any other (viz.model.plot): the quantities each exhibit plots, the exact
 curves drawn with them, and the panel that picks the pair. Each curve is checked against the
 physics it draws: the motion lies on it, or on the side of it theory says."""
 
@@ -11,6 +11,7 @@ import pytest
 
 import dynamics
 from dynamics import hoop as hp
+from viz.model.plot import PlotImage, Samples
 from viz.scene import (
     CyclotronConfig,
     CyclotronExhibit,
@@ -19,7 +20,6 @@ from viz.scene import (
     HoopConfig,
     HoopExhibit,
 )
-from viz.scene.plot import PlotImage, Samples
 
 CASES = [
     (CyclotronExhibit, CyclotronConfig(centre=(0.6, 0.0), vz=0.1)),

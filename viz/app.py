@@ -1,6 +1,7 @@
 """The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
 
-Layout: the cyclotron at x = -5.5 m, the spinning disk at the origin, the hoop at x = +5.5 m (+z up).
+Layout: the cyclotron at x = -4.4 m, the spinning disk at the origin, the hoop at x = +4.4 m
+(:data:`SPACING`; +z up).
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -32,8 +33,7 @@ The whole app, headless and without its loop thread::
     app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
     app.stop()
 
-``measure_frame_cost(n_frames=300)`` returns the server-side milliseconds per frame (all three
-exhibits with trails, no browser) for ``mechviz bench``.
+:func:`viz.frame_cost.measure_frame_cost` times frames of the whole app for ``mechviz bench``.
 """
 
 from __future__ import annotations
@@ -51,9 +51,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from . import warm
+from .frames import FrameLog
 from .live_record import add_record_toggle
-from .scene import EXHIBITS, CyclotronConfig, Exhibit, HoopConfig
-from .scene.base import LOG_FLOOR
+from .model.base import LOG_FLOOR
+from .scene import EXHIBITS, Exhibit
 from .scene.panel import Panel
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
@@ -97,41 +98,6 @@ def warm_up(
         if getattr(c, "compare_method", None):
             needed.append((c.system_name, c.compare_method))
     return warm.warm_all(needed, should_stop)
-
-
-# --------------------------------------------------------------------------- frame log
-class FrameLog:
-    """Start time (``time.perf_counter``, s), server-side cost (wall ms) and the loop thread's CPU
-    time in it (ms) of the last ``capacity`` frames, in preallocated arrays: written by the loop
-    thread once per frame, read by anyone. A cost well above its CPU time is time the thread
-    waited (for the interpreter lock, or for a core).
-
-    ``count`` is the number of frames ever logged; :meth:`since` returns the frames from a given
-    index on (those still held), so a reader polling more often than ``capacity`` frames (136 s
-    at 60 Hz by default) sees every frame exactly once.
-    """
-
-    def __init__(self, capacity: int = 8192) -> None:
-        self.capacity = int(capacity)
-        self.start = np.zeros(self.capacity)
-        self.cost_ms = np.zeros(self.capacity)
-        self.cpu_ms = np.zeros(self.capacity)
-        self.count = 0
-
-    def add(self, start: float, cost_ms: float, cpu_ms: float = math.nan) -> None:
-        i = self.count % self.capacity
-        self.start[i] = start
-        self.cost_ms[i] = cost_ms
-        self.cpu_ms[i] = cpu_ms
-        self.count += 1
-
-    def since(self, first: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
-        """``(index of the first frame returned, starts, costs, cpu times)`` for frames
-        ``first ..``; the index is larger than ``first`` when older frames were overwritten."""
-        n = self.count
-        lo = max(int(first), n - self.capacity + 1, 0)  # slot n may be being rewritten
-        idx = np.arange(lo, n) % self.capacity
-        return lo, self.start[idx], self.cost_ms[idx], self.cpu_ms[idx]
 
 
 # --------------------------------------------------------------------------- the app
@@ -619,52 +585,3 @@ class MechvizApp:
             pass
         finally:
             self.stop()
-
-
-# --------------------------------------------------------------------------- bench hook
-def measure_frame_cost(
-    n_frames: int = 300, *, warmup_frames: int = 30, compare: bool = False
-) -> dict:
-    """Server-side milliseconds per frame with all three exhibits and their trails, no browser.
-
-    The app runs headless on a free port without its loop thread; each frame is what the live
-    loop does (commands, one ``dynamics`` call per simulation, drawing inside ``server.atomic()``,
-    staggered GUI readouts), timed with ``time.perf_counter``. The exhibits start from
-    their configs' defaults (trails on the charge and the bead); ``compare=True`` adds a
-    comparison run (and its trail) to the charge and the hoop. Returns median, p95, mean and max
-    [ms] and the number of trail segments drawn at the end.
-    """
-    configs = {}
-    if compare:
-        configs = {
-            "cyclotron": CyclotronConfig(compare_method="boris"),
-            "hoop": HoopConfig(compare_method="rk4"),
-        }
-    warm_up("defaults", configs)
-    app = MechvizApp(port=0, configs=configs, start_loop=False)
-    try:
-        for _ in range(warmup_frames):
-            app.step_frame()
-        times = []
-        for _ in range(n_frames):
-            t0 = time.perf_counter()
-            app.step_frame()
-            times.append(1e3 * (time.perf_counter() - t0))
-        trails = sum(
-            getattr(ex, name).n_segments
-            for ex in app.exhibits.values()
-            for name in ("trail", "compare_trail", "cmp_trail")
-            if hasattr(ex, name)
-        )
-    finally:
-        app.stop()
-    a = np.asarray(times)
-    return {
-        "n_frames": int(n_frames),
-        "median_ms": float(np.median(a)),
-        "p95_ms": float(np.percentile(a, 95)),
-        "mean_ms": float(a.mean()),
-        "max_ms": float(a.max()),
-        "trail_segments": int(trails),
-        "compare": bool(compare),
-    }

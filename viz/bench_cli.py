@@ -28,7 +28,7 @@ def _viewer_measurements(quick: bool) -> dict:
     """Frame cost of the viewer and speed of the recorder, or why they are not available."""
     out: dict = {}
     try:
-        from viz.app import measure_frame_cost
+        from viz.frame_cost import measure_frame_cost
 
         out["frame_cost"] = measure_frame_cost(100 if quick else 300)
     except (ImportError, AttributeError) as exc:

@@ -12,7 +12,7 @@ connected, with memory flat (trails capped). :func:`run_endurance` measures exac
    with its own empty profile; ``playwright install`` is never run) open the page and wait until
    viser shows "Connected". After ``settle_s`` seconds the measurement starts and lasts ``seconds``.
 3. Inside the server process a sampler thread reads the loop's frame log
-   (:class:`viz.app.FrameLog`: start time and server-side cost of every frame) and, every
+   (:class:`viz.frames.FrameLog`: start time and server-side cost of every frame) and, every
    ``rss_every_s`` seconds, the resident set size (``/proc/self/statm``), the process CPU time and
    the number of connected viser clients.
 4. At the end every page must still show "Connected" and its status line's simulated time must

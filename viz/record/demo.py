@@ -9,7 +9,7 @@ times faster).
 
 The schema is a set of :mod:`msgspec` structs: a key the schema does not know, or a value of the
 wrong kind, is refused with the file name and the key's path (``helix.toml: events[0].t: ...``).
-:meth:`Demo.config` maps a valid demo onto the settings of its exhibit (:mod:`viz.scene`): every
+:meth:`Demo.config` maps a valid demo onto the settings of its exhibit (:mod:`viz.model`): every
 demo the schema allows is expressible there, so the recorder draws every demo with the viewer's
 own exhibits.
 """
@@ -28,7 +28,7 @@ import msgspec
 import dynamics
 from dynamics import hoop
 
-from ..scene import EXHIBITS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
+from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
 
 DEMO_DIR = Path(__file__).resolve().parents[2] / "assets" / "demos"
 MAX_FRAMES = 100_000
@@ -148,9 +148,9 @@ class Demo(_Struct):
         return d
 
     def config(self) -> ExhibitConfig:
-        """The settings of this demo's exhibit (:mod:`viz.scene`); ``ValueError`` naming the
+        """The settings of this demo's exhibit (:mod:`viz.model`); ``ValueError`` naming the
         setting if the demo's values are out of range for it."""
-        cls = EXHIBITS[self.exhibit].Config
+        cls = MODELS[self.exhibit].Config
         base = cls()
         kw: dict[str, Any] = {"params": {**base.params, **self.parameters}}
         if self.motion != "driven":

@@ -3,12 +3,12 @@
 ``DEMO.csv`` holds one row per run, member and frame: ``run, member, t``, the state (names from
 :mod:`dynamics`), the energy, the relative energy error and the error against the exact
 solution or the tight reference (:class:`dynamics.Simulation`), then the exhibit's other
-quantities, as the viewer's plot names them (:meth:`viz.scene.base.Exhibit.plot_variables`: the
+quantities, as the viewer's plot names them (:meth:`viz.model.base.ExhibitModel.plot_variables`: the
 charge's ``r``, ``p_r``, ``p_phi``, ``V_eff``; the hoop's modal coordinates ``q1``, ``q2``; the
 disk's ``L``). ``DEMO.png`` charts the motion with the predictions marked, the energy error and
-the error, and below them the exhibit's pictures (:meth:`~viz.scene.base.Exhibit.pictures`:
+the error, and below them the exhibit's pictures (:meth:`~viz.model.base.ExhibitModel.pictures`:
 the well, configuration space, the phase portrait, the polhode) with their exact curves, drawn
-by the viewer's own :func:`viz.scene.plot.draw_xy`. ``DEMO.json`` is the manifest.
+by the viewer's own :func:`viz.model.plot.draw_xy`. ``DEMO.json`` is the manifest.
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ import numpy as np
 import dynamics
 from dynamics import cyclotron, disk, hoop, measure
 
-from ..scene import EXHIBITS
-from ..scene.plot import Curve, Samples, draw_xy
+from ..model import MODELS
+from ..model.plot import Curve, Samples, draw_xy
 from .demo import Demo
 from .run import Traces
 
@@ -55,7 +55,7 @@ def ghost_samples(tr: Traces) -> Samples | None:
 def derived_variables(d: Demo) -> dict:
     """The exhibit's plot quantities beyond the state, energy and errors (the CSV's last columns)."""
     names = set(dynamics.SYSTEMS[_system_name(d)].state_names) | {"t", "energy", "energy_error", "error"}
-    variables = EXHIBITS[d.exhibit].plot_variables(d.config())
+    variables = MODELS[d.exhibit].plot_variables(d.config())
     return {n: v for n, v in variables.items() if n not in names}
 
 
@@ -97,7 +97,7 @@ def traces_csv(d: Demo, tr: Traces) -> bytes:
 def draw_pictures(d: Demo, tr: Traces, axes) -> None:
     """The exhibit's pictures on ``axes`` (one each): the main run's path, linear theory's
     where there is a ghost, and the exact curves, as the viewer's plot draws them."""
-    cls, config = EXHIBITS[d.exhibit], d.config()
+    cls, config = MODELS[d.exhibit], d.config()
     variables = cls.plot_variables(config)
     main = samples(tr, tr.main)
     ghost = ghost_samples(tr)
@@ -123,7 +123,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
     p = d.config().physics()
     main = tr.main
     t = tr.times[main]
-    pictures = EXHIBITS[d.exhibit].pictures(d.config())
+    pictures = MODELS[d.exhibit].pictures(d.config())
     fig = Figure(figsize=(9, 9.5 + 4.0 * bool(pictures)), dpi=100, layout="constrained")
     top, bottom = fig.subfigures(2, 1, height_ratios=(9.5, 4.0)) if pictures else (fig, None)
     ax1, ax2, ax3, ax4 = top.subplots(4, 1, height_ratios=(3, 2, 2, 1.1))
@@ -310,4 +310,7 @@ def final_errors(tr: Traces) -> dict[str, dict[str, Any]]:
 
 
 def _system_name(d: Demo) -> str:
-    return "driven-disk" if d.motion == "driven" else EXHIBITS[d.exhibit].Config.system_name
+    """The driver's name of the system a demo runs (the disk's depends on its motion)."""
+    spec = dynamics.SPECS[d.exhibit]
+    start = spec.start_values({"motion": d.motion} if d.motion else {})
+    return spec.build(spec.parameters(d.parameters), start)[0].name

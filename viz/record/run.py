@@ -1,11 +1,13 @@
-"""Running a demo headless: the viewer's own exhibit, one frame every ``1 / fps`` of playback.
+"""Running a demo frame by frame, one frame every ``1 / fps`` of playback.
 
-:func:`run_demo` builds the demo's exhibit (:meth:`viz.record.demo.Demo.config`) in a headless
-viser server with two scene serializers attached, advances it frame by frame (simulated time
-``speed / fps`` per frame), fires the scripted events at their times (a kick is a jump of the
-same runs, :meth:`dynamics.Simulation.jump`: time and counters go on), draws every frame, and
-keeps every run's samples as :class:`Traces`. Nothing here draws on its own: what a recording
-shows is what the viewer shows for the same settings.
+:func:`trace_demo` runs the demo's model alone (:mod:`viz.model`, no viser): it advances it
+frame by frame (simulated time ``speed / fps`` per frame), fires the scripted events at their
+times (a kick is a jump of the same runs, :meth:`dynamics.Simulation.jump`: time and counters go
+on) and keeps every run's samples and the measured figures as :class:`Traces`; the CSV, the
+figures and the charts of a recording come from these. :func:`run_demo` does the same with the
+viewer's own exhibit in a headless viser server, drawing every frame into two scene serializers
+for the ``.viser`` file and its HTML page: what a recording shows is what the viewer shows for
+the same settings.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ import numpy as np
 
 import dynamics
 
-from ..scene import EXHIBITS, Exhibit
+from ..model import MODELS
+from ..model.base import ExhibitModel
 from .demo import Demo
 
 ProgressFn = Callable[[int, int], None]
@@ -60,7 +63,7 @@ class Recorded:
     traces: Traces
 
 
-def labels_for(ex: Exhibit) -> dict[str, str]:
+def labels_for(ex: ExhibitModel) -> dict[str, str]:
     """Run role (``main``/``compare``) -> label: the method's name, made unique."""
     runs = ex.runs()
     out = {"main": runs["main"].method.name}
@@ -70,9 +73,19 @@ def labels_for(ex: Exhibit) -> dict[str, str]:
     return out
 
 
-def build_exhibit(server, demo: Demo) -> Exhibit:
+def build_exhibit(server, demo: Demo):
     """The demo's exhibit, as the viewer would build it for these settings."""
+    from ..scene import EXHIBITS
+
     return EXHIBITS[demo.exhibit](server, demo.config(), history_len=8)
+
+
+def trace_demo(demo: Demo, progress: ProgressFn | None = None) -> Traces:
+    """Run ``demo``'s model headless (no viser) and return every run's samples and the figures
+    measured from them. Raises :class:`dynamics.IntegrationError` if a run blows up."""
+    model = MODELS[demo.exhibit](demo.config(), history_len=8)
+    check_work(model, demo)
+    return _run(model, demo, progress)
 
 
 def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "light") -> Recorded:
@@ -92,13 +105,38 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "li
         cam = demo.camera
         server.initial_camera.position = tuple(cam.position or position)
         server.initial_camera.look_at = tuple(cam.look_at or look_at)
-        return _run(server, ex, demo, progress, theme)
+        serializers: list = []
+
+        def draw(k: int) -> None:
+            for ser in serializers:
+                ser.insert_sleep(1.0 / demo.fps)  # frame k plays at t = k / fps
+            with server.atomic():
+                ex.draw()
+            if not serializers:
+                # Start after the first frame is drawn: the snapshot holds the whole scene at
+                # t = 0 and every later frame only what changed. Two serializers, because each
+                # one serializes once: one for the .viser file, one for viser's own HTML page.
+                serializers.extend([server.get_scene_serializer(), server.get_scene_serializer()])
+
+        traces = _run(ex, demo, progress, draw)
+        for ser in serializers:
+            ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
+        data = serializers[0].serialize()
+        html = serializers[1].as_html(dark_mode=theme == "dark").encode("utf-8")
+        return Recorded(data, html, traces)
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
 
 
-def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None, theme: str) -> Recorded:
+def _run(
+    ex: ExhibitModel,
+    demo: Demo,
+    progress: ProgressFn | None,
+    draw: Callable[[int], None] | None = None,
+) -> Traces:
+    """Advance ``ex`` through the demo's frames, firing its events, and sample every run at
+    every frame; ``draw(k)`` (a view's) is called after frame ``k`` is reached."""
     labels = labels_for(ex)
     runs = {labels[role]: sim for role, sim in ex.runs().items()}
     K = demo.frames
@@ -114,7 +152,6 @@ def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None, theme: st
     ghost = np.empty((K, 1, d)) if getattr(ex.config, "ghost", False) else None
     pending = list(demo.events)
     log: list[dict[str, Any]] = []
-    serializers = []
     for k, t in enumerate(t_frames):
         while pending and pending[0].t <= t + 1e-12:
             ev = pending.pop(0)
@@ -135,36 +172,24 @@ def _run(server, ex: Exhibit, demo: Demo, progress: ProgressFn | None, theme: st
                 err[lbl][k] = s.error
         if ghost is not None:
             ghost[k, 0] = ex.ghost_state()
-        for ser in serializers:
-            ser.insert_sleep(1.0 / demo.fps)  # frame k plays at t = k / fps
-        with server.atomic():
-            ex.draw()
-        if not serializers:
-            # Start after the first frame is drawn: the snapshot holds the whole scene at t = 0
-            # and every later frame only what changed. Two serializers, because each one
-            # serializes once: one for the .viser file, one for viser's own HTML page.
-            serializers = [server.get_scene_serializer(), server.get_scene_serializer()]
+        if draw is not None:
+            draw(k)
         if progress is not None:
             progress(k + 1, K)
-    for ser in serializers:
-        ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
-    data = serializers[0].serialize()
-    html = serializers[1].as_html(dark_mode=theme == "dark").encode("utf-8")
     for lbl in runs:
         if np.all(np.isnan(err[lbl])):
             err[lbl] = None
-    traces = Traces(
+    return Traces(
         t_frames, times, states, energy, eerr, err,
         {lbl: s.reference_kind for lbl, s in runs.items()},
         {lbl: s.steps for lbl, s in runs.items()},
         {lbl: s.nfev for lbl, s in runs.items()},
         {lbl: _describe(s) for lbl, s in runs.items()},
         ghost, log, ex.measured(),
-    )  # fmt: skip
-    return Recorded(data, html, traces)
+    )
 
 
-def check_work(ex: Exhibit, demo: Demo) -> None:
+def check_work(ex: ExhibitModel, demo: Demo) -> None:
     """Refuse, before anything runs, a demo whose runs would take more than :data:`MAX_STEPS`
     steps (:meth:`dynamics.Simulation.estimated_steps`), naming what sets the count."""
     steps = sum(sim.estimated_steps(demo.simulated_time) for sim in ex.simulations())
@@ -184,6 +209,6 @@ def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def _raise_if_failed(ex: Exhibit) -> None:
+def _raise_if_failed(ex: ExhibitModel) -> None:
     if ex.failure_error is not None:
         raise ex.failure_error

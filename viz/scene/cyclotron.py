@@ -13,81 +13,14 @@ view (the trail is broken where it wraps).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import ClassVar
 
 import numpy as np
 
-import dynamics
 from dynamics import cyclotron as cy
-from dynamics import measure
-from dynamics.systems import CYCLOTRON
 
 from .. import geometry as geo
-from .base import Exhibit, ExhibitConfig, Motion, default_params, finite_numbers, fmt, positive
-from .plot import Curve, Variable, common_variables
-
-
-@dataclass(frozen=True)
-class CyclotronConfig(ExhibitConfig):
-    """Settings of the cyclotron exhibit.
-
-    The charge starts on the circle of transverse ``speed`` [m/s] about ``centre`` (x, y) [m] with
-    ``vz`` [m/s] along B, unless ``state`` gives the whole initial state (x, y, z, vx, vy, vz).
-    ``beam``: ``beam_size`` more charges from the same point in the same direction, at speeds
-    spread evenly over ``beam_speeds`` [m/s]. ``compare_method`` runs beside the main one, with
-    ``compare_dt`` / ``compare_rtol`` if given (else the main run's). ``kick`` [m/s] is the
-    radial kick the Kick button gives."""
-
-    system_name: ClassVar[str] = dynamics.Cyclotron.name
-    spec: ClassVar[dynamics.SystemSpec] = CYCLOTRON
-
-    method: str = CYCLOTRON.default_method({})
-    dt: float = CYCLOTRON.dt
-    params: dict = field(default_factory=lambda: default_params(CYCLOTRON))
-    speed: float = CYCLOTRON.setting("speed").default
-    vz: float = CYCLOTRON.setting("vz").default
-    centre: tuple = CYCLOTRON.setting("centre").default
-    state: tuple | None = None
-    beam: bool = False
-    beam_size: int = 16
-    beam_speeds: tuple = (0.25, 1.75)
-    kick: float = 0.5
-    compare_method: str | None = None
-    compare_dt: float | None = None
-    compare_rtol: float | None = None
-    trail_cap: int = 600
-    height: float = 2.0
-
-    def _validate(self) -> None:
-        positive("speed", self.speed)
-        finite_numbers("vz", (self.vz,), 1)
-        finite_numbers("centre", self.centre, 2)
-        if self.state is not None:
-            s = finite_numbers("state", self.state, 6)
-            if s[3] == 0.0 and s[4] == 0.0:
-                raise ValueError("state must have a transverse velocity (vx, vy not both 0)")
-        if not (isinstance(self.beam_size, int) and 1 <= self.beam_size <= 1000):
-            raise ValueError(f"beam_size must be a whole number from 1 to 1000, got {self.beam_size!r}")
-        lo, hi = (positive("beam_speeds", v) for v in finite_numbers("beam_speeds", self.beam_speeds, 2))
-        if lo > hi:
-            raise ValueError(f"beam_speeds must be (low, high), got {self.beam_speeds!r}")
-        finite_numbers("kick", (self.kick,), 1)
-        positive("height", self.height)
-
-    def initial_state(self) -> np.ndarray:
-        if self.state is not None:
-            return np.array(self.state, dtype=float)
-        return cy.circular_orbit_state(self.physics(), self.speed, self.centre, self.vz)
-
-    def beam_states(self) -> np.ndarray:
-        """(beam_size, 6): every charge at the start point, moving the same way, at its speed."""
-        s0 = self.initial_state()
-        speeds = np.linspace(self.beam_speeds[0], self.beam_speeds[1], self.beam_size)
-        out = np.tile(s0, (self.beam_size, 1))
-        direction = s0[3:5] / math.hypot(s0[3], s0[4])
-        out[:, 3:5] = speeds[:, None] * direction
-        return out
+from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
+from .base import Exhibit, fmt
 
 
 class BeamTrails:
@@ -127,15 +60,11 @@ class BeamTrails:
         self.node.remove()
 
 
-class CyclotronExhibit(Exhibit):
-    """The charge, its theory circle, optional comparison method and optional beam."""
+class CyclotronExhibit(CyclotronModel, Exhibit):
+    """The cyclotron drawn: the charge with its trail, the predicted circle, the field, the
+    comparison run and the beam."""
 
-    key = "cyclotron"
-    title = "Cyclotron"
-    name = "Cyclotron"
     icon = "ATOM"
-    Config = CyclotronConfig
-    chart_series = ("energy", "error", "energy_compare", "error_compare")
 
     # ------------------------------------------------------------------ scene (built once)
     def _build(self) -> None:
@@ -180,42 +109,18 @@ class CyclotronExhibit(Exhibit):
             np.float32,
         )
 
-    # ------------------------------------------------------------------ simulations
-    def _start(self) -> None:
-        c = self.config
-        p = c.physics()
-        system = dynamics.Cyclotron(p)
-        s0 = c.initial_state()
-        sim, cmp_ = self._make_runs(system, s0)
-        beam = None
-        if c.beam:
-            beam = self._make_simulation(system, c.method, c.beam_states(), reference=None)
-        # --- nothing above touched the exhibit; install
-        self.params = p
-        self.sim, self.compare, self.beam = sim, cmp_, beam
-        self._reset_common()
+    def _started(self) -> None:
+        p, cmp_ = self.params, self.compare
         self.trail.clear()
         self.compare_trail.clear()
         self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
         self._rebuild_beam_node()
         self.bodies.batched_scales = np.array([1.0, 1.0 if cmp_ is not None else 0.0, 0.5])
         self.compare_trail.visible = cmp_ is not None
-        self._begin_segment()
 
-    def _begin_segment(self) -> None:
-        """Start the samples the estimators read: at the start, and again after a kick."""
-        p, st = self.params, self.state
-        self.theory_centre = cy.guiding_centre(p, st)
-        self.theory_radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
-        self.motion = Motion((2, 2))  # (x, y) and (vx, vy) of the charge
-        self.beam_motion = None
-        if self.beam is not None:
-            n = len(self.beam.state)
-            self.beam_motion = Motion((n, 2), maxlen=min(1800, max(64, 400_000 // n)))
+    def _segment_started(self) -> None:
         self.trail.lift()
         self.compare_trail.lift()
-        self.trace.clear()  # the plot's points before a kick lie in another well
-        self._observe()
 
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
@@ -237,74 +142,6 @@ class CyclotronExhibit(Exhibit):
             batched_colors=colors, lod="off",
         )  # fmt: skip
         self.beam_trails = BeamTrails(self.scene, f"{self.root}/beam_trails", colors, self.config.height)
-
-    def _extra_simulations(self):
-        return [self.beam] if self.beam is not None else []
-
-    def runs(self) -> dict[str, dynamics.Simulation]:
-        """With a beam on, a recording traces the beam as its main run."""
-        out = super().runs()
-        if self.beam is not None:
-            out["main"] = self.beam
-        return out
-
-    # ------------------------------------------------------------------ measurements
-    def _observe(self) -> None:
-        st = self.state
-        self.motion.add(self.t, (st[0:2], st[3:5]))
-        if self.beam_motion is not None:
-            self.beam_motion.add(self.beam.t, self.beam.state[:, 3:5])
-
-    def measured(self) -> dict:
-        """Gyrofrequency and circle of the charge since its start or last kick
-        (:func:`dynamics.measure.gyrofrequency`, :func:`dynamics.measure.fit_circle`), and each
-        beam member's gyrofrequency."""
-        t, x = self.motion.arrays()
-        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1])}
-        circle = measure.fit_circle(x[:, 0]) if out["gyrofrequency"] is not None else None
-        out["radius"] = None if circle is None else circle[1]
-        out["beam_gyrofrequencies"] = None
-        if self.beam_motion is not None:
-            tb, vb = self.beam_motion.arrays()
-            out["beam_gyrofrequencies"] = measure.gyrofrequency(tb, vb)
-        return out
-
-    # ------------------------------------------------------------------ commands
-    def _ops_hint(self) -> str:
-        return ", kick"
-
-    def _apply_op(self, op, args: dict) -> str:
-        if op != "kick":
-            return super()._apply_op(op, args)
-        dv = finite_numbers("dv", (args.get("dv", self.config.kick),), 1)[0]
-        self.kick_effects(dv)
-        centre, radius = self.theory_centre, self.theory_radius
-        return (
-            f"kick dv = {dv:g} m/s: new circle radius {radius:.4g} m "
-            f"about ({centre[0]:.3g}, {centre[1]:.3g})"
-        )
-
-    def kick_effects(self, dv: float) -> dict[str, dict]:
-        """Kick every run (and the beam) radially by ``dv`` [m/s] at the current time, without a
-        restart (:meth:`dynamics.Simulation.jump`); returns, by run, the state before and what
-        theory predicts: each member's new centre and radius and the shift ``|dv| / |Omega|``."""
-        p = self.params
-        out = {}
-        for role, sim in self.runs().items():
-            before = sim.state.copy()
-            kicked = [cy.radial_kick(p, s, dv) for s in before]
-            out[role] = {
-                "state_before": before.tolist(),
-                "predicted_centre": [k[1][:2].tolist() for k in kicked],
-                "predicted_radius": [k[2] for k in kicked],
-                "predicted_shift": abs(dv) / abs(cy.signed_gyrofrequency(p)),
-            }
-        for sim in self.simulations():
-            sim.jump(np.array([cy.radial_kick(p, s, dv)[0] for s in sim.state]))
-        self.revision += 1
-        self._sample = self._compare_sample = None
-        self._begin_segment()
-        return out
 
     # ------------------------------------------------------------------ drawing
     def _display(self, xyz: np.ndarray) -> np.ndarray:
@@ -396,69 +233,6 @@ class CyclotronExhibit(Exhibit):
         lines.append(self.work_line())
         return "\n".join(lines)
 
-    # ------------------------------------------------------------------ the effective potential
-    def well(self) -> dict:
-        """:func:`well` of the charge's current state."""
-        return well(self.params, self.state)
-
-    # ------------------------------------------------------------------ plots
-    @classmethod
-    def plot_variables(cls, config) -> dict[str, Variable]:
-        """The state, and the radial motion of the seed's argument: ``r``, ``p_r``, ``p_phi``
-        and ``V_eff(r)`` for the sample's own ``p_phi``."""
-        p = config.physics()
-        units = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s"}
-        out = common_variables({n: f"{n} [{u}]" for n, u in units.items()})
-
-        def r(s):
-            return cy.radial_coordinates(p, s.states)[0]
-
-        def p_phi(s):
-            return cy.canonical_angular_momentum(p, s.states)
-
-        def v_eff(s):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                return cy.effective_potential(p, r(s), p_phi(s))
-
-        out["r"] = Variable("distance from the axis r [m]", r)
-        out["p_r"] = Variable("radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1])
-        out["p_phi"] = Variable("canonical ang. momentum p_φ [kg m²/s]", p_phi)
-        out["V_eff"] = Variable("V_eff(r) [J]", v_eff)
-        return out
-
-    @classmethod
-    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
-        """``(r, V_eff)``: the well for the newest sample's ``p_phi`` and its level ``E_perp``
-        (the path lies on the level, between the turning points); ``(x, y)``: the circle
-        predicted from the newest sample (guiding centre and Larmor radius)."""
-        if not len(samples):
-            return []
-        p, st = config.physics(), samples.states[-1]
-        if (x, y) == ("r", "V_eff"):
-            w = well(p, st)
-            lo, hi = w["x_range"]
-            return [
-                Curve(w["x"], w["V"], "V_eff(r)"),
-                Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "level E⊥", dashed=True),
-                Curve(np.array([w["r0"]]), np.array([cy.effective_potential(p, w["r0"], w["p_phi"])
-                      if w["r0"] > 0 else np.nan]), "bottom r0",
-                      kw={"marker": "o", "ls": "none"}),
-            ]  # fmt: skip
-        if (x, y) == ("x", "y"):
-            centre, rho = cy.guiding_centre(p, st), cy.larmor_radius(p, st)
-            phi = np.linspace(0.0, 2 * math.pi, 181)
-            return [
-                Curve(centre[0] + rho * np.cos(phi), centre[1] + rho * np.sin(phi),
-                      "predicted circle", dashed=True),
-                Curve(np.array([centre[0]]), np.array([centre[1]]), "guiding centre",
-                      kw={"marker": "+", "ms": 9, "ls": "none"}),
-            ]  # fmt: skip
-        return []
-
-    @classmethod
-    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
-        return (("r", "V_eff"), ("x", "y"))
-
     # ------------------------------------------------------------------ GUI
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
@@ -481,32 +255,3 @@ class CyclotronExhibit(Exhibit):
             "r0 = √(2\\|p_φ\\|/\\|qB\\|). A kick changes p_φ and redraws the well. Pick x and y "
             "for any other pair: (x, y) shows the orbit from above with the predicted circle."
         )
-
-
-def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
-    """The charge's radial motion in its effective potential: ``p_phi`` is conserved, so
-    ``E_perp = p_r^2/2m + V_eff(r)`` (:func:`dynamics.cyclotron.radial_coordinates`) and ``r``
-    swings between the orbit's closest and farthest distances from the axis, where
-    ``V_eff = E_perp``. Returns the chart's ``x`` (radii [m], the charge's ``r`` and the well's
-    bottom ``r0`` among them), ``V`` [J], the ``level`` E_perp [J], ``point`` and ``bottom`` (V at
-    r and at r0, NaN elsewhere), and ``x_range``/``y_range`` to draw."""
-    p_phi = float(cy.canonical_angular_momentum(p, st))
-    e_perp = 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2)
-    r_now = float(cy.radial_coordinates(p, st)[0])
-    centre = cy.guiding_centre(p, st)
-    dist, rho = math.hypot(centre[0], centre[1]), cy.larmor_radius(p, st)
-    r_min, r_max = abs(dist - rho), dist + rho
-    r0 = cy.effective_potential_minimum(p, p_phi) if p_phi != 0.0 else 0.0
-    lo = max(0.5 * r_min, 0.02 * r_max)
-    hi = 1.25 * r_max + 0.05
-    grid = np.linspace(lo, hi, 160)
-    x = np.unique(np.concatenate([grid, [r_now], [r0] if lo <= r0 <= hi else []]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        V = cy.effective_potential(p, x, p_phi)
-    point = np.where(x == r_now, V, np.nan)
-    bottom = np.where(x == r0, V, np.nan) if lo <= r0 <= hi else np.full_like(x, np.nan)
-    return {
-        "x": x, "V": V, "level": np.full_like(x, e_perp), "point": point, "bottom": bottom,
-        "x_range": (float(lo), float(hi)), "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
-        "r": r_now, "r0": r0, "r_min": r_min, "r_max": r_max, "p_phi": p_phi,
-    }  # fmt: skip

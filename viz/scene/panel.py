@@ -27,9 +27,9 @@ import numpy as np
 
 import dynamics
 
+from ..model.plot import PlotImage
 from ..warm import warm_method
 from .base import LOG_FLOOR
-from .plot import PlotImage
 
 
 def rtol_label(rtol: float) -> str:
@@ -287,7 +287,7 @@ class Panel:
 
     def plot(self, note: str) -> None:
         """The plot of any variable against any other: two dropdowns naming the quantities as
-        their axes do, and the image (:mod:`viz.scene.plot`), over the chart window; ``note``
+        their axes do, and the image (:mod:`viz.model.plot`), over the chart window; ``note``
         says what the exhibit's first pair shows."""
         ex = self.exhibit
         variables = ex.plot_variables(ex.config)

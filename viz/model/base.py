@@ -1,0 +1,567 @@
+"""What the three exhibits' models share: the settings base class, sample buffers and the
+headless model of an exhibit.
+
+An exhibit's *model* owns the :class:`dynamics.Simulation` (s) of one system, its events, the
+samples its readouts and charts need, and the figures measured from them; it imports no viser and
+draws nothing. The view (:mod:`viz.scene`) subclasses it to draw the scene and build the panel;
+the recorder, the notebook and the tests run the model alone. Every model has
+
+- ``config``: a frozen, validated settings dataclass (:class:`ExhibitConfig`); change it with
+  ``apply({"op": "set", field: value, ...})``,
+- ``advance(sim_seconds)`` / ``advance_to(t)``: one compiled ``dynamics`` call per simulation (a
+  blow-up pauses the exhibit and queues a message in ``events`` instead of raising);
+  ``measure=True`` also samples the energy and error (a chart point) and checks for divergence,
+- ``apply(command)``: ``{"op": "reset"}``, ``{"op": "set", ...}`` and the exhibit's own
+  operations (a kick); an invalid value raises ``ValueError`` naming the field, changing nothing,
+- ``state``, ``sample``, ``t``, ``paused``, ``failure``, ``measured()`` (the figures measured
+  from the motion, by name, from :mod:`dynamics.measure`), ``chart_data()``, ``runs()`` (the
+  simulations a recording traces, by role),
+- ``revision``: bumped by every change; while unchanged, a view would show the same thing,
+- ``plot_variables(config)``, ``plot_curves(config, x, y, samples)``, ``pictures(config)``
+  and ``default_plot(config)``: what a plot of any variable against any other and a recording's
+  pictures draw (:mod:`viz.model.plot`); ``plot_samples()`` the main run's samples over the
+  chart window.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+import dynamics
+from dynamics import params as _v
+
+from .plot import Curve, Samples, Variable, common_variables
+
+# |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
+DIVERGED = 24.0
+LOG_FLOOR = -17.0  # log10 of an error that is exactly zero
+PAUSED_HINT = "Paused; press Reset (or pick another method or a smaller step)."
+
+
+def log10_abs(x) -> float:
+    v = float(np.abs(x).max()) if x is not None else 0.0
+    return math.log10(v) if v > 10.0**LOG_FLOOR else LOG_FLOOR
+
+
+def fmt(x: float | None, digits: int = 4) -> str:
+    return "—" if x is None else f"{x:.{digits}g}"
+
+
+positive = _v.positive
+finite_numbers = _v.numbers
+
+
+# =========================================================================== settings
+@dataclass(frozen=True)
+class ExhibitConfig:
+    """Settings every exhibit has; subclasses add their own and ``_validate`` them.
+
+    ``method`` is integrated with ``dt`` [s] if it takes fixed steps, ``rtol`` if adaptive (the
+    method picks, :meth:`dynamics.Method.step_options`). ``params`` are the system's physical
+    parameters by name (its ``Params`` dataclass checks them). Validated on construction, so an
+    instance always holds settings a run can start from."""
+
+    system_name: ClassVar[str]  # the driver's name of the system (:data:`dynamics.SYSTEMS`)
+    spec: ClassVar[dynamics.SystemSpec]  # the system's description: parameters, start, step
+
+    method: str = "rk4"
+    dt: float = 1 / 60
+    rtol: float = 1e-9
+    params: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.physics()  # SettingError naming the parameter
+        names = [m.name for m in dynamics.methods_for(self.system_name)]
+        for fld in ("method", *(["compare_method"] if hasattr(self, "compare_method") else [])):
+            m = getattr(self, fld)
+            if m is not None and m not in names:
+                raise dynamics.SettingError(fld, f"{fld} must be one of {', '.join(names)}; got {m!r}")
+        # the step settings every run takes, and those of a comparison run where there is one,
+        # by the rules of dynamics.steps
+        for name in ("dt", "compare_dt"):
+            if getattr(self, name, None) is not None:
+                _v.positive(name, getattr(self, name))
+        for name in ("rtol", "compare_rtol"):
+            if getattr(self, name, None) is not None:
+                _v.below_one(name, getattr(self, name))
+        cap = getattr(self, "trail_cap", 2)
+        if not (isinstance(cap, int) and cap >= 2):
+            raise dynamics.SettingError(
+                "trail_cap", f"trail_cap must be a whole number of at least 2, got {cap!r}"
+            )
+        self._validate()
+
+    def _validate(self) -> None:
+        pass
+
+    def physics(self):
+        """The validated parameter dataclass of :mod:`dynamics` for ``params``
+        (:meth:`dynamics.SystemSpec.parameters`)."""
+        return self.spec.parameters(self.params)
+
+
+def default_params(spec: dynamics.SystemSpec) -> dict:
+    """The default parameters of a system as the ``params`` dict of a config."""
+    return spec.default_params()
+
+
+# =========================================================================== sample buffers
+class Ring:
+    """The last ``maxlen`` rows of shape ``shape`` in one preallocated buffer written twice (at
+    ``i`` and ``i + maxlen``), so the newest rows are always one contiguous slice: adding a row
+    allocates nothing and :meth:`array` copies one block. ``version`` changes on every change."""
+
+    def __init__(self, shape: tuple[int, ...], maxlen: int) -> None:
+        self.shape = tuple(shape)  # of one row
+        self.maxlen = max(2, int(maxlen))
+        self._buf = np.full((2 * self.maxlen, *shape), math.nan)
+        self._i = self._n = 0
+        self.count = 0  # rows ever added since the last clear
+        self.version = 0
+
+    def __len__(self) -> int:
+        return self._n
+
+    def clear(self) -> None:
+        self._i = self._n = self.count = 0
+        self.version += 1
+
+    def add(self, row) -> None:
+        i, m = self._i, self.maxlen
+        self._buf[i] = row
+        self._buf[i + m] = row
+        self._i = (i + 1) % m
+        self._n = min(self._n + 1, m)
+        self.count += 1
+        self.version += 1
+
+    def array(self) -> np.ndarray:
+        """The rows held, oldest first, as a fresh array."""
+        end = self._i + self.maxlen
+        return self._buf[end - self._n : end].copy()
+
+
+class History:
+    """Chart points: ``t`` and named series, the last ``maxlen`` of them (:class:`Ring`)."""
+
+    def __init__(self, names: tuple[str, ...], maxlen: int = 600) -> None:
+        self.names = tuple(names)
+        self._ring = Ring((1 + len(self.names),), maxlen)
+        self.maxlen = self._ring.maxlen
+
+    def __len__(self) -> int:
+        return len(self._ring)
+
+    @property
+    def version(self) -> int:
+        return self._ring.version
+
+    def clear(self) -> None:
+        self._ring.clear()
+
+    def add(self, t: float, **values: float) -> None:
+        self._ring.add([t, *(values.get(n, math.nan) for n in self.names)])
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays()[0]
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """``(t, *series)`` oldest first, as fresh arrays."""
+        return tuple(self._ring.array().T)
+
+
+class Motion:
+    """Samples of a run's motion since it started or last jumped: the times and one array per
+    sample (a velocity, the angles, ...), the newest ``maxlen``. The estimators of
+    :mod:`dynamics.measure` read them, exactly as the recorder reads its frames."""
+
+    def __init__(self, shape: tuple[int, ...], maxlen: int = 1800) -> None:
+        self.shape = tuple(shape)
+        self._t = Ring((), maxlen)
+        self._x = Ring(self.shape, maxlen)
+
+    def __len__(self) -> int:
+        return len(self._t)
+
+    def clear(self) -> None:
+        self._t.clear()
+        self._x.clear()
+
+    def add(self, t: float, x) -> None:
+        self._t.add(t)
+        self._x.add(x)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._t.array(), self._x.array()
+
+
+# =========================================================================== the exhibit
+class ExhibitModel:
+    """Base class: subclasses define ``Config``, ``key``, ``title``, ``name`` and the hooks
+    ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
+    advance), ``measured`` and ``_apply_op`` (own operations). A view learns of a new start from
+    ``_started()``, called at the end of every ``_start``."""
+
+    key: ClassVar[str] = ""
+    title: ClassVar[str] = ""
+    name: ClassVar[str] = ""  # one word: its tab and camera preset
+    Config: ClassVar[type[ExhibitConfig]]
+    chart_series: ClassVar[tuple[str, ...]] = ("energy", "error")
+    # settings that change only how the exhibit is drawn: applied without touching the runs
+    view_fields: ClassVar[frozenset[str]] = frozenset()
+    # settings that only choose the start: applied as a jump of the running simulations to the
+    # new start, so the clock and the work counters go on (``_jump_to_start``)
+    start_fields: ClassVar[frozenset[str]] = frozenset()
+
+    def __init__(self, config=None, *, history_len: int = 600, start: bool = True) -> None:
+        self.config = config if config is not None else self.Config()
+        self.paused = False
+        self.failure: str | None = None  # why the run stopped, in words (no viewer advice)
+        self.failure_error: dynamics.IntegrationError | None = None  # the same, as an error
+        self.events: list[tuple[str, str]] = []  # (title, body) for notifications
+        self.revision = 0
+        self.steps_last_advance = 0  # steps the main run took in the last advance
+        self.history = History(self.chart_series, maxlen=history_len)
+        self.trace = Ring((1,), history_len)  # sized for the run's state in _reset_common
+        self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
+        self._chart_t = 0.0  # time of the newest chart point
+        self.sim: dynamics.Simulation | None = None
+        self.compare: dynamics.Simulation | None = None
+        self._sample: dynamics.Sample | None = None
+        self._compare_sample: dynamics.Sample | None = None
+        if start:
+            self._start()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def t(self) -> float:
+        return self.sim.t if self.sim is not None else 0.0
+
+    @property
+    def state(self) -> np.ndarray:
+        """The main run's current state (d,): what drawing needs (a view until the next advance)."""
+        return self.sim.state[0]
+
+    @property
+    def compare_state(self) -> np.ndarray | None:
+        return None if self.compare is None else self.compare.state[0]
+
+    @property
+    def sample(self) -> dynamics.Sample:
+        if self._sample is None:
+            self._sample = self.sim.sample()
+        return self._sample
+
+    @property
+    def compare_sample(self) -> dynamics.Sample | None:
+        if self.compare is None:
+            return None
+        if self._compare_sample is None:
+            self._compare_sample = self.compare.sample()
+        return self._compare_sample
+
+    def simulations(self) -> list[dynamics.Simulation]:
+        return [s for s in (self.sim, self.compare, *self._extra_simulations()) if s is not None]
+
+    def runs(self) -> dict[str, dynamics.Simulation]:
+        """The runs a recording traces: ``"main"`` and, if there is one, ``"compare"``."""
+        out = {"main": self.sim}
+        if self.compare is not None:
+            out["compare"] = self.compare
+        return out
+
+    def _make_simulation(self, system, method: str, state, *, dt=None, rtol=None, reference="auto"):
+        """A :class:`dynamics.Simulation` of ``method`` with the step setting it takes (``dt``
+        and ``rtol`` default to the config's)."""
+        c = self.config
+        m = dynamics.get_method(method)
+        opts = m.step_options(c.dt if dt is None else dt, c.rtol if rtol is None else rtol)
+        return dynamics.Simulation(system, m, state=state, reference=reference, **opts)
+
+    def _make_runs(self, system, s0) -> tuple[dynamics.Simulation, dynamics.Simulation | None]:
+        """The main run of ``config.method`` and, if the config names one, the comparison run
+        of ``compare_method`` with its own ``compare_dt`` / ``compare_rtol`` (else the main
+        run's), both from ``s0``."""
+        c = self.config
+        sim = self._make_simulation(system, c.method, s0)
+        cmp_ = None
+        if getattr(c, "compare_method", None):
+            cmp_ = self._make_simulation(
+                system, c.compare_method, s0, dt=c.compare_dt, rtol=c.compare_rtol
+            )
+        return sim, cmp_
+
+    # ------------------------------------------------------------------ stepping
+    def advance(self, sim_seconds: float, *, measure: bool = True) -> None:
+        """Advance every simulation by ``sim_seconds`` (no-op while paused). ``measure``: also
+        sample the energy and error (a chart point, and the divergence check); the live app
+        measures each exhibit on every third frame, as a sample costs more than the step."""
+        if self.paused or sim_seconds <= 0.0:
+            return
+        self._advance(lambda sim: sim.advance(sim_seconds), measure)
+
+    def advance_to(self, t: float, *, measure: bool = True) -> None:
+        """Advance every simulation to time ``t`` [s] (fixed steps: the last step at or before)."""
+        if self.paused or t <= self.t:
+            return
+        self._advance(lambda sim: sim.advance_to(max(t, sim.t)), measure)
+
+    def _advance(self, move, measure: bool) -> None:
+        self.revision += 1
+        steps_before = self.sim.steps
+        for sim in self.simulations():
+            try:
+                move(sim)
+            except dynamics.IntegrationError as exc:
+                self._fail(exc)
+                break
+        self.steps_last_advance = self.sim.steps - steps_before
+        self._sample = None
+        self._compare_sample = None
+        if measure or self.paused:
+            if not self.paused:
+                self._check_divergence()
+            self._record()
+        self._observe()
+
+    def _extra_simulations(self) -> list[dynamics.Simulation]:
+        return []
+
+    def _check_divergence(self) -> None:
+        for label, smp, sim in (
+            ("", self.sample, self.sim),
+            ("comparison ", self.compare_sample, self.compare),
+        ):
+            if smp is None:
+                continue
+            grown = float(np.max(np.abs(smp.energy_error)))
+            if not math.isfinite(grown) or grown > DIVERGED:
+                reason = f"{label}run diverged: the energy changed by a factor {1 + grown:.3g}"
+                self._fail(dynamics.IntegrationError(sim.method.name, sim.step_label(), sim.t, reason))
+                return
+
+    def _fail(self, error: dynamics.IntegrationError) -> None:
+        self.paused = True
+        self.failure = str(error)
+        self.failure_error = error
+        self.events.append((f"{self.title}: integration stopped", f"{error}. {PAUSED_HINT}"))
+
+    def set_chart_window(self, seconds: float) -> None:
+        """Spread the chart's points evenly over the last ``seconds`` of simulated time (the
+        number of points stays the same); the chart starts afresh."""
+        self.chart_spacing = float(seconds) / self.history.maxlen
+        self.history.clear()
+        self.trace.clear()
+        self.revision += 1
+
+    def _record(self) -> None:
+        if len(self.history) and self.t - self._chart_t < self.chart_spacing and not self.paused:
+            return  # not yet time for the next point of a long window
+        self._chart_t = self.t
+        smp = self.sample
+        values = {"energy": log10_abs(smp.energy_error), "error": log10_abs(smp.error)}
+        c = self.compare_sample
+        if c is not None:
+            values["energy_compare"] = log10_abs(c.energy_error)
+            values["error_compare"] = log10_abs(c.error)
+        self.history.add(self.t, **values)
+        err = smp.error[0] if smp.error is not None else math.nan
+        self.trace.add([self.t, *smp.state[0], smp.energy[0], smp.energy_error[0], err])
+
+    def chart_data(self) -> tuple[np.ndarray, ...]:
+        """``(t, log10|dE/E0|, log10 error, ...)`` of the last samples (see ``chart_series``)."""
+        return self.history.arrays()
+
+    def stability_text(self) -> str:
+        """Where the running method's step stops being stable (markdown, for the step control):
+        the largest stable dt from :func:`dynamics.stability.stability_limit` for the current
+        parameters and state, and whether the chosen dt is inside it."""
+        from dynamics import stability
+
+        sim = self.sim
+        m = sim.method
+        if m.adaptive:
+            return f"<small>{m.name}: adaptive, the step follows rtol; no fixed limit</small>"
+        if m.backend == "exact":
+            return "<small>exact flow: any step</small>"
+        limit = stability.stability_limit(m.name, sim.system, self.state)
+        reason = stability.REASONS.get(m.name, "")
+        if limit is None:
+            return f"<small>Stable at any dt ({reason}).</small>"
+        if limit == 0.0:
+            return f"<small>⚠ Unstable at every dt: {reason}.</small>"
+        omega = stability.fastest_frequency(sim.system, self.state)
+        where = (
+            f"dt = {fmt(sim.dt)} s is {sim.dt / limit:.1%} of it"
+            if sim.dt <= limit
+            else f"⚠ dt = {fmt(sim.dt)} s is beyond it: expect the run to blow up"
+        )
+        return (
+            f"<small>**Stability limit dt < {fmt(limit)} s** (ω_max = {fmt(omega)} rad/s; "
+            f"{reason}); {where}.</small>"
+        )
+
+    # ------------------------------------------------------------------ commands
+    def apply(self, command: Mapping[str, Any] | str) -> str:
+        """Apply one command; returns a short description. ``ValueError`` leaves all untouched."""
+        self.revision += 1
+        if isinstance(command, str):
+            command = {"op": command}
+        command = dict(command)
+        op = command.pop("op", None)
+        if op == "reset":
+            self.reset()
+            return f"{self.title}: reset"
+        if op == "set":
+            return self.set(**command)
+        return self._apply_op(op, command)
+
+    def _apply_op(self, op, args: dict) -> str:
+        raise ValueError(f"op must be one of reset, set{self._ops_hint()}; got {op!r}")
+
+    def _ops_hint(self) -> str:
+        return ""
+
+    def set(self, **changes) -> str:
+        """Change config fields (validated first; the running simulation is kept on error)."""
+        self.revision += 1
+        fields = {f.name for f in dataclasses.fields(self.config)}
+        for name in changes:
+            if name not in fields:
+                raise ValueError(
+                    f"{name} is not a setting of {self.key}; choose from {', '.join(sorted(fields))}"
+                )
+        if "params" in changes:
+            params = dict(self.config.params)
+            for k, v in dict(changes["params"]).items():
+                if k not in params:
+                    raise ValueError(
+                        f"{k} is not a parameter of {self.key}; choose from {', '.join(params)}"
+                    )
+                params[k] = v
+            changes["params"] = params
+        try:
+            new = dataclasses.replace(self.config, **changes)
+        except TypeError as exc:  # a value of the wrong kind for a comparison inside validation
+            raise ValueError(str(exc)) from None
+        if new == self.config:
+            return f"{self.title}: unchanged"
+        old = self.config
+        changed = {f.name for f in dataclasses.fields(new) if getattr(new, f.name) != getattr(old, f.name)}
+        described = f"{self.title}: " + ", ".join(f"{k} = {v}" for k, v in changes.items())
+        if changed <= self.view_fields:  # how it is drawn, not what moves: the run goes on
+            self.config = new
+            return described
+        if changed <= self.start_fields:  # a new start, applied now: time and counts go on
+            self.config = new
+            try:
+                self._jump_to_start()
+            except (ValueError, TypeError):
+                self.config = old
+                raise
+            return described
+        # _start() builds every simulation before it touches the scene or the state, and
+        # replaces (never mutates) the old ones, so restoring the attributes undoes it.
+        snapshot = dict(self.__dict__)
+        self.config = new
+        try:
+            self._start()
+        except (ValueError, TypeError, ZeroDivisionError):
+            self.__dict__.clear()
+            self.__dict__.update(snapshot)
+            raise
+        return described
+
+    def _jump_to_start(self) -> None:
+        """Put every run at the configured start without restarting it
+        (:meth:`dynamics.Simulation.jump`), for exhibits that list ``start_fields``."""
+        raise NotImplementedError
+
+    def reset(self) -> None:
+        self.revision += 1
+        self._start()
+
+    def _reset_common(self) -> None:
+        self.paused = False
+        self.failure = None
+        self.failure_error = None
+        self._sample = None
+        self._compare_sample = None
+        self.history.clear()
+        d = self.sim.state.shape[1]
+        if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
+            self.trace = Ring((d + 4,), self.history.maxlen)
+        self.trace.clear()
+
+    # ------------------------------------------------------------------ any variable against any other
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """The quantities the exhibit can plot for ``config``, by name (:mod:`viz.model.plot`):
+        at least time, the state, energy and the errors."""
+        system = dynamics.SYSTEMS[cls.system_for(config)]
+        return common_variables({n: n for n in system.state_names})
+
+    @classmethod
+    def system_for(cls, config) -> str:
+        """The name of the :data:`dynamics.SYSTEMS` entry a run of ``config`` integrates."""
+        return config.system_name
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples: Samples) -> list[Curve]:
+        """The exact curves that go with ``y`` against ``x`` (none by default)."""
+        return []
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        """The pairs a recording draws in its PNG: the seed's own pictures of the system."""
+        return ()
+
+    @classmethod
+    def default_plot(cls, config) -> tuple[str, str]:
+        """The pair the panel's plot shows first: the first picture (else energy against t)."""
+        pictures = cls.pictures(config)
+        return pictures[0] if pictures else ("t", "energy")
+
+    def plot_samples(self) -> Samples:
+        """The main run's samples over the chart window (member 0 of an ensemble)."""
+        d = self.sim.state.shape[1]
+        return Samples.from_rows(self.trace.array(), d)
+
+    # ------------------------------------------------------------------ subclass hooks
+    def _start(self) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _started(self) -> None:
+        """Called at the end of every ``_start``: a view resets what it draws."""
+
+    def _observe(self) -> None:
+        pass
+
+    def measured(self) -> dict[str, Any]:
+        """The figures measured from the motion, by name (``None``: not yet)."""
+        return {}
+
+    def method_line(self, sim: dynamics.Simulation) -> str:
+        """The method and its step setting; for an adaptive main run also the steps it took over
+        the last advance (a frame, live) and the length of the step it is in: the tolerance
+        shows there."""
+        line = f"`{sim.method.name}` ({sim.step_label()})"
+        if sim is self.sim and sim.method.adaptive:
+            line += f", {self.steps_last_advance} steps in the last frame"
+            if sim.last_step is not None:
+                line += f", h = {fmt(sim.last_step, 2)} s"
+        return line
+
+    def work_line(self) -> str:
+        smp = self.sample
+        lines = [f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}."]
+        if self.failure:
+            lines.append(f"\n**Paused:** {self.failure}. {PAUSED_HINT}")
+        return "\n".join(lines)

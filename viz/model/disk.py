@@ -1,0 +1,260 @@
+"""The spinning disk's model: a disk with a bead on its rim, turned about an axle along a
+diameter, headless.
+
+*Driven*: the exact uniform rotation (``dynamics.DrivenDisk``, method ``exact``), whose bearing
+forces (``dynamics.disk.bearing_force_a/b``) the motion's dL/dt measures. *Released*: the axle is
+removed at ``t = 0`` and the free body tumbles (``dynamics.ReleasedDisk``, integrated by the chosen
+method); the wobble's growth rate and the polhode's period are measured from the motion. The view
+is :class:`viz.scene.disk.DiskExhibit`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+import dynamics
+from dynamics import disk as dk
+from dynamics import measure
+from dynamics.systems import DISK
+
+from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .plot import Curve, Variable, common_variables
+
+MODES = DISK.setting("motion").choices
+
+
+@dataclass(frozen=True)
+class DiskConfig(ExhibitConfig):
+    """Settings of the disk exhibit: ``mode`` "driven" (the exact uniform rotation; ``method``
+    is not used) or "released" (the free body, integrated by ``method``), ``extra_spin`` [rad/s]
+    added at release in the disk frame (seeds the tumble), ``follow_cm`` (a view option: draw
+    the released body in the frame moving with its centre of mass)."""
+
+    system_name: ClassVar[str] = dynamics.ReleasedDisk.name
+    spec: ClassVar[dynamics.SystemSpec] = DISK
+
+    # The method when released: RK4 at one step per frame, the cheapest keeping the on-screen
+    # error below 1e-3 of the exhibit over 10 minutes (docs/bench/defaults.md).
+    method: str = DISK.default_method({"motion": "released"})
+    dt: float = DISK.dt
+    params: dict = field(default_factory=lambda: default_params(DISK))
+    mode: str = DISK.setting("motion").default
+    extra_spin: tuple = DISK.setting("extra_spin").default
+    follow_cm: bool = True
+
+    def _validate(self) -> None:
+        DISK.setting("motion").check(self.mode)
+        finite_numbers("extra_spin", self.extra_spin, 3)
+
+
+def principal_axes_for(p: dk.DiskParams, mode: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(moments, axes (rows), origin)`` in the disk frame: about A (the origin) when driven,
+    about the centre of mass when released."""
+    if mode == "driven":
+        moments, axes = dk.principal_axes(p)
+        return moments, axes, np.zeros(3)
+    moments, axes = dk.principal_axes_cm(p)
+    return moments, axes, dk.centre_of_mass(p)
+
+
+class DiskModel(ExhibitModel):
+    key = "disk"
+    title = "Spinning disk"
+    name = "Disk"
+    Config = DiskConfig
+    view_fields = frozenset({"follow_cm"})
+
+    # ------------------------------------------------------------------ simulations
+    def _start(self) -> None:
+        c = self.config
+        p = c.physics()
+        if c.mode == "driven":
+            system = dynamics.DrivenDisk(p)
+            sim = self._make_simulation(system, "exact", system.default_state())
+        else:
+            system = dynamics.ReleasedDisk(p, tuple(float(x) for x in c.extra_spin))
+            sim = self._make_simulation(system, c.method, system.default_state())
+        self.params = p
+        self.sim, self.compare = sim, None
+        self._reset_common()
+        self._pose_cache = None  # (sim, t, config, (rotation, A)) of the last pose() call
+        self.force_amplitude = dk.axle_force_amplitude(p)
+        # Driven: L is fixed in the body (dynamics gives it at t = 0, when the disk frame is the
+        # space frame); the pose turns it with the sampled rotation R(t).
+        self._body_L = dk.angular_momentum(p, 0.0)
+        # driven: (angle, omega) for the bearing force; released: body angular velocity
+        self.motion = Motion((2,) if c.mode == "driven" else (3,))
+        self._started()
+        self._observe()
+
+    # ------------------------------------------------------------------ kinematics from dynamics
+    def pose(self, sample: dynamics.Sample | None = None):
+        """``(rotation disk->space, position of A in space)`` of the current state (or of the
+        given sample)."""
+        if sample is not None:
+            return self._pose_of(sample.state[0], sample.t)
+        sim, cached = self.sim, self._pose_cache
+        if (
+            cached is not None
+            and cached[0] is sim
+            and cached[1] == sim.t
+            and cached[2] is self.config
+        ):
+            return cached[3]  # a frame asks several times for the pose of one state
+        pose = self._pose_of(sim.state[0], sim.t)
+        self._pose_cache = (sim, sim.t, self.config, pose)
+        return pose
+
+    def _pose_of(self, st: np.ndarray, t: float):
+        if self.config.mode == "driven":
+            return dk.rotation_about_axle(st[0]), np.zeros(3)
+        spin = tuple(float(x) for x in self.config.extra_spin)
+        # follow_cm: the centre of mass stays where it was at release (its drift w0 x r_cm is
+        # uniform), i.e. the pose at t = 0 with the current orientation.
+        return dk.released_pose(self.params, st, 0.0 if self.config.follow_cm else t, spin)
+
+    def vectors_space(self):
+        """Angular velocity and angular momentum (space frame) and the point they are drawn from."""
+        p, st = self.params, self.state
+        rot, a = self.pose()
+        if self.config.mode == "driven":
+            return p.omega * dk.AXLE, rot @ self._body_L, a
+        moments = dk.free_kernel_params(p)
+        omega = dk.quaternion_to_matrix(st[3:7]) @ st[:3]
+        L = dk.free_angular_momentum_space(moments, st)
+        return omega, L, a + rot @ dk.centre_of_mass(p)
+
+    def _observe(self) -> None:
+        st = self.state
+        self.motion.add(self.t, st[:2] if self.config.mode == "driven" else st[:3])
+
+    def growth_rate_theory(self) -> float:
+        """Linear growth rate [1/s] of the wobble from the release state (released only)."""
+        return measure.wobble_growth_rate_theory(self.sim.system.kernel_params(), self.sim.state0[0])
+
+    def measured(self) -> dict:
+        """Driven: the bearing force amplitude at B from dL/dt of the sampled motion
+        (:func:`dynamics.measure.bearing_force_amplitude`); released: the wobble's growth rate
+        (:func:`dynamics.measure.wobble_growth_rate`)."""
+        t, x = self.motion.arrays()
+        if self.config.mode == "driven":
+            return {"bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])}
+        middle = int(np.argsort(dk.free_kernel_params(self.params))[1])
+        freq = measure.crossing_frequency(t, x[:, middle]) if len(t) else None
+        return {
+            "growth_rate": measure.wobble_growth_rate(t, x),
+            # the component on the intermediate axis is sn or cn: two zero crossings a period
+            "polhode_period": None if not freq else 2 * math.pi / freq,
+        }
+
+    def polhode_period(self) -> float:
+        """The polhode's period [s] from the Jacobi elliptic solution (released only)."""
+        return dk.polhode_period(self.sim.system.kernel_params(), self.state[:3])
+
+    # ------------------------------------------------------------------ plots
+    @classmethod
+    def system_for(cls, config) -> str:
+        return "driven-disk" if config.mode == "driven" else "free-body"
+
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """Driven: the angle and rate, and L about A in space (its tip circles the axle).
+        Released: the body-frame angular velocity about the centre of mass, the quaternion, and
+        L in space (conserved)."""
+        p = config.physics()
+        if config.mode == "driven":
+            out = common_variables({"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"})
+
+            def L(s):
+                return dk.rotation_about_axle(s.states[:, 0]) @ (dk.inertia_tensor(p) @ (p.omega * dk.AXLE))
+
+            about = "A"
+        else:
+            out = common_variables({
+                # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
+                "w1": "body ω₁ [rad/s]", "w2": "body ω₂ [rad/s]", "w3": "body ω₃ [rad/s]",
+                **{f"q{k}": f"quaternion q{k}" for k in range(4)},
+            })  # fmt: skip
+            moments = dk.free_kernel_params(p)
+
+            def L(s):
+                return dk.free_angular_momentum_space(moments, s.states)
+
+            about = "CM"
+        for k, axis in enumerate("xyz"):
+            out[f"L{axis}"] = Variable(f"L_{axis} about {about} [kg m²/s]",
+                                       lambda s, k=k: L(s)[:, k])  # fmt: skip
+        return out
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
+        """Released, two components of ``w``: the polhode's exact projection. ``E`` and ``|L|``
+        fixed, eliminating ``w_k`` leaves the conic ``sum_(i != k) I_i (I_k - I_i) w_i^2 =
+        2E I_k - L^2``: an ellipse, or along the intermediate axis a hyperbola, whose asymptotes
+        are the separatrix. Driven, ``(Lx, Lz)``: the circle L's tip sweeps about the axle."""
+        if not len(samples):
+            return []
+        p = config.physics()
+        if config.mode == "driven":
+            if (x, y) != ("Lx", "Lz"):
+                return []
+            body = dk.inertia_tensor(p) @ (p.omega * dk.AXLE)
+            rho = math.hypot(body[0], body[2])
+            phi = np.linspace(0.0, 2 * math.pi, 181)
+            return [Curve(rho * np.cos(phi), rho * np.sin(phi), "L's cone", dashed=True)]
+        names = ("w1", "w2", "w3")
+        if x not in names or y not in names or x == y:
+            return []
+        moments = dk.free_kernel_params(p)
+        w = samples.states[-1, :3]
+        two_e = float(np.sum(moments * w * w))
+        l2 = float(np.sum((moments * w) ** 2))
+        i, j = names.index(x), names.index(y)
+        k = 3 - i - j
+        a, b = moments[i] * (moments[k] - moments[i]), moments[j] * (moments[k] - moments[j])
+        c = two_e * moments[k] - l2
+        reach = math.sqrt(two_e / float(moments.min()))  # no component of w is larger
+        return [Curve(*_conic(a, b, c, reach), "exact polhode",
+                      dashed=True)]  # fmt: skip
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        return (("Lx", "Lz"),) if config.mode == "driven" else (("w2", "w3"), ("w1", "w3"))
+
+    def stability_text(self) -> str:
+        if self.config.mode == "driven":
+            return (
+                "<small>Driven: the exact uniform rotation, no step. The method and dt apply "
+                "once the disk is released.</small>"
+            )
+        return super().stability_text()
+
+
+def _conic(a: float, b: float, c: float, reach: float, n: int = 721) -> tuple[np.ndarray, np.ndarray]:
+    """Points of ``a x^2 + b y^2 = c``: an ellipse (one closed curve) or a hyperbola (both
+    branches, split by NaN, out to ``reach`` from the centre), or nothing (NaN)."""
+    if a < 0 and b < 0:
+        a, b, c = -a, -b, -c
+    if a > 0 and b > 0:
+        if c <= 0:
+            return np.full(1, np.nan), np.full(1, np.nan)
+        phi = np.linspace(0.0, 2 * math.pi, n)
+        return math.sqrt(c / a) * np.cos(phi), math.sqrt(c / b) * np.sin(phi)
+    if a == 0 or b == 0 or c == 0:  # degenerate: the asymptotes themselves
+        if a * b >= 0:
+            return np.full(1, np.nan), np.full(1, np.nan)
+        s = math.sqrt(-a / b)
+        u = np.linspace(-reach, reach, 3)
+        return np.concatenate([u, [np.nan], u]), np.concatenate([s * u, [np.nan], -s * u])
+    vertex = math.sqrt(abs(c / a)) if (a > 0) == (c > 0) else math.sqrt(abs(c / b))
+    u = np.linspace(-1.0, 1.0, n) * (math.acosh(max(1.0, reach / vertex)) + 0.1)
+    nan = [np.nan]
+    if (a > 0) == (c > 0):  # branches open along x
+        px, py = math.sqrt(c / a) * np.cosh(u), math.sqrt(-c / b) * np.sinh(u)
+        return np.concatenate([px, nan, -px]), np.concatenate([py, nan, py])
+    px, py = math.sqrt(-c / a) * np.sinh(u), math.sqrt(c / b) * np.cosh(u)
+    return np.concatenate([px, nan, px]), np.concatenate([py, nan, -py])

@@ -1,0 +1,208 @@
+"""The hoop's model: a hoop swinging in its own plane about a pivot on its rim, a bead sliding on
+it without friction, headless.
+
+Beside the nonlinear motion, linear theory from the same start (``dynamics.hoop.linear_solution``)
+gives the ghost. Both normal-mode frequencies are measured from the motion: the angles are
+projected on the mode shapes and each modal coordinate is timed between its zero crossings
+(:mod:`dynamics.measure`). The view is :class:`viz.scene.hoop.HoopExhibit`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+import dynamics
+from dynamics import hoop as hp
+from dynamics import measure
+from dynamics.systems import HOOP, HOOP_MODES
+
+from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .plot import Curve, Variable, common_variables
+
+MODES = ("mode 1", "mode 2", "mix", "custom")
+
+
+@dataclass(frozen=True)
+class HoopConfig(ExhibitConfig):
+    """Settings of the hoop exhibit. The start: ``mode`` "mode 1" or "mode 2" (that normal mode
+    alone at ``amplitude`` [rad], its largest angle), "mix" (both at half of it) or "custom"
+    (``angles`` (theta1, theta2) [rad], at rest); ``state`` (theta1, theta2, theta1', theta2')
+    overrides them all. ``compare_method`` runs beside the main one with ``compare_dt`` /
+    ``compare_rtol`` if given; ``ghost`` draws linear theory from the same start."""
+
+    system_name: ClassVar[str] = dynamics.Hoop.name
+    spec: ClassVar[dynamics.SystemSpec] = HOOP
+
+    # RK4 at one step per frame: as cheap as it gets below 1e-3 over 10 minutes
+    # (docs/bench/defaults.md)
+    method: str = HOOP.default_method({})
+    dt: float = HOOP.dt
+    params: dict = field(default_factory=lambda: default_params(HOOP))
+    # The description's default start: both modes at rest, each at half the amplitude ("mix")
+    mode: str = "mix"
+    amplitude: float = HOOP_MODES[0] + HOOP_MODES[1]
+    angles: tuple = (0.4, -0.3)
+    state: tuple | None = None
+    compare_method: str | None = None
+    compare_dt: float | None = None
+    compare_rtol: float | None = None
+    ghost: bool = True
+    trail_cap: int = 240
+
+    def _validate(self) -> None:
+        if self.mode not in MODES:
+            raise ValueError(f"mode must be one of {', '.join(MODES)}; got {self.mode!r}")
+        (a,) = finite_numbers("amplitude", (self.amplitude,), 1)
+        if abs(a) >= 3.0:
+            raise ValueError(f"amplitude must be an angle below 3 rad, got {self.amplitude!r}")
+        if any(abs(x) >= math.pi for x in finite_numbers("angles", self.angles, 2)):
+            raise ValueError(f"angles must be two angles in (-pi, pi) rad, got {self.angles!r}")
+        if self.state is not None:
+            finite_numbers("state", self.state, 4)
+
+    def initial_state(self) -> np.ndarray:
+        if self.state is not None:
+            return np.array(self.state, dtype=float)
+        p, a = self.physics(), float(self.amplitude)
+        if self.mode == "mode 1":
+            return hp.mode_state(p, (a, 0.0))
+        if self.mode == "mode 2":
+            return hp.mode_state(p, (0.0, a))
+        if self.mode == "mix":
+            return hp.mode_state(p, (0.5 * a, 0.5 * a))
+        return np.array([float(self.angles[0]), float(self.angles[1]), 0.0, 0.0])
+
+
+class HoopModel(ExhibitModel):
+    key = "hoop"
+    title = "Hoop with bead"
+    name = "Hoop"
+    Config = HoopConfig
+    chart_series = ("energy", "error", "energy_compare", "error_compare")
+    start_fields = frozenset({"mode", "amplitude", "angles", "state"})
+
+    # ------------------------------------------------------------------ simulations
+    def _start(self) -> None:
+        c = self.config
+        p = c.physics()
+        system = dynamics.Hoop(p)
+        s0 = c.initial_state()
+        sim, cmp_ = self._make_runs(system, s0)
+        self.params = p
+        self.sim, self.compare = sim, cmp_
+        self._reset_common()
+        self.mode_frequencies, self.shapes = hp.normal_modes(p)
+        self.motion = Motion((2,))  # the angles
+        self._started()
+        self._observe()
+
+    def ghost_state(self) -> np.ndarray:
+        """Linear theory from the run's start (or last jump) at the current time."""
+        return hp.linear_solution(self.params, self.sim.state0[0], self.sim.t - self.sim.t0)
+
+    def _jump_to_start(self) -> None:
+        s0 = self.config.initial_state()
+        for sim in self.simulations():
+            sim.jump(s0)
+        self.revision += 1
+        self._sample = self._compare_sample = None
+        self._jumped()
+        self.motion.clear()
+        self.trace.clear()
+        self._observe()
+
+    def _jumped(self) -> None:
+        """Called when the runs jump to a new start: a view breaks its trails."""
+
+    def modal_coordinates(self, state) -> np.ndarray:
+        return measure.modal_coordinates(np.asarray(state, float)[:2], self.shapes)
+
+    def _observe(self) -> None:
+        self.motion.add(self.t, self.state[:2])
+
+    def measured(self) -> dict:
+        """Both normal-mode frequencies from the sampled angles
+        (:func:`dynamics.measure.mode_frequencies`)."""
+        t, angles = self.motion.arrays()
+        return {"mode_frequencies": measure.mode_frequencies(t, angles, self.shapes)}
+
+    def modal_history(self, points: int = 600) -> tuple[np.ndarray, ...]:
+        """``(t, q1, q2, q1_linear, q2_linear)`` over the samples since the start (at most
+        ``points`` of them, evenly thinned): the angles' coordinates on the two mode shapes, and
+        linear theory's from the same start (each a cosine at its mode's frequency)."""
+        t, angles = self.motion.arrays()
+        if len(t) > points:
+            keep = np.linspace(0, len(t) - 1, points).round().astype(int)
+            t, angles = t[keep], angles[keep]
+        q = measure.modal_coordinates(angles, self.shapes)
+        sim = self.sim
+        ghost = hp.linear_solution(self.params, sim.state0[0], t - sim.t0)[:, :2]
+        g = measure.modal_coordinates(ghost, self.shapes)
+        return t, q[:, 0], q[:, 1], g[:, 0], g[:, 1]
+
+    # ------------------------------------------------------------------ plots
+    @classmethod
+    def plot_variables(cls, config) -> dict[str, Variable]:
+        """The angles, their rates and the two normal-mode coordinates (the angles on the mode
+        shapes, :func:`dynamics.measure.modal_coordinates`)."""
+        _, shapes = hp.normal_modes(config.physics())
+        out = common_variables({
+            "theta1": "hoop angle θ1 [rad]", "theta2": "bead angle θ2 [rad]",
+            "omega1": "hoop rate θ1' [rad/s]", "omega2": "bead rate θ2' [rad/s]",
+        })  # fmt: skip
+        for k in (0, 1):
+            out[f"q{k + 1}"] = Variable(
+                f"mode-{k + 1} coordinate q{k + 1} [rad]",
+                lambda s, k=k: measure.modal_coordinates(s.states[:, :2], shapes)[:, k],
+            )
+        return out
+
+    @classmethod
+    def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
+        """Configuration space ``(theta1, theta2)``: the mode lines (1, 1) and (m, -(M + m)).
+        A phase portrait ``(theta_i, theta_i')``: the separatrix of the pendulum mode 1 reduces
+        to, ``theta' = +-2 omega_1 cos(theta / 2)``, and, for a motion on the mode-1 set
+        (``theta1 = theta2``), its exact orbit ``theta'^2 = 2 (e + omega_1^2 cos theta)``."""
+        p = config.physics()
+        freqs, shapes = hp.normal_modes(p)
+        pair = {x, y}
+        if pair == {"theta1", "theta2"}:
+            out = []
+            for k, shape in enumerate(shapes):
+                u = np.asarray(shape) / np.abs(shape).max() * math.pi
+                line = np.array([-u, u])
+                cols = (0, 1) if x == "theta1" else (1, 0)
+                out.append(Curve(line[:, cols[0]], line[:, cols[1]], f"mode {k + 1} line"))
+            return out
+        if (x, y) not in (("theta1", "omega1"), ("theta2", "omega2")):
+            return []
+        w1 = float(freqs[0])
+        th = np.linspace(-math.pi, math.pi, 361)
+        top = 2 * w1 * np.cos(th / 2)
+        out = [
+            Curve(np.concatenate([th, th[::-1]]), np.concatenate([top, -top[::-1]]),
+                  "separatrix"),
+        ]  # fmt: skip
+        if len(samples):
+            s = samples.states[-1]
+            # on the mode-1 set, to what an integrator keeps of it (the set is unstable at
+            # large amplitude: round-off grows off it by about 1e-9 over a 3 rad swing)
+            if abs(s[0] - s[1]) < 1e-6 and abs(s[2] - s[3]) < 1e-6:
+                e = 0.5 * s[2] ** 2 - w1 * w1 * math.cos(s[0])
+                with np.errstate(invalid="ignore"):
+                    v = np.sqrt(2 * (e + w1 * w1 * np.cos(th)))
+                out.append(Curve(np.concatenate([th, th[::-1]]), np.concatenate([v, -v[::-1]]),
+                                 "exact pendulum orbit", dashed=True))  # fmt: skip
+        return out
+
+    @classmethod
+    def pictures(cls, config) -> tuple[tuple[str, str], ...]:
+        return (("theta1", "omega1"), ("theta1", "theta2"))
+
+    def initial_mode_amplitudes(self) -> np.ndarray:
+        """The start's coordinates on the two mode shapes [rad]."""
+        return self.modal_coordinates(self.sim.state0[0])
