@@ -11,7 +11,9 @@ the recorder stream exactly what :meth:`Simulation.sample` returns.
 
 The relative energy error is ``(E - E0) / (E0 - E_floor)``, where ``E_floor`` is the lowest
 energy the system can have (``System.energy_floor()``): it measures the energy that moves, not
-the arbitrary zero of a potential.
+the arbitrary zero of a potential. Both ``E - E_floor`` and ``E0 - E_floor`` are the system's
+own ``energy_above_floor`` (evaluated without cancellation), so the error resolves round-off
+relative to the moving energy at any amplitude.
 
 Compiled code runs in chunks of about :data:`CHUNK_SECONDS` each, so Ctrl-C (``KeyboardInterrupt``)
 ends any run within a fraction of a second, leaving the simulation at the end of the last whole
@@ -149,6 +151,7 @@ class Simulation:
         self.state = self.state0.copy()
         self.p = system.kernel_params()
         self.E0 = np.asarray(system.energy(self.state0), dtype=float)
+        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
         self.t0 = 0.0  # time at which state0 holds (moves with a jump)
         self.t = 0.0  # time reached (fixed step: steps * dt)
         self.clock = 0.0  # time asked for; fixed-step runs carry clock - t to the next call
@@ -212,6 +215,7 @@ class Simulation:
         self.state = s.copy()
         self.t0 = self.t
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
         self._has_exact = self.system.has_exact(self.state0)
         if self._carry is not None:
             self._carry.forget()  # a kept step and its series or interpolant belong to the old state
@@ -237,6 +241,7 @@ class Simulation:
                 raise ValueError("state must be finite")
             self.state0 = s0.copy()
             self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+            self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
             self._taylor_h = None
         self.state = self.state0.copy()
         self.t = self.clock = self.t0 = 0.0
@@ -457,7 +462,7 @@ class Simulation:
     def energy_scale(self) -> np.ndarray:
         """``E0 - E_floor`` (N,): the energy that moves, by which the energy error is divided
         (1 where nothing moves: there the error is absolute, in J)."""
-        moving = self.E0 - self.system.energy_floor()
+        moving = self._moving0
         return np.where(moving > 0.0, moving, 1.0)
 
     def sample(self) -> Sample:
@@ -465,6 +470,7 @@ class Simulation:
         # information we want to show, not a warning.
         with np.errstate(over="ignore", invalid="ignore"):
             energy = np.asarray(self.system.energy(self.state), dtype=float)
+            moving = np.asarray(self.system.energy_above_floor(self.state), dtype=float)
             scale = self.energy_scale()
             ref = self.reference_state() if self._track_error else None
             err = None if ref is None else self.system.error(self.state, ref)
@@ -473,7 +479,7 @@ class Simulation:
             self.t,
             self.state.copy(),
             energy,
-            (energy - self.E0) / scale,
+            (moving - self._moving0) / scale,
             err,
             None if ref is None else ref.copy(),
             self.nfev,
