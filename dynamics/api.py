@@ -192,7 +192,7 @@ def simulate(
     ts, S, E, EE, ERR, INV = [], [], [], [], [], []
     for k, t in enumerate(np.linspace(0.0, float(t_end), K)):
         if k:
-            sim.advance_to(float(t))
+            sim.advance_to(float(t), final=k == K - 1)
         s = sim.sample()
         ts.append(s.t)
         S.append(s.state)

@@ -24,7 +24,9 @@ the whole number of steps that fits and carries the remainder, so ``t`` is ``ste
 Adaptive methods land exactly on the requested time; the compiled ones (DOP853, Taylor's method)
 by their dense output: their steps are not cut at the times asked for (nor at the chunks'
 ends), the step that passes one is kept and evaluated there, and the next call goes on from its
-end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`).
+end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`). A
+final time (``advance_to(t, final=True)``, the end of :meth:`Simulation.run`) is different:
+DOP853 cuts its last step to end there and answers with the stepped end point, as scipy does.
 """
 
 from __future__ import annotations
@@ -258,8 +260,9 @@ class Simulation:
             return f"rtol={self.rtol:g}, atol={self.atol:g}"
         return "exact flow" if self.dt is None else f"dt={self.dt:g} s"
 
-    def advance_to(self, t_target: float) -> None:
-        """Advance to ``t_target`` (fixed step: the last whole step at or before it)."""
+    def advance_to(self, t_target: float, *, final: bool = False) -> None:
+        """Advance to ``t_target`` (fixed step: the last whole step at or before it). ``final``:
+        it is the run's end; DOP853 cuts its last step to end there (module docstring)."""
         t_target = _v.finite("t", t_target)
         if t_target < self.t:
             raise ValueError(f"t must not go backwards: {t_target} < {self.t}")
@@ -292,10 +295,10 @@ class Simulation:
             elif m.kernel == "taylor":
                 self._run_taylor(t_target)
             else:
-                self._run_dop853(t_target)
+                self._run_dop853(t_target, final)
             self.t = t_target
         if self._reference is not None:
-            self._reference.advance_to(self.t)
+            self._reference.advance_to(self.t, final=final)
 
     def advance(self, duration: float) -> None:
         """Advance the clock by ``duration`` [s]; a fixed-step method takes the whole steps that
@@ -332,7 +335,7 @@ class Simulation:
             self.state[:], self.steps, self.t = start
             raise
 
-    def _run_dop853(self, t_target: float) -> None:
+    def _run_dop853(self, t_target: float, final: bool = False) -> None:
         """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
         length of a chunk from the last step size; Ctrl-C is seen between chunks). A chunk's end
         is one more time asked for: the step across it is kept, not cut, so the chunks take the
@@ -343,16 +346,18 @@ class Simulation:
                 h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
             span = self._chunk_steps * h
             t_next = t_target if not span < t_target - self.t else self.t + span
-            self._timed_chunk(lambda _k, t1=t_next: self._dop853_to(t1), self._chunk_steps)
+            land = final and t_next == t_target
+            self._timed_chunk(lambda _k, t1=t_next, c=land: self._dop853_to(t1, c), self._chunk_steps)
             self.t = t_next
 
-    def _dop853_to(self, t1: float) -> None:
-        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1``."""
+    def _dop853_to(self, t1: float, land: bool = False) -> None:
+        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1`` (``land``:
+        the last step cut to end at ``t1``)."""
         if self._carry is None:
             self._carry = Dop853Carry(*self.state.shape)
         run_dop853(
             self.system.sys_id, self.state, self.p, self.t, t1,
-            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
+            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry, land,
         )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
@@ -491,14 +496,16 @@ class Simulation:
 
     def run(self, t_end: float, n_samples: int = 2) -> Trajectory:
         """Run to ``t_end`` [s], sampling ``n_samples`` equally spaced times (first and last
-        included; fixed-step samples fall on the last step at or before each time)."""
+        included; fixed-step samples fall on the last step at or before each time; ``t_end`` is
+        a final time, see :meth:`advance_to`)."""
         t_end = _v.positive("t_end", t_end)
         if n_samples < 2:
             raise ValueError(f"n_samples must be at least 2, got {n_samples}")
         samples = []
-        for t in np.linspace(0.0, t_end, n_samples):
+        times = np.linspace(0.0, t_end, n_samples)
+        for t in times:
             if t > 0:
-                self.advance_to(float(t))
+                self.advance_to(float(t), final=t == times[-1])
             samples.append(self.sample())
         err = None if samples[0].error is None else np.stack([s.error for s in samples])
         return Trajectory(
