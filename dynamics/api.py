@@ -67,7 +67,7 @@ class Run:
     error: np.ndarray | None
     reference: str | None  # "exact", "reference" or None: what ``error`` is measured against
     steps: int
-    rhs_evaluations: int
+    rhs_evaluations: int  # what is counted depends on the method: ``Method.counts``
     invariants: dict[str, np.ndarray] = field(default_factory=dict)
 
     def column(self, name: str) -> np.ndarray:
@@ -150,6 +150,7 @@ def simulate(
     t_end: float,
     dt: float | None = None,
     rtol: float | None = None,
+    atol: float | None = None,
     samples: int = 501,
     state: Any = None,
     motion: Literal["driven", "released"] = "released",
@@ -167,7 +168,9 @@ def simulate(
     (amplitudes of mode 1 and mode 2 [rad], at rest; default hanging at rest), the released
     disk's ``extra_spin`` [rad/s] (disk-frame components) on top of its spin about the axle.
     ``params`` are the system's physical parameters (:func:`parameters`). ``dt`` is required for
-    fixed-step methods, ``rtol`` (default 1e-9) is for adaptive ones. ``reference`` as in
+    fixed-step methods, ``rtol`` (default 1e-9) and ``atol`` (default ``rtol``, in the state's
+    units: a motion much smaller than 1 is then held to ``atol``, not to ``rtol`` of itself) are
+    for adaptive ones. ``reference`` as in
     :class:`dynamics.Simulation` (``None`` skips the error measurement, which for systems
     without an exact solution runs a tight DOP853 beside the method)."""
     system = _check_system(system)
@@ -186,7 +189,7 @@ def simulate(
         raise ValueError("modes is for the hoop only")
     if samples < 2:
         raise ValueError(f"samples must be at least 2, got {samples}")
-    sim = Simulation(sysm, method, dt=dt, rtol=rtol, state=state, reference=reference)
+    sim = Simulation(sysm, method, dt=dt, rtol=rtol, atol=atol, state=state, reference=reference)
     K = int(samples)
     single = np.asarray(sim.state0).shape[0] == 1 and (state is None or np.ndim(state) == 1)
     ts, S, E, EE, ERR, INV = [], [], [], [], [], []

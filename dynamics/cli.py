@@ -404,8 +404,12 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     if method.adaptive and args.dt is not None:
         raise CliError(f"--dt: {method.name} is adaptive; give --rtol instead")
-    if not method.adaptive and args.rtol is not None:
-        raise CliError(f"--rtol: {method.name} takes a fixed step; give --dt instead")
+    atol = getattr(args, "atol", None)
+    for flag, tol in (("--rtol", args.rtol), ("--atol", atol)):
+        if not method.adaptive and tol is not None:
+            raise CliError(f"{flag}: {method.name} takes a fixed step; give --dt instead")
+        if tol is not None and not 0 < tol < 1:
+            raise CliError(f"{flag}: must lie in (0, 1), got {tol}")
     dt = args.dt
     if dt is not None and dt <= 0:
         raise CliError(f"--dt: must be positive, got {dt}")
@@ -420,17 +424,16 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
             )
         # Land exactly on --t-end: the largest step <= --dt that divides it.
         dt = t_end / max(1, math.ceil(n - 1e-9))
-    if args.rtol is not None and not 0 < args.rtol < 1:
-        raise CliError(f"--rtol: must lie in (0, 1), got {args.rtol}")
     try:
-        sim = Simulation(sysm, method, dt=dt, rtol=args.rtol, state=state)
+        sim = Simulation(sysm, method, dt=dt, rtol=args.rtol, atol=atol, state=state)
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if sim.reference_note:
         raise CliError(
-            f"--rtol {args.rtol:g}: the {sysm.name} has no exact solution here and the reference "
-            f"run (DOP853 at rtol {REFERENCE_TOL:g}) must be clearly tighter; choose "
-            f"--rtol >= {MIN_COMPARED_TOL:g}"
+            f"{'--atol' if sim.atol < sim.rtol else '--rtol'} {min(sim.rtol, sim.atol):g}: the "
+            f"{sysm.name} has no exact solution here and the reference run (DOP853 at rtol "
+            f"{REFERENCE_TOL:g}) must be clearly tighter; choose --rtol and --atol >= "
+            f"{MIN_COMPARED_TOL:g}"
         )
     steps = sim.estimated_steps(t_end)
     if not steps <= args.max_steps:
@@ -459,6 +462,7 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         "energy_drift": float(traj.energy_error[-1, 0]),
         "max_energy_error": float(np.max(np.abs(traj.energy_error))),
         "rhs_evaluations": int(traj.nfev),
+        "rhs_evaluations_count": method.counts,
         "steps": int(traj.steps),
     }
     if traj.error is not None:
@@ -547,7 +551,20 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         p.add_argument("--t-end", type=number, required=True, help="duration [s]")
         p.add_argument("--method", default=None, help="integration method (--list-methods)")
         p.add_argument("--dt", type=number, default=None, help="fixed step size [s]")
-        p.add_argument("--rtol", type=number, default=None, help="tolerance of adaptive methods")
+        p.add_argument(
+            "--rtol",
+            type=number,
+            default=None,
+            help="relative tolerance of adaptive methods (default 1e-9)",
+        )
+        p.add_argument(
+            "--atol",
+            type=number,
+            default=None,
+            help="absolute tolerance of adaptive methods, in the state's units (default: --rtol); "
+            "a motion much smaller than 1 (a swing of 0.01 rad) is then held to atol, not to "
+            "rtol of itself, and its relative error is larger than rtol by about that ratio",
+        )
         p.add_argument(
             "--samples",
             type=int,

@@ -107,7 +107,10 @@ class Simulation:
     system : a :mod:`dynamics.systems` adapter.
     method : a name from :data:`dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
     dt : step size [s] for fixed-step methods (must be > 0 and finite).
-    rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``).
+    rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``). ``atol`` is in
+        the state's units: where a component is much smaller than 1 (a swing of 0.01 rad) it
+        is held to ``atol``, not to ``rtol`` of itself, so its relative error exceeds ``rtol``
+        by about the ratio of the two; give a smaller ``atol`` for such motions.
     state : initial state(s); default the system's ``default_state()``.
     reference : measure the error against the exact solution, or a tight DOP853 run when there
         is none (``"auto"``; not for an adaptive run tighter than :data:`MIN_COMPARED_TOL`, see

@@ -628,7 +628,7 @@ class Exhibit:
 
     def work_line(self) -> str:
         smp = self.sample
-        lines = [f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}."]
+        lines = [f"\nSteps {smp.steps}; evaluations {smp.nfev}: {self.sim.method.counts}."]
         if self.failure:
             lines.append(f"\n**Paused:** {self.failure}. {PAUSED_HINT}")
         return "\n".join(lines)
