@@ -258,10 +258,10 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
 @pytest.mark.parametrize(
     ("name", "figure", "readout"),
     [
-        ("helix", "gyrofrequency", lambda m: m["gyrofrequency"]),
-        ("hoop-mode2", "mode 2 frequency (linear theory)", lambda m: m["mode_frequencies"][1]),
-        ("driven-disk", "bearing force amplitude at B", lambda m: m["bearing_force"]),
-        ("tumbling-disk", "wobble growth rate", lambda m: m["growth_rate"]),
+        ("helix", "gyrofrequency", lambda m: m["gyrofrequency"].value),
+        ("hoop-mode2", "mode 2 frequency (linear theory)", lambda m: m["mode_frequencies"][1].value),
+        ("driven-disk", "bearing force amplitude at B", lambda m: m["bearing_force"].value),
+        ("tumbling-disk", "wobble growth rate", lambda m: m["growth_rate"].value),
     ],
 )
 def test_a_readout_and_the_manifest_report_the_same_number_for_one_motion(name, figure, readout):

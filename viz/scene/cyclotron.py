@@ -259,9 +259,9 @@ class CyclotronExhibit(Exhibit):
         (:func:`dynamics.measure.gyrofrequency`, :func:`dynamics.measure.fit_circle`), and each
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
-        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1])}
-        circle = measure.fit_circle(x[:, 0]) if out["gyrofrequency"] is not None else None
-        out["radius"] = None if circle is None else circle[1]
+        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
+        circle = measure.fit_circle(x[:, 0])
+        out["radius"] = measure.Estimate(circle.value[1]) if circle else circle
         out["beam_gyrofrequencies"] = None
         if self.beam_motion is not None:
             tb, vb = self.beam_motion.arrays()
@@ -361,13 +361,14 @@ class CyclotronExhibit(Exhibit):
         w_th = cy.gyrofrequency(p)
         m = self.measured()
         w_me = m["gyrofrequency"]
+        t_me = fmt(2 * math.pi / w_me.value) if w_me else "—"
         lines = [
             f"**t = {self.t:.2f} s** · {self.method_line(self.sim)}",
             "",
             "| quantity | theory | measured |",
             "|---|---|---|",
             f"| gyrofrequency \\|qB\\|/m [rad/s] | {fmt(w_th)} | {fmt(w_me)} |",
-            f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {fmt(2 * math.pi / w_me) if w_me else '—'} |",
+            f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {t_me} |",
             f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.theory_radius)} | {fmt(m['radius'])} |",
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs exact | 0 | {float(np.max(smp.error)) if smp.error is not None else 0.0:.2e} |",
@@ -382,10 +383,10 @@ class CyclotronExhibit(Exhibit):
         if self.beam is not None:
             lo, hi = self.config.beam_speeds
             n = len(self.beam.state)
-            if wb is None:
-                periods = "periods: measured once the charges have turned half a radian"
+            if not wb:
+                periods = f"periods not resolved ({wb.reason})"
             else:
-                T = 2 * math.pi / np.asarray(wb)
+                T = 2 * math.pi / np.asarray(wb.value)
                 periods = (
                     f"measured periods {fmt(T.min(), 7)} to {fmt(T.max(), 7)} s, a spread of "
                     f"{T.max() - T.min():.1e} s against theory's 0 (2πm/\\|qB\\| = "
