@@ -66,7 +66,7 @@ class Run:
     error: np.ndarray | None
     reference: str | None  # "exact", "reference" or None: what ``error`` is measured against
     steps: int
-    rhs_evaluations: int
+    rhs_evaluations: int  # what is counted depends on the method: ``Method.counts``
     invariants: dict[str, np.ndarray] = field(default_factory=dict)
     start: dict[str, Any] = field(default_factory=dict)  # the start settings, defaults filled in
 
@@ -161,7 +161,9 @@ def simulate(
     ``motion`` (``"driven"`` or ``"released"``) and ``extra_spin`` [rad/s] (disk-frame
     components, added at release). ``state`` (``(d,)`` or an ensemble ``(N, d)``, layout
     :attr:`Run.columns`) replaces the start. ``method`` defaults to the system's, ``dt`` to its
-    step for fixed-step methods, ``rtol`` (1e-9) and ``atol`` (``rtol``) are for adaptive ones.
+    step for fixed-step methods; ``rtol`` (default 1e-9) and ``atol`` (default ``rtol``, in the
+    state's units: a motion much smaller than 1 is then held to ``atol``, not to ``rtol`` of
+    itself) are for adaptive ones.
     ``reference`` as in :class:`dynamics.Simulation` (``None`` skips the error measurement, which
     for systems without an exact solution runs a tight DOP853 beside the method)."""
     spec = _spec(system)
@@ -178,10 +180,11 @@ def simulate(
     sim = Simulation(setup.system, setup.method, step=setup.step, state=setup.state,
                      reference=reference)  # fmt: skip
     single = np.ndim(setup.state) == 1
+    K = samples
     ts, S, E, EE, ERR, INV = [], [], [], [], [], []
-    for k, t in enumerate(np.linspace(0.0, t_end, samples)):
+    for k, t in enumerate(np.linspace(0.0, t_end, K)):
         if k:
-            sim.advance_to(float(t))
+            sim.advance_to(float(t), final=k == K - 1)
         s = sim.sample()
         ts.append(s.t)
         S.append(s.state)

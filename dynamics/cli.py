@@ -171,8 +171,8 @@ def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
             start[s.name] = tuple(b if v is None else v for b, v in zip(base, given, strict=True))
     setup = spec.setup(
         _given(args, spec, [x.name for x in spec.params]), start,
-        method=args.method, dt=args.dt, rtol=args.rtol,
-    )  # fmt: skip
+        method=args.method, dt=args.dt, rtol=args.rtol, atol=getattr(args, "atol", None),
+    )
     overrides = {n: getattr(args, n) for n in spec.state_overrides if getattr(args, n, None) is not None}
     if overrides:
         state = setup.state.copy()
@@ -215,8 +215,9 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     step = setup.step
     if method.adaptive and args.dt is not None:
         raise CliError(f"--dt: {method.name} is adaptive; give --rtol instead")
-    if not method.adaptive and args.rtol is not None:
-        raise CliError(f"--rtol: {method.name} takes a fixed step; give --dt instead")
+    for flag, tol in (("--rtol", args.rtol), ("--atol", getattr(args, "atol", None))):
+        if not method.adaptive and tol is not None:
+            raise CliError(f"{flag}: {method.name} takes a fixed step; give --dt instead")
     if isinstance(step, Fixed):
         n = t_end / step.dt
         if not n <= args.max_steps:
@@ -229,9 +230,10 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     sim = Simulation(sysm, method, step=step, state=state)
     if sim.reference_note:
         raise CliError(
-            f"--rtol {sim.rtol:g}: the {spec.name} has no exact solution here and the reference "
-            f"run (DOP853 at rtol {REFERENCE_TOL:g}) must be clearly tighter; choose "
-            f"--rtol >= {MIN_COMPARED_TOL:g}"
+            f"{'--atol' if sim.atol < sim.rtol else '--rtol'} {min(sim.rtol, sim.atol):g}: the "
+            f"{spec.name} has no exact solution here and the reference run (DOP853 at rtol "
+            f"{REFERENCE_TOL:g}) must be clearly tighter; choose --rtol and --atol >= "
+            f"{MIN_COMPARED_TOL:g}"
         )
     steps = sim.estimated_steps(t_end)
     if not steps <= args.max_steps:
@@ -263,6 +265,7 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         "energy_drift": float(traj.energy_error[-1, 0]),
         "max_energy_error": float(np.max(np.abs(traj.energy_error))),
         "rhs_evaluations": int(traj.nfev),
+        "rhs_evaluations_count": method.counts,
         "steps": int(traj.steps),
     }
     if traj.error is not None:
@@ -339,8 +342,15 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         p.add_argument("--dt", type=number, default=None,
                        help=f"fixed step size [s] (default {spec.dt:.4g})")
         p.add_argument("--rtol", type=number, default=None,
-                       help=f"tolerance of adaptive methods, relative and absolute "
-                       f"(default {spec.rtol:g})")
+                       help=f"relative tolerance of adaptive methods (default {spec.rtol:g})")
+        p.add_argument(
+            "--atol",
+            type=number,
+            default=None,
+            help="absolute tolerance of adaptive methods, in the state's units (default: --rtol); "
+            "a motion much smaller than 1 (a swing of 0.01 rad) is then held to atol, not to "
+            "rtol of itself, and its relative error is larger than rtol by about that ratio",
+        )
         p.add_argument(
             "--samples",
             type=int,

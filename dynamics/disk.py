@@ -36,6 +36,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -329,22 +330,25 @@ def polhode_period(moments: np.ndarray, w: np.ndarray) -> float:
     inertia = np.asarray(moments, dtype=float)
     w = np.asarray(w, dtype=float)
     order = np.argsort(inertia)
-    a, b, c = inertia[order]
-    wa, wb, wc = w[order]
+    # Exact rational arithmetic on the given doubles: near the separatrix ``M^2 - 2EB`` is a
+    # small difference of large terms, and ``1 - k^2`` is proportional to it.
+    a, b, c = (Fraction(float(x)) for x in inertia[order])
+    wa, wb, wc = (Fraction(float(x)) for x in w[order])
     two_e = a * wa * wa + b * wb * wb + c * wc * wc
     m2 = (a * wa) ** 2 + (b * wb) ** 2 + (c * wc) ** 2
-    if two_e <= 0.0 or abs(m2 - two_e * b) <= 1e-14 * m2:
-        return math.inf  # at rest, or on the separatrix to round-off (k = 1)
+    if two_e <= 0 or m2 == two_e * b:
+        return math.inf  # at rest, or on the separatrix (k = 1)
     if m2 < two_e * b:  # circles the axis of the smallest moment: swap the roles of A and C
         a, c = c, a
     lam2 = (c - b) * (m2 - two_e * a) / (a * b * c)
-    num = (b - a) * (two_e * c - m2)
-    if lam2 <= 0.0:
+    if lam2 <= 0:
         return math.inf
-    k2 = num / ((c - b) * (m2 - two_e * a))
-    if not 0.0 <= k2 < 1.0:
-        return math.inf  # the separatrix (k = 1) or round-off beyond it
-    return 4.0 * float(special.ellipk(k2)) / math.sqrt(lam2)
+    # 1 - k^2 = (C - A)(M^2 - 2EB) / ((C - B)(M^2 - 2EA)); K from it directly (ellipkm1), which
+    # keeps its digits as k -> 1
+    k2c = (c - a) * (m2 - two_e * b) / ((c - b) * (m2 - two_e * a))
+    if not 0 < k2c <= 1:
+        return math.inf
+    return 4.0 * float(special.ellipkm1(float(k2c))) / math.sqrt(float(lam2))
 
 
 def poinsot(moments: np.ndarray, state: np.ndarray) -> dict[str, np.ndarray | float]:

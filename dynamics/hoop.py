@@ -11,8 +11,8 @@ Units and conventions (SI throughout)
 - State ``(theta1, theta2, omega1, omega2)`` with ``omega_i = d theta_i / dt`` [rad/s].
 - Hoop centre ``a (sin theta1, -cos theta1)``; bead at the centre plus ``a (sin theta2, -cos theta2)``.
 - Energy: the potential's zero is at the pivot's height, so the energy hanging at rest is
-  ``-(M + 2m) g a``; the relative energy error divides by the energy above that floor,
-  ``(E - E0) / (E0 + (M + 2m) g a)``, the energy that oscillates.
+  ``-(M + 2m) g a``; the relative energy error is that of the energy above that floor,
+  evaluated directly (:func:`energy_above_rest`), the energy that oscillates.
 
 Lagrangian (hoop inertia about the pivot ``2 M a^2``, parallel-axis theorem)::
 
@@ -88,6 +88,26 @@ def energy(p: HoopParams, state: np.ndarray) -> np.ndarray:
     th1, th2, w1, w2 = s[..., 0], s[..., 1], s[..., 2], s[..., 3]
     kinetic = a * a * ((M + 0.5 * m) * w1**2 + 0.5 * m * w2**2 + m * np.cos(th1 - th2) * w1 * w2)
     potential = -(M + m) * g * a * np.cos(th1) - m * g * a * np.cos(th2)
+    return kinetic + potential
+
+
+def energy_above_rest(p: HoopParams, state: np.ndarray) -> np.ndarray:
+    """Energy above hanging at rest [J], ``energy(state) + (M + 2m) g a``, evaluated without
+    cancellation so that it keeps its relative precision at any swing, however small.
+
+    The potential uses ``1 - cos th = 2 sin^2(th / 2)``; the kinetic energy is a sum of squares,
+    ``a^2 (M w1^2 + (m/2) |w1 e(th1) + w2 e(th2)|^2)`` with ``e(th) = (cos th, sin th)``, the
+    hoop's rotation about the pivot plus the bead's velocity relative to it. ``energy`` takes
+    the difference of two terms near ``(M + 2m) g a``, which at a swing ``A`` loses a factor
+    ``1 / A^2`` of its relative precision."""
+    s = np.asarray(state, dtype=float)
+    M, m, a, g = p.hoop_mass, p.bead_mass, p.radius, p.gravity
+    th1, th2, w1, w2 = s[..., 0], s[..., 1], s[..., 2], s[..., 3]
+    vx = w1 * np.cos(th1) + w2 * np.cos(th2)
+    vy = w1 * np.sin(th1) + w2 * np.sin(th2)
+    kinetic = a * a * (M * w1 * w1 + 0.5 * m * (vx * vx + vy * vy))
+    h1, h2 = np.sin(0.5 * th1), np.sin(0.5 * th2)
+    potential = 2.0 * g * a * ((M + m) * h1 * h1 + m * h2 * h2)
     return kinetic + potential
 
 

@@ -11,7 +11,9 @@ the recorder stream exactly what :meth:`Simulation.sample` returns.
 
 The relative energy error is ``(E - E0) / (E0 - E_floor)``, where ``E_floor`` is the lowest
 energy the system can have (``System.energy_floor()``): it measures the energy that moves, not
-the arbitrary zero of a potential.
+the arbitrary zero of a potential. Both ``E - E_floor`` and ``E0 - E_floor`` are the system's
+own ``energy_above_floor`` (evaluated without cancellation), so the error resolves round-off
+relative to the moving energy at any amplitude.
 
 Compiled code runs in chunks of about :data:`CHUNK_SECONDS` each, so Ctrl-C (``KeyboardInterrupt``)
 ends any run within a fraction of a second, leaving the simulation at the end of the last whole
@@ -22,7 +24,9 @@ the whole number of steps that fits and carries the remainder, so ``t`` is ``ste
 Adaptive methods land exactly on the requested time; the compiled ones (DOP853, Taylor's method)
 by their dense output: their steps are not cut at the times asked for (nor at the chunks'
 ends), the step that passes one is kept and evaluated there, and the next call goes on from its
-end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`).
+end, so sampling a run does not change the steps it takes (:attr:`Simulation.last_step`). A
+final time (``advance_to(t, final=True)``, the end of :meth:`Simulation.run`) is different:
+DOP853 cuts its last step to end there and answers with the stepped end point, as scipy does.
 """
 
 from __future__ import annotations
@@ -106,7 +110,10 @@ class Simulation:
     system : a :mod:`dynamics.systems` adapter.
     method : a name from :data:`dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
     dt : step size [s] for fixed-step methods (must be > 0 and finite).
-    rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``).
+    rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``). ``atol`` is in
+        the state's units: where a component is much smaller than 1 (a swing of 0.01 rad) it
+        is held to ``atol``, not to ``rtol`` of itself, so its relative error exceeds ``rtol``
+        by about the ratio of the two; give a smaller ``atol`` for such motions.
     step : the step control as one value (:mod:`dynamics.steps`), instead of dt/rtol/atol.
     state : initial state(s); default the system's ``default_state()``.
     reference : measure the error against the exact solution, or a tight DOP853 run when there
@@ -153,6 +160,7 @@ class Simulation:
         self.state = self.state0.copy()
         self.p = system.kernel_params()
         self.E0 = np.asarray(system.energy(self.state0), dtype=float)
+        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
         self.t0 = 0.0  # time at which state0 holds (moves with a jump)
         self.t = 0.0  # time reached (fixed step: steps * dt)
         self.clock = 0.0  # time asked for; fixed-step runs carry clock - t to the next call
@@ -207,6 +215,7 @@ class Simulation:
         self.state = s.copy()
         self.t0 = self.t
         self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
         self._has_exact = self.system.has_exact(self.state0)
         if self._carry is not None:
             self._carry.forget()  # a kept step and its series or interpolant belong to the old state
@@ -232,6 +241,7 @@ class Simulation:
                 raise ValueError("state must be finite")
             self.state0 = s0.copy()
             self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
+            self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
             self._taylor_h = None
         self.state = self.state0.copy()
         self.t = self.clock = self.t0 = 0.0
@@ -246,8 +256,9 @@ class Simulation:
     def step_label(self) -> str:
         return self.step.label()
 
-    def advance_to(self, t_target: float) -> None:
-        """Advance to ``t_target`` (fixed step: the last whole step at or before it)."""
+    def advance_to(self, t_target: float, *, final: bool = False) -> None:
+        """Advance to ``t_target`` (fixed step: the last whole step at or before it). ``final``:
+        it is the run's end; DOP853 cuts its last step to end there (module docstring)."""
         t_target = _v.finite("t", t_target)
         if t_target < self.t:
             raise ValueError(f"t must not go backwards: {t_target} < {self.t}")
@@ -280,10 +291,10 @@ class Simulation:
             elif m.kernel == "taylor":
                 self._run_taylor(t_target)
             else:
-                self._run_dop853(t_target)
+                self._run_dop853(t_target, final)
             self.t = t_target
         if self._reference is not None:
-            self._reference.advance_to(self.t)
+            self._reference.advance_to(self.t, final=final)
 
     def advance(self, duration: float) -> None:
         """Advance the clock by ``duration`` [s]; a fixed-step method takes the whole steps that
@@ -320,7 +331,7 @@ class Simulation:
             self.state[:], self.steps, self.t = start
             raise
 
-    def _run_dop853(self, t_target: float) -> None:
+    def _run_dop853(self, t_target: float, final: bool = False) -> None:
         """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
         length of a chunk from the last step size; Ctrl-C is seen between chunks). A chunk's end
         is one more time asked for: the step across it is kept, not cut, so the chunks take the
@@ -331,16 +342,18 @@ class Simulation:
                 h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
             span = self._chunk_steps * h
             t_next = t_target if not span < t_target - self.t else self.t + span
-            self._timed_chunk(lambda _k, t1=t_next: self._dop853_to(t1), self._chunk_steps)
+            land = final and t_next == t_target
+            self._timed_chunk(lambda _k, t1=t_next, c=land: self._dop853_to(t1, c), self._chunk_steps)
             self.t = t_next
 
-    def _dop853_to(self, t1: float) -> None:
-        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1``."""
+    def _dop853_to(self, t1: float, land: bool = False) -> None:
+        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1`` (``land``:
+        the last step cut to end at ``t1``)."""
         if self._carry is None:
             self._carry = Dop853Carry(*self.state.shape)
         run_dop853(
             self.system.sys_id, self.state, self.p, self.t, t1,
-            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry,
+            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry, land,
         )  # fmt: skip
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
@@ -450,7 +463,7 @@ class Simulation:
     def energy_scale(self) -> np.ndarray:
         """``E0 - E_floor`` (N,): the energy that moves, by which the energy error is divided
         (1 where nothing moves: there the error is absolute, in J)."""
-        moving = self.E0 - self.system.energy_floor()
+        moving = self._moving0
         return np.where(moving > 0.0, moving, 1.0)
 
     def sample(self) -> Sample:
@@ -458,6 +471,7 @@ class Simulation:
         # information we want to show, not a warning.
         with np.errstate(over="ignore", invalid="ignore"):
             energy = np.asarray(self.system.energy(self.state), dtype=float)
+            moving = np.asarray(self.system.energy_above_floor(self.state), dtype=float)
             scale = self.energy_scale()
             ref = self.reference_state() if self._track_error else None
             err = None if ref is None else self.system.error(self.state, ref)
@@ -466,7 +480,7 @@ class Simulation:
             self.t,
             self.state.copy(),
             energy,
-            (energy - self.E0) / scale,
+            (moving - self._moving0) / scale,
             err,
             None if ref is None else ref.copy(),
             self.nfev,
@@ -478,14 +492,16 @@ class Simulation:
 
     def run(self, t_end: float, n_samples: int = 2) -> Trajectory:
         """Run to ``t_end`` [s], sampling ``n_samples`` equally spaced times (first and last
-        included; fixed-step samples fall on the last step at or before each time)."""
+        included; fixed-step samples fall on the last step at or before each time; ``t_end`` is
+        a final time, see :meth:`advance_to`)."""
         t_end = _v.positive("t_end", t_end)
         if n_samples < 2:
             raise ValueError(f"n_samples must be at least 2, got {n_samples}")
         samples = []
-        for t in np.linspace(0.0, t_end, n_samples):
+        times = np.linspace(0.0, t_end, n_samples)
+        for t in times:
             if t > 0:
-                self.advance_to(float(t))
+                self.advance_to(float(t), final=t == times[-1])
             samples.append(self.sample())
         err = None if samples[0].error is None else np.stack([s.error for s in samples])
         return Trajectory(

@@ -17,9 +17,9 @@ def test_cyclotron_run_goes_round_at_the_gyrofrequency_of_the_analysis():
         charge=2.0, mass=1.0, field=0.5, speed=1.5,
     )  # fmt: skip
     assert run.states.shape == (400, 6) and run.columns[:2] == ("x", "y")
-    w = measure.gyrofrequency(run.t, run.states[:, 3:5])
+    w = measure.gyrofrequency(run.t, run.states[:, 3:5], xy=run.states[:, :2]).value
     assert w == pytest.approx(info["gyrofrequency"], rel=1e-5)
-    _centre, radius = measure.fit_circle(run.states[:, :2])
+    _centre, radius = measure.fit_circle(run.states[:, :2]).value
     assert radius == pytest.approx(info["radius"], rel=1e-6)
     assert np.max(np.abs(run.energy_error)) < 1e-12  # Boris keeps |v|
     assert run.reference == "exact" and run.error is not None
@@ -29,7 +29,7 @@ def test_hoop_mode1_frequency_matches_the_normal_mode_analysis():
     freqs = api.analyze("hoop", bead_mass=0.5)["mode_frequencies"]
     run = api.simulate("hoop", method="dop853", rtol=1e-10, t_end=20.0, modes=(0.01, 0.0))
     q = run.column("theta1")
-    assert measure.crossing_frequency(run.t, q) == pytest.approx(freqs[0], rel=1e-3)
+    assert measure.crossing_frequency(run.t, q).value == pytest.approx(freqs[0], rel=1e-3)
     assert np.allclose(run.column("theta1"), run.column("theta2"), atol=1e-9)  # in phase, equal
 
 

@@ -245,3 +245,43 @@ def test_the_polhode_period_is_infinite_on_the_separatrix_and_the_wobble_period_
     assert disk.polhode_period(moments, np.array([0.0, 0.0, 2.0])) == pytest.approx(
         2 * math.pi / wobble, rel=1e-14
     )
+
+
+def _polhode_period_mp(moments, w):
+    """4K(k)/lambda in 50-digit arithmetic from the exact values of the given doubles, with
+    ``1 - k^2`` formed as ``(C - A)(M^2 - 2EB) / ((C - B)(M^2 - 2EA))`` and K from mpmath."""
+    import mpmath
+
+    with mpmath.workdps(50):
+        order = np.argsort(moments)
+        a, b, c = (mpmath.mpf(float(x)) for x in np.asarray(moments)[order])
+        wa, wb, wc = (mpmath.mpf(float(x)) for x in np.asarray(w)[order])
+        two_e = a * wa**2 + b * wb**2 + c * wc**2
+        m2 = (a * wa) ** 2 + (b * wb) ** 2 + (c * wc) ** 2
+        if m2 < two_e * b:
+            a, c = c, a
+        lam2 = (c - b) * (m2 - two_e * a) / (a * b * c)
+        k2c = (c - a) * (m2 - two_e * b) / ((c - b) * (m2 - two_e * a))
+        return float(4 * mpmath.ellipk(1 - k2c) / mpmath.sqrt(lam2)), float(k2c)
+
+
+@pytest.mark.parametrize("side", ["smallest", "largest", "both"])
+def test_the_polhode_period_keeps_its_digits_next_to_the_separatrix(side):
+    """A spin along the intermediate axis tipped so that 1 - k^2 is about 1e-7: the period
+    within 1e-12 of a 50-digit mpmath evaluation of 4K(k)/lambda for the same doubles. In
+    doubles M^2 - 2EB loses the digits 1 - k^2 is made of (3.3e-10 off before)."""
+    a, b, c = ReleasedDisk(OTHERS[0]).kernel_params()
+    wb = 3.0
+    wa2 = 1e-7 * b * (c - b) * wb**2 / (a * (c - a))  # circles the smallest axis
+    wc2 = 1e-7 * b * (b - a) * wb**2 / (c * (c - a))  # circles the largest axis
+    if side == "smallest":
+        w = np.array([math.sqrt(wa2), wb, 0.0])
+    elif side == "largest":
+        w = np.array([0.0, wb, math.sqrt(wc2)])
+    else:  # both tipped, their contributions to M^2 - 2EB nearly cancelling
+        wa = 0.01
+        wc = math.sqrt(a * (b - a) * wa**2 / (c * (c - b)) + wc2)
+        w = np.array([wa, wb, wc])
+    reference, k2c = _polhode_period_mp(np.array([a, b, c]), w)
+    assert 3e-8 < k2c < 3e-7
+    assert disk.polhode_period(np.array([a, b, c]), w) == pytest.approx(reference, rel=1e-12)

@@ -35,7 +35,6 @@ _HEADLESS = textwrap.dedent(
         "rows": len(csv.splitlines()) - 1,
         "header": csv.splitlines()[0],
         "figures": figures(demo, tr),
-        "measured": {k: v for k, v in tr.measured.items() if not isinstance(v, list)},
         "state": tr.states[tr.main][-1, 0].tolist(),
         "viser": "viser" in sys.modules and sys.modules["viser"] is not None,
     }))

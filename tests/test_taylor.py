@@ -193,3 +193,28 @@ def test_a_large_ensemble_runs_in_parallel_with_the_serial_result(monkeypatch):
         sim.run(2.0, n_samples=5)
         runs.append((sim.state.copy(), sim.steps))
     assert np.array_equal(runs[0][0], runs[1][0]) and runs[0][1] == runs[1][1]
+
+
+def test_the_method_list_states_the_orders_the_rule_picks():
+    """``--list-methods`` shows Taylor's orders as ``order_for`` picks them at each tolerance it
+    names (not a fixed order), and LSODA's as variable; an evaluation of Taylor's method is one
+    series expansion, one per step."""
+    import re
+
+    from dynamics.integrators import METHODS
+
+    text = METHODS["taylor"].order_text()
+    for label in ("1e-3", "1e-9", "1e-12"):
+        tol = float(label)
+        picked = sorted({taylor.order_for(tol, tol, s)[0] for s in (CYCLOTRON, HOOP, FREE_BODY)})
+        shown = re.search(rf"(\d+)(?:-(\d+))? at {label}\b", text)
+        assert shown is not None, text
+        assert (int(shown[1]), int(shown[2] or shown[1])) == (picked[0], picked[-1])
+    lo = min(taylor.order_for(t, t, s)[0] for t in (0.9, 0.5, 0.1) for s in (CYCLOTRON, HOOP))
+    assert f"{lo}-{taylor.MAX_ORDER} over all tolerances" in text
+    assert taylor.order_for(1e-300, 1e-300, HOOP)[0] == taylor.MAX_ORDER
+    for name in ("scipy-lsoda", "odeint"):
+        assert "variable order" in METHODS[name].describe()
+    sim = Simulation(Hoop(), "taylor", rtol=1e-9, reference=None)
+    sim.advance_to(3.0)
+    assert sim.nfev == sim.steps and "series expansions" in METHODS["taylor"].counts

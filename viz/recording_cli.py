@@ -120,6 +120,8 @@ def _report(res) -> None:
     print(f"  -> {res.paths['.viser'].parent}/{d.name}.{{viser,html,csv,png,json}}")
     for f in man["figures"]:
         if f["measured"] is None:
+            if f.get("not_resolved"):
+                print(f"  {f['name']}: not resolved ({f['not_resolved']})")
             continue
         pred = "" if f["predicted"] is None else f", predicted {f['predicted']:.6g}"
         print(f"  {f['name']}: {f['measured']:.6g} {f['unit']}{pred}".rstrip())

@@ -50,7 +50,12 @@ def integration_error(method: str, step: str, t: float, code: int) -> Integratio
 
 @dataclass(frozen=True)
 class Method:
-    """One integration method, described as data."""
+    """One integration method, described as data.
+
+    ``order`` is the order of a fixed-order method; for a variable one (``variable_order``) the
+    highest it uses, which only the driver's work estimate reads. ``counts`` says what the
+    driver's evaluation count (``nfev``, the CLI's ``rhs_evaluations``) counts for this method:
+    not every method's unit of work is one right-hand side."""
 
     name: str
     title: str
@@ -63,6 +68,8 @@ class Method:
     kernel: str | None = None
     scipy_name: str | None = None
     stability: str = ""
+    variable_order: bool = False
+    counts: str = "right-hand-side evaluations"
 
     def applies_to(self, system: str) -> bool:
         return system in self.systems
@@ -87,11 +94,30 @@ class Method:
             return f"rtol = {opts['rtol']:g}"
         return "exact flow" if self.backend == "exact" else "adaptive"
 
+    def order_text(self) -> str:
+        """The order in words: ``"order 4"``; for Taylor's method the orders its rule
+        (:func:`dynamics.integrators.taylor.order_for`) picks, from the rule itself."""
+        if self.kernel == "taylor":
+            from .taylor import STEP_COST, order_for  # deferred: the compiled series are not needed
+
+            def picked(tol: float) -> str:
+                ps = sorted({order_for(tol, tol, s)[0] for s in STEP_COST})
+                return f"{ps[0]}" if len(ps) == 1 else f"{ps[0]}-{ps[-1]}"
+
+            lo, hi = picked(0.5), picked(1e-300)
+            return (
+                f"order from min(rtol, atol): {picked(1e-3)} at 1e-3, {picked(1e-9)} at 1e-9, "
+                f"{picked(1e-12)} at 1e-12 (by system), {lo}-{hi} over all tolerances"
+            )
+        if self.variable_order:
+            return f"variable order (at most {self.order})"
+        return "no truncation error" if self.backend == "exact" else f"order {self.order}"
+
     def describe(self) -> str:
         kind = "adaptive" if self.adaptive else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"
         imp = ", implicit" if self.implicit else ""
-        return f"{self.title}: order {self.order}, {kind}{imp}, {props}"
+        return f"{self.title}: {self.order_text()}, {kind}{imp}, {props}; evaluations: {self.counts}"
 
 
 ALL = frozenset({"cyclotron", "hoop", "free-body"})
@@ -111,6 +137,7 @@ METHODS: dict[str, Method] = {
             "exact",
             kernel="exact",
             stability="exact for any step",
+            counts="nothing (the closed form costs no evaluation)",
         ),
         Method(
             "euler",
@@ -147,6 +174,7 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="midpoint",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
+            counts="right-hand-side evaluations (one per fixed-point iteration)",
         ),
         Method(
             "boris",
@@ -159,6 +187,7 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="symmetric2",
             stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
+            counts="force evaluations (one per step)",
         ),
         Method(
             "verlet",
@@ -171,6 +200,7 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="symmetric2",
             stability="linear stability w_max h < 2",
+            counts="fixed-point sweeps (each a 2x2 solve and a force)",
         ),
         Method(
             "splitting",
@@ -183,6 +213,7 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="symmetric2",
             stability="keeps |L| to round-off at any step",
+            counts="exact rotations (five per step)",
         ),
         Method(
             "yoshida4",
@@ -195,6 +226,7 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="yoshida4",
             stability="composition of Boris / Stormer-Verlet / splitting",
+            counts="its base steps' units (forces, fixed-point sweeps or rotations)",
         ),
         Method(
             "dop853",
@@ -206,11 +238,12 @@ METHODS: dict[str, Method] = {
             ALL,
             "numba",
             stability="step size controlled to rtol, atol",
+            counts="right-hand-side evaluations (the dense output's included)",
         ),
         Method(
             "taylor",
-            "Taylor series (compiled; order from the tolerance, 2-30)",
-            0,
+            "Taylor series (compiled)",
+            40,
             (),
             True,
             False,
@@ -218,6 +251,8 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="taylor",
             stability="step from the series' radius of convergence (Jorba and Zou)",
+            variable_order=True,
+            counts="series expansions (one per step)",
         ),
         Method(
             "scipy-rk45",
@@ -229,6 +264,7 @@ METHODS: dict[str, Method] = {
             _SCIPY_SYSTEMS,
             "scipy",
             scipy_name="RK45",
+            counts="right-hand-side evaluations (scipy's nfev)",
         ),
         Method(
             "scipy-dop853",
@@ -240,6 +276,7 @@ METHODS: dict[str, Method] = {
             _SCIPY_SYSTEMS,
             "scipy",
             scipy_name="DOP853",
+            counts="right-hand-side evaluations (scipy's nfev)",
         ),
         Method(
             "scipy-radau",
@@ -251,6 +288,7 @@ METHODS: dict[str, Method] = {
             _SCIPY_SYSTEMS,
             "scipy",
             scipy_name="Radau",
+            counts="right-hand-side evaluations (scipy's nfev: Jacobians' not included)",
         ),
         Method(
             "scipy-lsoda",
@@ -262,6 +300,8 @@ METHODS: dict[str, Method] = {
             _SCIPY_SYSTEMS,
             "scipy",
             scipy_name="LSODA",
+            variable_order=True,
+            counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
         ),
         Method(
             "odeint",
@@ -273,6 +313,8 @@ METHODS: dict[str, Method] = {
             _SCIPY_SYSTEMS,
             "scipy",
             scipy_name="odeint",
+            variable_order=True,
+            counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
         ),
     ]
 }

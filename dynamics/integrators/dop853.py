@@ -17,10 +17,11 @@ extra stages are evaluated only for a step that passes a requested time. The kep
 only if the state handed back is still the one written there: a state changed in between (a
 kick) starts afresh from it, with one evaluation of its derivative.
 
-A run that must end exactly at a time (a final time) ends there by interpolation too. That is
-within the tolerance: the interpolant errs by ``O(h^8)`` inside a step (measured slope 8.0 on the
-charge), the same order as the local error the controller keeps below the tolerance, and it
-meets the step's own values at both ends.
+A run that ends at a time (``land``: a final time, not a frame) cuts the step that would pass it
+so that it ends there, as scipy's ``solve_ivp`` does, and hands back that step's own end point:
+the interpolant errs by ``O(h^8)`` inside a step, the same order as the local error the
+controller keeps below the tolerance but a larger multiple of it than the stepped solution's
+``O(h^9)``. The cut step is kept like any other, so a run may still go on from there.
 
 Counts: ``stats[i] = (evaluations, accepted steps, rejected steps)``; evaluations include the
 dense output's stages and the derivative of a fresh start.
@@ -169,7 +170,7 @@ def _runner(sys_id: int, d: int):
 
     @njit(cache=True)
     def run(Y, p, t0, t1, rtol, atol, H, F, stats, status, base, span, Y0, Y1, Q, dense, last,
-            tableau):  # fmt: skip
+            tableau, land):  # fmt: skip
         """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place; ``_rhs(sys_id, y, p, out)``.
 
         ``H`` (N,) carries each member's next step size between calls (0: choose one, as scipy does
@@ -178,7 +179,7 @@ def _runner(sys_id: int, d: int):
         as in ``run_fixed``, with code ``TOO_SMALL_STEP`` when the controller needs a step below
         10 ulp of ``t``. ``base``, ``span``, ``Y0``, ``Y1``, ``Q``, ``dense`` and ``last`` are a
         :class:`Dop853Carry`'s arrays: the last step of each member, carried to the next call.
-        ``tableau`` is :data:`TABLEAU`.
+        ``tableau`` is :data:`TABLEAU`. ``land``: cut the step that would pass ``t1`` to end there.
         """
         A, B, E3, E5, A_DENSE, D = tableau
         n = Y.shape[0]
@@ -228,8 +229,11 @@ def _runner(sys_id: int, d: int):
                         if h_abs < min_step:
                             report(status, TOO_SMALL_STEP, stats[i, 1], i)
                             return
-                        # No clipping at t1: the step the controller chose, interpolated at t1.
+                        # No clipping at t1 unless landing: the step the controller chose,
+                        # interpolated at t1.
                         t_new = t + h_abs
+                        if land and t_new > t1:
+                            t_new = t1
                         h = t_new - t
                         h_abs = abs(h)
                         # Stages (scipy's rk_step). Sums run stage-outer, component-inner: with d
@@ -356,9 +360,12 @@ class Dop853Carry:
         self.span[:] = 0.0
 
 
-def run_dop853(sys_id: int, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry: Dop853Carry) -> None:
+def run_dop853(
+    sys_id: int, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry: Dop853Carry, land: bool = False
+) -> None:
     """Advance every row of ``Y`` (N, d) of system ``sys_id`` from ``t0`` to ``t1`` [s], going on
-    from ``carry``'s kept steps and keeping the last ones there.
+    from ``carry``'s kept steps and keeping the last ones there. ``land``: ``t1`` is a final time;
+    the step that would pass it is cut to end there (module docstring).
 
     The loop is compiled for the system and for ``d`` as constants, and cached on disk: with the
     right-hand side an argument (a first-class function), or any compiled function held by the
@@ -370,5 +377,5 @@ def run_dop853(sys_id: int, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry
     """
     _runner(int(sys_id), int(Y.shape[1]))(
         Y, p, t0, t1, rtol, atol, H, F, stats, status, carry.base, carry.span, carry.Y0, carry.Y1,
-        carry.Q, carry.dense, carry.last, TABLEAU,
+        carry.Q, carry.dense, carry.last, TABLEAU, bool(land),
     )  # fmt: skip

@@ -49,7 +49,11 @@ def log10_abs(x) -> float:
     return math.log10(v) if v > 10.0**LOG_FLOOR else LOG_FLOOR
 
 
-def fmt(x: float | None, digits: int = 4) -> str:
+def fmt(x, digits: int = 4) -> str:
+    """A number to ``digits`` significant digits, "—" for ``None``; a
+    :class:`dynamics.measure.Estimate` shows its value or "not resolved (reason)"."""
+    if hasattr(x, "text"):
+        return x.text(digits)
     return "—" if x is None else f"{x:.{digits}g}"
 
 
@@ -561,7 +565,7 @@ class ExhibitModel:
 
     def work_line(self) -> str:
         smp = self.sample
-        lines = [f"\nSteps {smp.steps}, RHS evaluations {smp.nfev}."]
+        lines = [f"\nSteps {smp.steps}; evaluations {smp.nfev}: {self.sim.method.counts}."]
         if self.failure:
             lines.append(f"\n**Paused:** {self.failure}. {PAUSED_HINT}")
         return "\n".join(lines)

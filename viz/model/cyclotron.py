@@ -151,9 +151,9 @@ class CyclotronModel(ExhibitModel):
         (:func:`dynamics.measure.gyrofrequency`, :func:`dynamics.measure.fit_circle`), and each
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
-        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1])}
-        circle = measure.fit_circle(x[:, 0]) if out["gyrofrequency"] is not None else None
-        out["radius"] = None if circle is None else circle[1]
+        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
+        circle = measure.fit_circle(x[:, 0])
+        out["radius"] = measure.Estimate(circle.value[1]) if circle else circle
         out["beam_gyrofrequencies"] = None
         if self.beam_motion is not None:
             tb, vb = self.beam_motion.arrays()

@@ -144,11 +144,11 @@ class DiskModel(ExhibitModel):
         if self.config.mode == "driven":
             return {"bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])}
         middle = int(np.argsort(dk.free_kernel_params(self.params))[1])
-        freq = measure.crossing_frequency(t, x[:, middle]) if len(t) else None
+        freq = measure.crossing_frequency(t, x[:, middle]) if len(t) else measure.unresolved("no samples")
         return {
             "growth_rate": measure.wobble_growth_rate(t, x),
             # the component on the intermediate axis is sn or cn: two zero crossings a period
-            "polhode_period": None if not freq else 2 * math.pi / freq,
+            "polhode_period": measure.Estimate(2 * math.pi / freq.value) if freq else freq,
         }
 
     def polhode_period(self) -> float:

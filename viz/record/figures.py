@@ -3,7 +3,8 @@
 Every measured number comes from :mod:`dynamics.measure` applied to the recorded frames, the
 same estimators the viewer's readouts apply to the samples their exhibits keep; every predicted
 number from the system's module in :mod:`dynamics`. A figure the frames cannot support (too
-short a stretch, too few crossings) is left out rather than guessed.
+short a stretch, too few crossings, aliased) has no measured value and says why
+(``not_resolved``) rather than guess.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ from .run import Traces
 
 
 def figure(name: str, measured, predicted, unit: str, note: str = "") -> dict[str, Any]:
+    reason = ""
+    if isinstance(measured, measure.Estimate):
+        measured, reason = measured.value, measured.reason
     rel = None
     if predicted not in (None, 0) and measured is not None and math.isfinite(measured):
         rel = abs(measured - predicted) / abs(predicted)
@@ -30,6 +34,7 @@ def figure(name: str, measured, predicted, unit: str, note: str = "") -> dict[st
         "unit": unit,
         "relative_difference": rel,
         **({"note": note} if note else {}),
+        **({"not_resolved": reason} if reason else {}),
     }
 
 
@@ -44,6 +49,8 @@ def figures(d: Demo, tr: Traces) -> list[dict[str, Any]]:
 
 
 def _keep(figs: list, name: str, measured, *args, **kw) -> None:
+    """Add the figure; an estimate not resolved is kept with its reason, a plain ``None`` left
+    out."""
     if measured is not None:
         figs.append(figure(name, measured, *args, **kw))
 
@@ -55,18 +62,18 @@ def _cyclotron(d: Demo, tr: Traces, p) -> list[dict[str, Any]]:
     w = cyclotron.gyrofrequency(p)
     pre = t < (d.events[0].t if d.events else math.inf)  # before the first kick
     if S.shape[1] == 1:
-        w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5])
+        w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5], xy=S[pre, 0, :2])
         _keep(figs, "gyrofrequency", w_meas, w, "rad/s")
-        circle = measure.fit_circle(S[pre, 0, :2]) if w_meas is not None else None
-        if circle is not None:
-            figs.append(figure("Larmor radius", circle[1], cyclotron.larmor_radius(p, S[0, 0]), "m"))
-        if w_meas is not None and abs(S[0, 0, 5]) > 0:
-            pitch = measure.slope(t[pre], S[pre, 0, 2]) * 2 * math.pi / w_meas
+        circle = measure.fit_circle(S[pre, 0, :2])
+        radius = measure.Estimate(circle.value[1]) if circle else circle
+        figs.append(figure("Larmor radius", radius, cyclotron.larmor_radius(p, S[0, 0]), "m"))
+        if w_meas and abs(S[0, 0, 5]) > 0:
+            pitch = measure.slope(t[pre], S[pre, 0, 2]) * 2 * math.pi / w_meas.value
             figs.append(figure("helix pitch", pitch, S[0, 0, 5] * cyclotron.period(p), "m"))
     else:
-        rates = measure.gyrofrequency(t, S[:, :, 3:5])
-        if rates is not None:
-            periods = 2 * math.pi / np.asarray(rates)
+        rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2])
+        if rates:
+            periods = 2 * math.pi / np.asarray(rates.value)
             figs.append(figure("shortest period in the beam", periods.min(), 2 * math.pi / w, "s"))
             figs.append(figure("longest period in the beam", periods.max(), 2 * math.pi / w, "s"))
         v = np.hypot(S[0, :, 3], S[0, :, 4])
@@ -77,12 +84,13 @@ def _cyclotron(d: Demo, tr: Traces, p) -> list[dict[str, Any]]:
         post = t > entry["t"] + 1e-9
         before = measure.fit_circle(S[pre, 0, :2])
         after = measure.fit_circle(S[post, 0, :2])
-        if before is None or after is None:
+        if not before or not after:
             continue
-        figs.append(figure("circle shift after the kick", float(np.linalg.norm(after[0] - before[0])),
-                           eff["predicted_shift"], "m"))  # fmt: skip
-        figs.append(figure("radius after the kick", after[1], eff["predicted_radius"][0], "m"))
-        _keep(figs, "gyrofrequency after the kick", measure.gyrofrequency(t[post], S[post, 0, 3:5]),
+        shift = float(np.linalg.norm(after.value[0] - before.value[0]))
+        figs.append(figure("circle shift after the kick", shift, eff["predicted_shift"], "m"))
+        figs.append(figure("radius after the kick", after.value[1], eff["predicted_radius"][0], "m"))
+        _keep(figs, "gyrofrequency after the kick",
+              measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2]),
               w, "rad/s", "unchanged: the period does not depend on the energy")  # fmt: skip
     if len(tr.states) > 1:
         for label, run in tr.runs.items():
@@ -137,7 +145,7 @@ def _hoop(d: Demo, tr: Traces, p) -> list[dict[str, Any]]:
     for k in (0, 1):
         _keep(figs, f"mode {k + 1} frequency (linear theory)", measured[k], freqs[k], "rad/s")
     a1 = abs(float(amps[0]))
-    if measured[0] is not None and abs(amps[1]) < 1e-12 and a1 > 0.2:
+    if measured[0] and abs(amps[1]) < 1e-12 and a1 > 0.2:
         figs.append(figure("mode 1 frequency (exact, finite amplitude)", measured[0],
                            2 * math.pi / hoop.mode1_period(p, a1), "rad/s",
                            "rigid-pendulum period 4 K(sin^2(A/2)) / omega_1"))  # fmt: skip

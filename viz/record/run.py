@@ -204,9 +204,19 @@ def check_work(ex: ExhibitModel, demo: Demo) -> None:
 def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
     m = sim.method
     return {
-        "method": m.name, "title": m.title, "order": m.order,
+        "method": m.name, "title": m.title, "order": _order(sim), "evaluations": m.counts,
         "structure": list(m.structure), "step": sim.step_label(), "dt": sim.dt, "rtol": sim.rtol,
     }  # fmt: skip
+
+
+def _order(sim: dynamics.Simulation) -> int | None:
+    """The order the run used: Taylor's from its tolerance, ``None`` for LSODA's variable one."""
+    m = sim.method
+    if m.kernel == "taylor":
+        from dynamics.integrators.taylor import order_for
+
+        return order_for(sim.rtol, sim.atol, sim.system.sys_id)[0]
+    return None if m.variable_order else m.order
 
 
 def _raise_if_failed(ex: ExhibitModel) -> None:

@@ -199,13 +199,14 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         w_th = cy.gyrofrequency(p)
         m = self.measured()
         w_me = m["gyrofrequency"]
+        t_me = fmt(2 * math.pi / w_me.value) if w_me else "—"
         lines = [
             f"**t = {self.t:.2f} s** · {self.method_line(self.sim)}",
             "",
             "| quantity | theory | measured |",
             "|---|---|---|",
             f"| gyrofrequency \\|qB\\|/m [rad/s] | {fmt(w_th)} | {fmt(w_me)} |",
-            f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {fmt(2 * math.pi / w_me) if w_me else '—'} |",
+            f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {t_me} |",
             f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.theory_radius)} | {fmt(m['radius'])} |",
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs exact | 0 | {float(np.max(smp.error)) if smp.error is not None else 0.0:.2e} |",
@@ -220,10 +221,10 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         if self.beam is not None:
             lo, hi = self.config.beam_speeds
             n = len(self.beam.state)
-            if wb is None:
-                periods = "periods: measured once the charges have turned half a radian"
+            if not wb:
+                periods = f"periods not resolved ({wb.reason})"
             else:
-                T = 2 * math.pi / np.asarray(wb)
+                T = 2 * math.pi / np.asarray(wb.value)
                 periods = (
                     f"measured periods {fmt(T.min(), 7)} to {fmt(T.max(), 7)} s, a spread of "
                     f"{T.max() - T.min():.1e} s against theory's 0 (2πm/\\|qB\\| = "

@@ -360,7 +360,8 @@ class DiskExhibit(DiskModel, Exhibit):
             lines.append(f"| \\|F_A + F_B\\| = (M+m) ω² ρ_cm [N] | {fmt(net)} | |")
             lines.append(
                 f"\nRed arrows at A and B: the bearing forces, 1 m ↔ {1 / self.force_scale:.3g} N. Measured: "
-                "\\|ŷ × dL/dt\\| / 2R, with dL/dt from central differences of the sampled L(t)."
+                "\\|ŷ × dL/dt\\| / 2R, with dL/dt from central differences of the sampled L(t) "
+                "divided by their known factor sin θ/θ (θ half the turn between the two samples)."
             )
         else:
             _, L, _ = self.vectors_space()

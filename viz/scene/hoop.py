@@ -237,8 +237,8 @@ class HoopExhibit(HoopModel, Exhibit):
             "",
             "| normal mode | ω linear theory [rad/s] | ω measured [rad/s] |",
             "|---|---|---|",
-            f"| 1: in phase, √(g/2a) | {fmt(freqs[0])} | {fmt(meas[0]) if meas[0] else '—'} |",
-            f"| 2: out of phase, √((1+m/M)g/a) | {fmt(freqs[1])} | {fmt(meas[1]) if meas[1] else '—'} |",
+            f"| 1: in phase, √(g/2a) | {fmt(freqs[0])} | {fmt(meas[0])} |",
+            f"| 2: out of phase, √((1+m/M)g/a) | {fmt(freqs[1])} | {fmt(meas[1])} |",
         ]
         if c.mode == "mode 1" and 0 < abs(c.amplitude) < math.pi:
             w_nl = 2 * math.pi / hp.mode1_period(p, abs(float(c.amplitude)))

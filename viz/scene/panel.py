@@ -251,7 +251,9 @@ class Panel:
                     "Tolerance rtol",
                     options=rtol_options(ex.config.rtol),
                     initial_value=rtol_label(ex.config.rtol),
-                    hint="Relative (and absolute) tolerance of the adaptive methods",
+                    hint="Tolerance of the adaptive methods, relative and absolute alike (atol = "
+                    "rtol): a swing of A rad is held to rtol/A of itself, so errors relative to a "
+                    "small motion are larger than rtol",
                 ),
             )
 
