@@ -117,10 +117,14 @@ class AtlasSpec:
         if self.kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
         if self.system not in SYSTEM_NAMES:
-            raise ValueError(f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}")
+            raise ValueError(
+                f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}"
+            )
         if self.kind == "chaos" and self.system != "hoop":
             raise ValueError("system: the chaos map is of the hoop's start plane (system hoop)")
-        object.__setattr__(self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params)))
+        object.__setattr__(
+            self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params))
+        )
         self.make_system()  # the parameters' own dataclass validates them
         object.__setattr__(self, "methods", tuple(self.methods))
         if not self.methods:
@@ -136,7 +140,9 @@ class AtlasSpec:
             if name not in allowed:
                 raise ValueError(f"methods: {name} is not a compiled method of the {self.system}")
             if self.kind != "accuracy" and m.adaptive:
-                raise ValueError(f"methods: {name} is adaptive; the {self.kind} map takes fixed steps")
+                raise ValueError(
+                    f"methods: {name} is adaptive; the {self.kind} map takes fixed steps"
+                )
         if self.kind == "chaos" and len(self.methods) != 1:
             raise ValueError("methods: the chaos map is computed with one method")
         if self.kind == "accuracy":

@@ -46,7 +46,9 @@ def figure(ds: xr.Dataset):
     y, x = spec.y.name, spec.x.name
     methods = [str(m) for m in ds["method"].values]
     n = len(methods)
-    fig, axes = plt.subplots(1, n, figsize=(4.6 * n + 1.0, 4.2), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(
+        1, n, figsize=(4.6 * n + 1.0, 4.2), squeeze=False, layout="constrained"
+    )
     xs, ys = ds[x].values, ds[y].values
     xlabel = AMPLITUDE_LABELS[spec.system] if x == "amplitude" else AXIS_LABELS[x]
     for k, (ax, method) in enumerate(zip(axes[0], methods, strict=True)):

@@ -60,7 +60,11 @@ def template(spec: AtlasSpec) -> xr.Dataset:
     from .theory import AMPLITUDE_UNITS
 
     y, x = spec.y.name, spec.x.name
-    coords = {"method": np.array(spec.methods, dtype=object), y: spec.y.values(), x: spec.x.values()}
+    coords = {
+        "method": np.array(spec.methods, dtype=object),
+        y: spec.y.values(),
+        x: spec.x.values(),
+    }
     data = {}
     for name, (dtype, fill) in VARIABLES[spec.kind].items():
         cells = np.full(spec.shape, fill, dtype=dtype)
@@ -125,7 +129,9 @@ def open_for_resume(path: str | Path, spec: AtlasSpec) -> np.ndarray:
     try:
         ds = xr.open_zarr(path, consolidated=False)
     except Exception as exc:
-        raise StoreError(f"--resume: {path} is not an atlas store ({exc.__class__.__name__})") from None
+        raise StoreError(
+            f"--resume: {path} is not an atlas store ({exc.__class__.__name__})"
+        ) from None
     key = ds.attrs.get("run_key")
     if key != spec.run_key():
         raise StoreError(
@@ -146,7 +152,9 @@ def write_chunk(path: str | Path, spec: AtlasSpec, index, cells: dict, session: 
     k, rows, cols = spec.cells(index)
     y, x = spec.y.name, spec.x.name
     region = {"method": slice(k, k + 1), y: rows, x: cols}
-    data = {name: (("method", y, x), np.asarray(cells[name])[None]) for name in VARIABLES[spec.kind]}
+    data = {
+        name: (("method", y, x), np.asarray(cells[name])[None]) for name in VARIABLES[spec.kind]
+    }
     xr.Dataset(data).to_zarr(path, region=region, consolidated=False)
     m, by, bx = index
     flags = {

@@ -97,8 +97,14 @@ def mode1_transverse_trace(p: HoopParams, amplitude: float, eps: float = 1e-6) -
             s = y0.copy()
             s[j] += sign * eps
             states.append(s)
-    sim = Simulation(Hoop(p), "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL,
-                     state=np.array(states), reference=None)
+    sim = Simulation(
+        Hoop(p),
+        "dop853",
+        rtol=REFERENCE_TOL,
+        atol=REFERENCE_ATOL,
+        state=np.array(states),
+        reference=None,
+    )
     sim.advance_to(hoop.mode1_period(p, amplitude))
     end = sim.state
     jac = np.stack([(end[1 + 2 * j] - end[2 + 2 * j]) / (2 * eps) for j in range(4)], axis=1)
