@@ -187,6 +187,13 @@ def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
     path = out / "atlas.zarr"
     if not args.resume and out.exists() and not out.is_dir():
         raise CliError(f"--out: {out} is not a folder")
+    try:  # before anything is printed or written: a store this run may not use is one line
+        if args.resume:
+            store.open_for_resume(path, spec)
+        elif path.exists():
+            store.create(path, spec)  # raises: it exists
+    except store.StoreError as exc:
+        raise CliError(str(exc)) from None
     cells = math.prod(spec.shape)
     print(
         f"mechviz atlas: {spec.kind} of the {spec.system}, {cells} cells in "

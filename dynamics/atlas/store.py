@@ -19,6 +19,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import platform
+import shutil
 import warnings
 from importlib import metadata
 from pathlib import Path
@@ -105,20 +106,22 @@ def _encoding(spec: AtlasSpec, ds: xr.Dataset) -> dict:
 
 
 def create(path: str | Path, spec: AtlasSpec) -> None:
-    """Write the empty dataset of ``spec`` to a new store at ``path``."""
+    """Write the empty dataset of ``spec`` to a new store at ``path``: written beside it and
+    renamed into place, so a store at ``path`` is always whole."""
     path = Path(path)
     if path.exists():
         raise StoreError(f"--out: {path} exists; pass --resume to continue it, or another --out")
     ds = template(spec)
-    with warnings.catch_warnings():  # strings are not yet in the Zarr v3 specification
-        warnings.simplefilter("ignore", UserWarning)
-        try:
-            ds.to_zarr(path, mode="w-", encoding=_encoding(spec, ds), consolidated=False)
-        except BaseException:
-            import shutil
-
-            shutil.rmtree(path, ignore_errors=True)
-            raise
+    partial = path.with_name(path.name + ".partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    try:
+        with warnings.catch_warnings():  # strings are not yet in the Zarr v3 specification
+            warnings.simplefilter("ignore", UserWarning)
+            ds.to_zarr(partial, mode="w-", encoding=_encoding(spec, ds), consolidated=False)
+        partial.rename(path)
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
 
 
 def open_for_resume(path: str | Path, spec: AtlasSpec) -> np.ndarray:
