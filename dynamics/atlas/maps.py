@@ -46,12 +46,17 @@ def figure(ds: xr.Dataset):
     y, x = spec.y.name, spec.x.name
     methods = [str(m) for m in ds["method"].values]
     n = len(methods)
-    fig, axes = plt.subplots(
-        1, n, figsize=(4.6 * n + 1.0, 4.2), squeeze=False, layout="constrained"
+    cols = min(n, 3)
+    rows = -(-n // cols)
+    fig, grid = plt.subplots(
+        rows, cols, figsize=(4.6 * cols + 1.0, 4.2 * rows), squeeze=False, layout="constrained"
     )
+    axes = grid.ravel()
+    for ax in axes[n:]:
+        ax.set_visible(False)
     xs, ys = ds[x].values, ds[y].values
     xlabel = AMPLITUDE_LABELS[spec.system] if x == "amplitude" else AXIS_LABELS[x]
-    for k, (ax, method) in enumerate(zip(axes[0], methods, strict=True)):
+    for k, (ax, method) in enumerate(zip(axes[:n], methods, strict=True)):
         if spec.kind == "stability":
             values = _log10_abs(ds["energy_error"].values[k])
             shown = np.clip(np.where(np.isinf(values), 6.0, values), -16, 6)
@@ -65,6 +70,9 @@ def figure(ds: xr.Dataset):
             limit = ds["linear_limit_dt"].values[k]
             if np.all(np.isfinite(limit)) and np.all(limit > 0):
                 ax.plot(xs, limit, "k--", linewidth=1.5, label="linear theory")
+            else:
+                words = "stable at every step" if np.all(limit > 0) else "unstable at every step"
+                ax.plot([], [], "k--", label=f"linear theory: {words}")
             ax.set_ylim(ys.min(), ys.max())
             ax.legend(loc="upper right", fontsize=8, facecolor="0.8")
         elif spec.kind == "chaos":
