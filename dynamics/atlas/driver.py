@@ -20,7 +20,9 @@ import contextlib
 import logging
 import os
 import random
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from distributed.diagnostics.plugin import WorkerPlugin
 
 from . import store as _store
 from .grid import AtlasSpec
@@ -82,19 +85,46 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
             client.close()
         return
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(
-        n_workers=n,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    with _workers_ignore_ctrl_c():
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     client = Client(cluster)
+    client.register_plugin(_IgnoreCtrlC())  # and those a nanny starts again later
     try:
         yield client
     finally:
         client.close()
         cluster.close()
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Worker processes started inside inherit an ignored SIGINT: a terminal's Ctrl-C reaches the
+    whole process group, and it is this process's to handle (cancel, keep, shut the cluster
+    down), not each worker's (a traceback apiece)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+class _IgnoreCtrlC(WorkerPlugin):
+    """Worker plugin: the worker process ignores SIGINT (see :func:`_workers_ignore_ctrl_c`)."""
+
+    name = "mechviz-ignore-ctrl-c"
+
+    def setup(self, worker) -> None:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def run_atlas(
