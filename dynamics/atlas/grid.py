@@ -22,6 +22,7 @@ import hashlib
 import json
 import math
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -212,11 +213,19 @@ class AtlasSpec:
         return d
 
     def run_key(self) -> str:
-        """A hash of everything that decides the numbers, the source of the compiled physics
-        included: two runs with the same key compute the same chunks bit for bit."""
+        """A hash of everything that decides the numbers, the source of the physics and of the
+        atlas's kernels included: two runs with the same key compute the same chunks bit for
+        bit."""
         from .._jit import _source_hash
 
-        text = json.dumps({"spec": self.as_dict(), "dynamics": _source_hash()}, sort_keys=True)
+        here = Path(__file__).parent
+        # the physics (hashed for numba's cache, which leaves this package out) and what here
+        # decides a cell's numbers
+        code = [_source_hash()] + [
+            (here / f).read_text() for f in ("grid.py", "theory.py", "kernels.py")
+        ]
+        digest = hashlib.sha256("\n".join(code).encode()).hexdigest()
+        text = json.dumps({"spec": self.as_dict(), "code": digest}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     @classmethod
