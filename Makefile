@@ -1,13 +1,13 @@
 # mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
-# against accuracy (into a temporary folder). `make screenshots`, `make bench-docs` and
-# `make readme-gif` refresh the pictures and tables committed under docs/ (`bench-docs` also the
-# README's benchmark figures); nothing else writes there. Each target creates .venv and installs
-# the project (editable) on first use.
+# against accuracy (into a temporary folder). `make screenshots`, `make bench-docs`,
+# `make readme-gif` and `make atlas-docs` refresh the pictures and tables committed under docs/
+# (`bench-docs` also the README's benchmark figures); nothing else writes there. Each target
+# creates .venv and installs the project (editable) on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench bench-docs screenshots readme-gif lint clean
+.PHONY: run test bench bench-docs screenshots readme-gif atlas-docs lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -54,6 +54,19 @@ readme-gif: $(VENV)/.installed-test
 	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	$(BIN)/mechviz record radial-kick --out "$$tmp" --duration 8 --fps 10 --video gif --size 640x360 && \
 	cp "$$tmp/radial-kick.gif" $(README_GIF).partial && mv $(README_GIF).partial $(README_GIF)
+
+# The README's atlas maps: the hoop's chaos map (128 x 128 starts, 60 s each) and its stability
+# map for every fixed-step method, on a LocalCluster of this machine's cores.
+ATLAS_IMG := docs/img/atlas
+atlas-docs: $(VENV)/.installed-test
+	$(BIN)/python -m pip install -q -e '.[atlas]'
+	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(BIN)/mechviz atlas chaos --out "$$tmp/chaos" --no-progress && \
+	$(BIN)/mechviz atlas stability --out "$$tmp/stability" --no-progress && \
+	mkdir -p $(ATLAS_IMG) && \
+	for m in chaos stability; do \
+	  cp "$$tmp/$$m/$$m.png" $(ATLAS_IMG)/$$m.png.partial && mv $(ATLAS_IMG)/$$m.png.partial $(ATLAS_IMG)/$$m.png; \
+	done
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

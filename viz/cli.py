@@ -1,7 +1,7 @@
 """The ``mechviz`` command: one entry point, a subcommand per use.
 
 ``analyze`` and ``simulate`` come from :mod:`dynamics.cli` and need no viewer; ``view``,
-``record``, ``play``, ``bench`` and ``video`` import what they need only when run.
+``record``, ``play``, ``bench``, ``video`` and ``atlas`` import what they need only when run.
 """
 
 from __future__ import annotations
@@ -11,8 +11,14 @@ import importlib
 import sys
 
 # view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli),
-# video (viz.video_cli).
-_COMMAND_MODULES = ("viz.app_cli", "viz.recording_cli", "viz.bench_cli", "viz.video_cli")
+# video (viz.video_cli), atlas (viz.atlas_cli).
+_COMMAND_MODULES = (
+    "viz.app_cli",
+    "viz.recording_cli",
+    "viz.bench_cli",
+    "viz.video_cli",
+    "viz.atlas_cli",
+)
 
 
 class _Parser(argparse.ArgumentParser):

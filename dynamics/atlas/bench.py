@@ -1,0 +1,195 @@
+"""What an atlas costs: per cell, per core, and what Dask adds (``mechviz atlas --bench OUT``).
+
+Measures, on the chaos map of the hoop (the map that outgrows one machine):
+
+- *cost per cell*: one chunk run as an ensemble (:func:`.kernels.compute_chunk`) against the same
+  cells run one at a time, each its own :class:`dynamics.Simulation` (ratio below 1: the
+  ensemble is cheaper);
+- *parallel efficiency*: the same atlas on a ``LocalCluster`` (TCP) of one worker process and of
+  two, workers warmed first (compiled kernels, not timed); speed-up ``T1 / T2``;
+- *scheduling overhead*: ``1 - (sum of task seconds) / (workers x wall seconds)``, the share of
+  the workers' time not spent inside a task (scheduling, transfer, writing the store);
+- *cells per second per core* from the tasks' own seconds, and the projected wall time of a
+  1024 x 1024 map over 60 s on 1, 8 and 64 cores (at the measured two-worker efficiency).
+
+The load average is recorded before and after: on a shared machine the figures are a lower
+bound on what the code does alone.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .grid import AtlasSpec, Axis
+from .kernels import compute_chunk
+from .store import versions
+
+
+def _spec(n: int, duration: float, chunk: tuple[int, int]) -> AtlasSpec:
+    return AtlasSpec(
+        "chaos",
+        "hoop",
+        ("rk4",),
+        Axis("theta2", -3.0, 3.0, n),
+        Axis("theta1", -3.0, 3.0, n),
+        duration=duration,
+        chunk=chunk,
+    )
+
+
+def _warm(spec: AtlasSpec) -> bool:
+    compute_chunk(_spec(2, 0.1, (2, 2)), (0, 0, 0))
+    return True
+
+
+def per_cell_cost(n: int, duration: float) -> dict:
+    """Seconds per cell: ``n`` cells as one ensemble against the same cells one at a time."""
+    spec = _spec(n, duration, (1, n))
+    compute_chunk(spec, (0, 0, 0))  # compile
+    t0 = time.perf_counter()
+    compute_chunk(spec, (0, 0, 0))
+    ensemble = (time.perf_counter() - t0) / n
+    single = _spec(n, duration, (1, 1))
+    t0 = time.perf_counter()
+    for j in range(n):
+        compute_chunk(single, (0, 0, j))
+    serial = (time.perf_counter() - t0) / n
+    return {
+        "cells": n,
+        "duration_s": duration,
+        "ensemble_s_per_cell": ensemble,
+        "serial_simulation_s_per_cell": serial,
+        "ratio": ensemble / serial,
+    }
+
+
+def distributed_run(spec: AtlasSpec, workers: int) -> dict:
+    """The atlas on a fresh LocalCluster of ``workers`` processes; warmed, then timed."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    from .driver import run_atlas
+
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        protocol="tcp",
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+    with cluster, Client(cluster) as client, tempfile.TemporaryDirectory() as tmp:
+        client.wait_for_workers(workers)
+        client.run(_warm, spec)
+        report = run_atlas(spec, Path(tmp) / "a.zarr", client=client)
+    busy = report.task_seconds / (workers * report.wall_seconds)
+    return {
+        "workers": workers,
+        "chunks": report.total,
+        "wall_s": report.wall_seconds,
+        "task_s": report.task_seconds,
+        "scheduling_overhead": 1.0 - busy,
+    }
+
+
+def run_bench(out: Path, *, quick: bool = False, progress: bool = True) -> dict:
+    """Run the measurements and write ``out/atlas-bench.json``; returns the result."""
+
+    def say(text: str) -> None:
+        if progress:
+            print(f"mechviz atlas --bench: {text}", flush=True)
+
+    load_before = os.getloadavg()
+    started = time.perf_counter()
+    duration = 60.0
+    say("cost per cell: one ensemble against one Simulation per cell")
+    cost = per_cell_cost(32 if quick else 128, duration)
+    # enough chunks of about a second (a quarter in a quick run) to keep two workers busy
+    n = 32 if quick else 64
+    target = 0.25 if quick else 1.0
+    rows = max(1, min(n, int(target / (cost["ensemble_s_per_cell"] * n))))
+    spec = _spec(n, duration, (rows, n))
+    say(
+        f"parallel efficiency: {n}x{n} cells in {len(spec.chunks())} chunks of {rows}x{n}, "
+        "on 1 and 2 workers"
+    )
+    one = distributed_run(spec, 1)
+    two = distributed_run(spec, 2)
+    speedup = one["wall_s"] / two["wall_s"]
+    cells = n * n
+    per_core = cells / one["task_s"]
+    efficiency = speedup / 2.0
+    projected = {
+        str(c): 1024 * 1024 / (per_core * c * (1.0 if c == 1 else efficiency)) for c in (1, 8, 64)
+    }
+    load_after = os.getloadavg()
+    result = {
+        "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "mode": "quick" if quick else "full",
+        "cpu_count": os.cpu_count(),
+        "load_average_before": [round(x, 2) for x in load_before],
+        "load_average_after": [round(x, 2) for x in load_after],
+        "loaded_machine": max(load_before[0], load_after[0]) > 0.5 * (os.cpu_count() or 1),
+        "versions": versions(),
+        "map": {"kind": "chaos", "method": "rk4", "step_s": spec.step, "duration_s": duration},
+        "per_cell": cost,
+        "one_worker": one,
+        "two_workers": two,
+        "speedup_1_to_2": speedup,
+        "parallel_efficiency_2": efficiency,
+        "scheduling_overhead": max(one["scheduling_overhead"], two["scheduling_overhead"]),
+        "cells_per_s_per_core": per_core,
+        "projected_1024x1024_wall_s": projected,
+        "bench_seconds": time.perf_counter() - started,
+        "targets": {
+            "per_cell_within_1.2x_of_serial": cost["ratio"] <= 1.2,
+            "speedup_1_to_2_at_least_1.7": speedup >= 1.7,
+            "scheduling_overhead_under_5pct": max(
+                one["scheduling_overhead"], two["scheduling_overhead"]
+            )
+            < 0.05,
+        },
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "atlas-bench.json"
+    partial = path.with_suffix(".json.partial")
+    partial.write_text(json.dumps(result, indent=1))
+    partial.replace(path)
+    result["path"] = str(path)
+    return result
+
+
+def format_summary(r: dict) -> str:
+    c = r["per_cell"]
+    lines = [
+        f"atlas bench ({r['mode']}, {r['date']}, {r['cpu_count']} cores, load "
+        f"{r['load_average_before']} -> {r['load_average_after']}"
+        f"{', a loaded machine' if r['loaded_machine'] else ''})",
+        f"  per cell: ensemble {1e3 * c['ensemble_s_per_cell']:.3g} ms, one Simulation per cell "
+        f"{1e3 * c['serial_simulation_s_per_cell']:.3g} ms (ratio {c['ratio']:.2f})",
+        f"  1 worker {r['one_worker']['wall_s']:.2f} s, 2 workers {r['two_workers']['wall_s']:.2f} s:"
+        f" speed-up {r['speedup_1_to_2']:.2f}x (efficiency {100 * r['parallel_efficiency_2']:.0f} %)",
+        f"  scheduling overhead {100 * r['scheduling_overhead']:.1f} %",
+        f"  {r['cells_per_s_per_core']:.0f} cells/s/core; 1024x1024 over 60 s: "
+        + ", ".join(f"{k} cores {_hms(v)}" for k, v in r["projected_1024x1024_wall_s"].items()),
+        "  targets: "
+        + ", ".join(f"{k} {'met' if v else 'MISSED'}" for k, v in r["targets"].items()),
+        f"  written: {r['path']}",
+    ]
+    return "\n".join(lines)
+
+
+def _hms(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "n/a"
+    m, s = divmod(int(round(seconds)), 60)
+    h, m = divmod(m, 60)
+    return f"{h}h{m:02d}m{s:02d}s" if h else f"{m}m{s:02d}s"

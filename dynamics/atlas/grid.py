@@ -1,0 +1,272 @@
+"""What an atlas computes: its kind, system, methods, two axes, settings, and the chunks it is cut into.
+
+An atlas is a map over a grid of ``(method, y, x)`` cells. Each kind names its axes:
+
+============ ================================ ================================
+kind         y (rows)                         x (columns)
+============ ================================ ================================
+stability    ``dt`` [s], the step              ``amplitude`` (see :mod:`.theory`)
+accuracy     ``dt`` [s] or ``rtol``            ``amplitude``
+chaos        ``theta2`` [rad] at rest          ``theta1`` [rad] at rest (hoop only)
+============ ================================ ================================
+
+The grid is cut into rectangular chunks of ``chunk = (rows, columns)`` cells of one method, each
+one task. The chunk shape is part of the run (it is hashed into :meth:`AtlasSpec.run_key`), so a
+resumed run cuts the grid exactly as the first one did; :func:`chunk_shape_for` picks one worth
+about :data:`CHUNK_SECONDS` of work from a rough cost per step.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from .. import params as _v
+from ..integrators import get_method, methods_for
+
+Kind = Literal["stability", "chaos", "accuracy"]
+KINDS: tuple[str, ...] = ("stability", "chaos", "accuracy")
+SYSTEM_NAMES = ("hoop", "cyclotron", "free-body")
+
+#: Target wall time [s] of one chunk (one task) on one core.
+CHUNK_SECONDS = 1.0
+#: Rough cost [ns] of one compiled step of one member on one core, used only to size chunks
+#: (the atlas benchmark measures the real figures). Unknown methods count as the costliest.
+STEP_COST_NS = {
+    "euler": 50.0,
+    "boris": 50.0,
+    "verlet": 80.0,
+    "rk4": 100.0,
+    "splitting": 150.0,
+    "midpoint": 300.0,
+    "yoshida4": 400.0,
+    "dop853": 2000.0,
+    "taylor": 2000.0,
+}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """``n`` values from ``start`` to ``stop`` (both included), evenly spaced (``"linear"``) or
+    in geometric progression (``"log"``, both ends positive)."""
+
+    name: str
+    start: float
+    stop: float
+    n: int
+    scale: Literal["linear", "log"] = "linear"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", _v.finite(f"{self.name} start", self.start))
+        object.__setattr__(self, "stop", _v.finite(f"{self.name} stop", self.stop))
+        if not isinstance(self.n, int | np.integer) or self.n < 1:
+            raise ValueError(f"{self.name}: the number of points must be a positive integer")
+        object.__setattr__(self, "n", int(self.n))
+        if self.scale not in ("linear", "log"):
+            raise ValueError(f"{self.name}: scale must be 'linear' or 'log', got {self.scale!r}")
+        if self.scale == "log" and not (self.start > 0 and self.stop > 0):
+            raise ValueError(f"{self.name}: a log axis needs positive ends")
+        if self.n > 1 and self.start == self.stop:
+            raise ValueError(f"{self.name}: start and stop are equal")
+
+    def values(self) -> np.ndarray:
+        if self.scale == "log":
+            return np.geomspace(self.start, self.stop, self.n)
+        return np.linspace(self.start, self.stop, self.n)
+
+
+@dataclass(frozen=True)
+class AtlasSpec:
+    """One atlas: everything that decides its numbers (and nothing that does not, such as the
+    cluster it runs on).
+
+    kind : ``"stability"``, ``"chaos"`` or ``"accuracy"`` (module docstring).
+    system : ``"hoop"``, ``"cyclotron"`` or ``"free-body"`` (chaos: hoop only).
+    params : the system's parameters by field name (its dataclass validates them).
+    methods : method names; stability: fixed-step methods; chaos: one fixed-step method.
+    y, x : the axes (names as in the module docstring).
+    periods : stability: run length in periods of the fastest linear mode.
+    threshold : stability: a cell is unbounded once its relative energy error exceeds this.
+    duration : chaos and accuracy: run length [s].
+    step : chaos: the fixed step [s] of the method the exponent is computed with.
+    renormalise : chaos: time [s] between renormalisations of the twin's offset.
+    separation : chaos: the twin's offset (Euclidean, in state space) after each renormalisation.
+    chunk : (rows, columns) of one chunk.
+    """
+
+    kind: Kind
+    system: str
+    methods: tuple[str, ...]
+    y: Axis
+    x: Axis
+    params: tuple[tuple[str, float], ...] = ()
+    periods: float = 50.0
+    threshold: float = 1.0
+    duration: float = 60.0
+    step: float = 0.01
+    renormalise: float = 1.0
+    separation: float = 1e-9
+    chunk: tuple[int, int] = field(default=(0, 0))
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        if self.system not in SYSTEM_NAMES:
+            raise ValueError(
+                f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}"
+            )
+        if self.kind == "chaos" and self.system != "hoop":
+            raise ValueError("system: the chaos map is of the hoop's start plane (system hoop)")
+        object.__setattr__(
+            self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params))
+        )
+        self.make_system()  # the parameters' own dataclass validates them
+        object.__setattr__(self, "methods", tuple(self.methods))
+        if not self.methods:
+            raise ValueError("methods: give at least one")
+        if len(set(self.methods)) != len(self.methods):
+            raise ValueError("methods: a method is named twice")
+        allowed = {m.name for m in methods_for(self.system) if m.backend == "numba"}
+        for name in self.methods:
+            try:
+                m = get_method(name)
+            except (KeyError, ValueError):
+                raise ValueError(f"methods: unknown method {name!r}") from None
+            if name not in allowed:
+                raise ValueError(f"methods: {name} is not a compiled method of the {self.system}")
+            if self.kind != "accuracy" and m.adaptive:
+                raise ValueError(
+                    f"methods: {name} is adaptive; the {self.kind} map takes fixed steps"
+                )
+        if self.kind == "chaos" and len(self.methods) != 1:
+            raise ValueError("methods: the chaos map is computed with one method")
+        if self.kind == "accuracy":
+            adaptive = {get_method(m).adaptive for m in self.methods}
+            if len(adaptive) > 1:
+                raise ValueError("methods: mix no fixed-step and adaptive methods in one map")
+            want = "rtol" if adaptive.pop() else "dt"
+            if self.y.name != want:
+                raise ValueError(f"y axis: {self.methods[0]} takes {want}, not {self.y.name}")
+            ends = (self.y.start, self.y.stop)
+            if want == "rtol" and not (0 < min(ends) and max(ends) < 1):
+                raise ValueError("rtol: must lie between 0 and 1")
+        expected = {
+            "stability": ("dt", "amplitude"),
+            "chaos": ("theta2", "theta1"),
+            "accuracy": (self.y.name, "amplitude"),
+        }[self.kind]
+        if (self.y.name, self.x.name) != expected:
+            raise ValueError(f"axes: the {self.kind} map has y = {expected[0]}, x = {expected[1]}")
+        if self.y.name == "dt" and min(self.y.start, self.y.stop) <= 0:
+            raise ValueError("dt: the steps must be positive")
+        for name in ("periods", "threshold", "duration", "step", "renormalise", "separation"):
+            _v.positive(name, getattr(self, name))
+        if self.kind == "chaos" and self.renormalise < self.step:
+            raise ValueError("renormalise: must be at least one step")
+        if self.chunk == (0, 0):
+            object.__setattr__(self, "chunk", chunk_shape_for(self))
+        rows, cols = (int(c) for c in self.chunk)
+        if rows < 1 or cols < 1:
+            raise ValueError(f"chunk: rows and columns must be at least 1, got {self.chunk}")
+        object.__setattr__(self, "chunk", (min(rows, self.y.n), min(cols, self.x.n)))
+
+    # ---------------------------------------------------------------- the system
+    def make_system(self):
+        """The :mod:`dynamics.systems` adapter with :attr:`params`."""
+        from .theory import make_system
+
+        return make_system(self.system, dict(self.params))
+
+    # ---------------------------------------------------------------- the grid
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return (len(self.methods), self.y.n, self.x.n)
+
+    @property
+    def chunk_grid(self) -> tuple[int, int, int]:
+        """Chunks along (method, y, x)."""
+        return (len(self.methods), -(-self.y.n // self.chunk[0]), -(-self.x.n // self.chunk[1]))
+
+    def chunks(self) -> list[tuple[int, int, int]]:
+        """Every chunk's index ``(method, row block, column block)``, in row-major order."""
+        return [tuple(int(v) for v in i) for i in np.ndindex(*self.chunk_grid)]
+
+    def cells(self, index: tuple[int, int, int]) -> tuple[int, slice, slice]:
+        """The method index and the row and column slices of chunk ``index``."""
+        k, by, bx = index
+        cy, cx = self.chunk
+        rows = slice(by * cy, min((by + 1) * cy, self.y.n))
+        return k, rows, slice(bx * cx, min((bx + 1) * cx, self.x.n))
+
+    # ---------------------------------------------------------------- identity
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["params"] = dict(self.params)
+        d["methods"] = list(self.methods)
+        d["chunk"] = list(self.chunk)
+        return d
+
+    def run_key(self) -> str:
+        """A hash of everything that decides the numbers, the source of the physics and of the
+        atlas's kernels included: two runs with the same key compute the same chunks bit for
+        bit."""
+        from .._jit import _source_hash
+
+        here = Path(__file__).parent
+        # the physics (hashed for numba's cache, which leaves this package out) and what here
+        # decides a cell's numbers
+        code = [_source_hash()] + [
+            (here / f).read_text() for f in ("grid.py", "theory.py", "kernels.py")
+        ]
+        digest = hashlib.sha256("\n".join(code).encode()).hexdigest()
+        text = json.dumps({"spec": self.as_dict(), "code": digest}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+    @classmethod
+    def from_dict(cls, d: dict) -> AtlasSpec:
+        d = dict(d)
+        d["y"], d["x"] = Axis(**d["y"]), Axis(**d["x"])
+        d["params"] = tuple(d["params"].items())
+        d["methods"], d["chunk"] = tuple(d["methods"]), tuple(d["chunk"])
+        return cls(**d)
+
+
+def steps_per_cell(spec: AtlasSpec, method: str) -> float:
+    """Compiled member-steps one cell costs at the finest step of the grid (an upper bound)."""
+    from .theory import fastest_period
+
+    if spec.kind == "chaos":
+        return 2.0 * spec.duration / spec.step
+    if spec.y.name == "dt":
+        finest = min(spec.y.start, spec.y.stop)
+        span = spec.periods * fastest_period(spec) if spec.kind == "stability" else spec.duration
+        return span / finest
+    # adaptive: about 2 rtol^(-1/8) steps per fastest period, and a reference run beside it
+    rtol = min(spec.y.start, spec.y.stop)
+    return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / 8.0)
+
+
+def chunk_shape_for(spec: AtlasSpec) -> tuple[int, int]:
+    """(rows, columns) worth about :data:`CHUNK_SECONDS` on one core: whole rows of the grid when
+    they fit (a chunk of a stability or accuracy map shares one step size per row), else part of
+    one row."""
+    costliest = max(STEP_COST_NS.values())
+    worst = max(STEP_COST_NS.get(m, costliest) * steps_per_cell(spec, m) for m in spec.methods)
+    cells = max(1, int(CHUNK_SECONDS * 1e9 / max(worst, 1.0)))
+    if cells >= spec.x.n:
+        return (max(1, min(spec.y.n, cells // spec.x.n)), spec.x.n)
+    return (1, cells)
+
+
+def grid_values(spec: AtlasSpec) -> dict[str, np.ndarray]:
+    return {spec.y.name: spec.y.values(), spec.x.name: spec.x.values()}
+
+
+def ceil_div(a: float, b: float) -> int:
+    return int(math.ceil(a / b - 1e-9))
