@@ -50,11 +50,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+import dynamics
+
 from . import warm
 from .frames import FrameLog
 from .live_record import add_record_toggle
 from .model.base import LOG_FLOOR
-from .scene import EXHIBITS, Exhibit
+from .scene import EXHIBITS, CyclotronExhibit, Exhibit
 from .scene.panel import Panel
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
@@ -91,7 +93,8 @@ def warm_up(
         systems = {cls.Config.system_name for cls in EXHIBITS.values()}
         return warm.warm_all(warm.every_method(sorted(systems)), should_stop)
     cfg = configs or {}
-    needed: list[tuple[str, str]] = [("hoop", "dop853"), ("free-body", "dop853")]  # references
+    # the tight DOP853 reference runs of the systems without an exact solution everywhere
+    needed = [(s.name, "dop853") for s in (dynamics.Hoop, dynamics.ReleasedDisk)]
     for key, cls in EXHIBITS.items():
         c = cfg.get(key) or cls.Config()
         needed.append((c.system_name, c.method))
@@ -332,7 +335,7 @@ class MechvizApp:
         if view == "All":
             return OVERVIEW
         if view == "Top":  # looking down (+y up on the screen, +x right), slid clear of the panel
-            o = self.exhibits["cyclotron"].origin + (PANEL_SHIFT * 6.5, 0.0, 0.0)
+            o = self.exhibits[CyclotronExhibit.key].origin + (PANEL_SHIFT * 6.5, 0.0, 0.0)
             return tuple(o + (0.0, -0.01, 6.5)), tuple(o)
         position, target = (np.asarray(v, float) for v in self.exhibits[VIEWS[view]].camera)
         forward = target - position

@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from .app import MechvizApp, warm_up
-from .scene import CyclotronConfig, HoopConfig
+from .model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
 
 
 def measure_frame_cost(
@@ -26,8 +26,8 @@ def measure_frame_cost(
     configs = {}
     if compare:
         configs = {
-            "cyclotron": CyclotronConfig(compare_method="boris"),
-            "hoop": HoopConfig(compare_method="rk4"),
+            CyclotronModel.key: CyclotronConfig(compare_method="boris"),
+            HoopModel.key: HoopConfig(compare_method="rk4"),
         }
     warm_up("defaults", configs)
     app = MechvizApp(port=0, configs=configs, start_loop=False)
