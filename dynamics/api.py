@@ -180,30 +180,19 @@ def simulate(
     sim = Simulation(setup.system, setup.method, step=setup.step, state=setup.state,
                      reference=reference)  # fmt: skip
     single = np.ndim(setup.state) == 1
-    K = samples
-    ts, S, E, EE, ERR, INV = [], [], [], [], [], []
-    for k, t in enumerate(np.linspace(0.0, t_end, K)):
-        if k:
-            sim.advance_to(float(t), final=k == K - 1)
-        s = sim.sample()
-        ts.append(s.t)
-        S.append(s.state)
-        E.append(s.energy)
-        EE.append(s.energy_error)
-        ERR.append(s.error)
-        INV.append(s.invariants or {})
+    traj = sim.run(t_end, n_samples=samples)
 
-    def stack(xs):
-        a = np.stack(xs)
+    def member(a):
         return a[:, 0] if single else a
 
-    err = None if ERR[0] is None else stack(ERR)
-    inv = {name: stack([i[name] for i in INV]) for name in INV[0]}
     return Run(
         system=spec.name, method=sim.method.name, step=sim.step_label(),
         params=dataclasses.asdict(setup.params), columns=tuple(setup.system.state_names),
-        t=np.asarray(ts), states=stack(S), energy=stack(E), energy_error=stack(EE), error=err,
-        reference=sim.reference_kind, steps=sim.steps, rhs_evaluations=sim.nfev, invariants=inv,
+        t=traj.t, states=member(traj.states), energy=member(traj.energy),
+        energy_error=member(traj.energy_error),
+        error=None if traj.error is None else member(traj.error),
+        reference=sim.reference_kind, steps=sim.steps, rhs_evaluations=sim.nfev,
+        invariants={n: member(v) for n, v in traj.invariants.items()},
         start=dict(setup.start),
     )  # fmt: skip
 

@@ -92,7 +92,9 @@ class Sample:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Samples of a run stacked in time: ``t`` (K,), ``states`` (K, N, d), ..."""
+    """Samples of a run stacked in time: ``t`` (K,) [s], ``states`` (K, N, d), ``energy`` [J]
+    and ``energy_error`` (K, N), ``error`` (K, N) or None, ``invariants`` by name (K, N, ...);
+    ``nfev`` and ``steps`` of the whole run."""
 
     t: np.ndarray
     states: np.ndarray
@@ -100,6 +102,8 @@ class Trajectory:
     error: np.ndarray | None
     nfev: int
     steps: int
+    energy: np.ndarray | None = None
+    invariants: dict[str, np.ndarray] | None = None
 
 
 class Simulation:
@@ -504,6 +508,7 @@ class Simulation:
                 self.advance_to(float(t), final=t == times[-1])
             samples.append(self.sample())
         err = None if samples[0].error is None else np.stack([s.error for s in samples])
+        names = samples[0].invariants or {}
         return Trajectory(
             np.array([s.t for s in samples]),
             np.stack([s.state for s in samples]),
@@ -511,6 +516,8 @@ class Simulation:
             err,
             self.nfev,
             self.steps,
+            np.stack([s.energy for s in samples]),
+            {n: np.stack([s.invariants[n] for s in samples]) for n in names},
         )
 
 

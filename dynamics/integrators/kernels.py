@@ -136,9 +136,9 @@ def run_direct(step, Y, p, h, n_steps, status):
 
     The members are independent, so each is taken through all its steps before the next
     (member outer): the row view ``Y[i]`` is then made once per member instead of once per
-    step. That view is reference counted, and doing it every step cost more than a whole
-    Boris step (measured 25 -> 11 ns/step); the states are bit for bit those of a time-outer
-    loop. A member only needs stepping up to the earliest failure found so far.
+    step. That view is reference counted, and making it every step can cost more than a
+    whole cheap step (docs/bench has the figures); the states are bit for bit those of a
+    time-outer loop. A member only needs stepping up to the earliest failure found so far.
     """
     nfev = 0
     status[0] = OK
