@@ -552,6 +552,12 @@ class ExhibitModel:
         """The figures measured from the motion, by name (``None``: not yet)."""
         return {}
 
+    @classmethod
+    def recorded_figures(cls, config, tr) -> list[dict[str, Any]]:
+        """The figures a recording of ``config`` reports, measured from its traces
+        (:class:`viz.model.traces.Traces`) against theory (:mod:`viz.model.figures`)."""
+        return []
+
     def method_line(self, sim: dynamics.Simulation) -> str:
         """The method and its step setting; for an adaptive main run also the steps it took over
         the last advance (a frame, live) and the length of the step it is in: the tolerance

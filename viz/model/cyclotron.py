@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -21,7 +21,9 @@ from dynamics import measure
 from dynamics.systems import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers, positive
+from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
+from .traces import Traces
 
 
 @dataclass(frozen=True)
@@ -259,6 +261,62 @@ class CyclotronModel(ExhibitModel):
     @classmethod
     def pictures(cls, config) -> tuple[tuple[str, str], ...]:
         return (("r", "V_eff"), ("x", "y"))
+
+
+    # ------------------------------------------------------------------ a recording's figures
+    @classmethod
+    def recorded_figures(cls, config, tr: Traces) -> list[dict[str, Any]]:
+        """Gyrofrequency, Larmor radius and pitch (or the beam's periods), each kick's circle
+        shift and new radius, and the final energy errors when two methods are compared."""
+        p = config.physics()
+        figs: list[dict[str, Any]] = []
+        main = tr.main
+        t, S = tr.times[main], tr.states[main]
+        w = cy.gyrofrequency(p)
+        kicks = [e["t"] for e in tr.event_log]
+        pre = t < (kicks[0] if kicks else math.inf)  # before the first kick
+        if S.shape[1] == 1:
+            w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5], xy=S[pre, 0, :2])
+            keep(figs, "gyrofrequency", w_meas, w, "rad/s")
+            circle = measure.fit_circle(S[pre, 0, :2])
+            radius = measure.Estimate(circle.value[1]) if circle else circle
+            figs.append(figure("Larmor radius", radius, cy.larmor_radius(p, S[0, 0]), "m"))
+            if w_meas and abs(S[0, 0, 5]) > 0:
+                pitch = measure.slope(t[pre], S[pre, 0, 2]) * 2 * math.pi / w_meas.value
+                figs.append(figure("helix pitch", pitch, S[0, 0, 5] * cy.period(p), "m"))
+        else:
+            rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2])
+            if rates:
+                periods = 2 * math.pi / np.asarray(rates.value)
+                figs.append(figure("shortest period in the beam", periods.min(), 2 * math.pi / w, "s"))
+                figs.append(figure("longest period in the beam", periods.max(), 2 * math.pi / w, "s"))
+            v = np.hypot(S[0, :, 3], S[0, :, 4])
+            figs.append(figure("speed ratio in the beam", v.max() / v.min(), None, "",
+                               "the periods agree although the speeds differ by this factor"))  # fmt: skip
+        for entry in tr.event_log:
+            eff = entry["effects"][main]
+            post = t > entry["t"] + 1e-9
+            before = measure.fit_circle(S[pre, 0, :2])
+            after = measure.fit_circle(S[post, 0, :2])
+            if not before or not after:
+                continue
+            shift = float(np.linalg.norm(after.value[0] - before.value[0]))
+            figs.append(figure("circle shift after the kick", shift, eff["predicted_shift"], "m"))
+            figs.append(figure("radius after the kick", after.value[1], eff["predicted_radius"][0], "m"))
+            keep(figs, "gyrofrequency after the kick",
+                  measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2]),
+                  w, "rad/s", "unchanged: the period does not depend on the energy")  # fmt: skip
+        if len(tr.states) > 1:
+            for label, run in tr.runs.items():
+                E = tr.energy_error[label][:, 0]
+                pred, note = None, ""
+                if run["method"] == "euler":
+                    pred = (1 + (w * run["dt"]) ** 2) ** tr.steps[label] - 1
+                    note = "explicit Euler: |v|^2 grows by 1 + (Omega dt)^2 every step"
+                elif run["method"] in ("boris", "exact"):
+                    pred, note = 0.0, "Boris keeps |v| to round-off"
+                figs.append(figure(f"final energy error, {label}", float(E[-1]), pred, "", note))
+        return figs
 
 
 def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -22,7 +22,9 @@ from dynamics import measure
 from dynamics.systems import DISK
 
 from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
+from .traces import Traces
 
 MODES = DISK.setting("motion").choices
 
@@ -232,6 +234,42 @@ class DiskModel(ExhibitModel):
                 "once the disk is released.</small>"
             )
         return super().stability_text()
+
+
+    # ------------------------------------------------------------------ a recording's figures
+    @classmethod
+    def recorded_figures(cls, config, tr: Traces) -> list[dict[str, Any]]:
+        """Driven: the spin rate and the bearing force's amplitude and frequency from dL/dt of
+        the motion. Released: the wobble's growth rate and the change of |L|."""
+        p = config.physics()
+        if config.mode == "driven":
+            return cls._driven_figures(tr, p)
+        return cls._released_figures(tr, p)
+
+    @staticmethod
+    def _driven_figures(tr: Traces, p) -> list[dict[str, Any]]:
+        t, S = tr.times[tr.main], tr.states[tr.main]
+        figs = [figure("spin rate", measure.slope(t, S[:, 0, 0]), p.omega, "rad/s")]
+        keep(figs, "bearing force amplitude at B",
+              measure.bearing_force_amplitude(p, t, S[:, 0, 0], S[:, 0, 1]), dk.axle_force_amplitude(p),
+              "N", "from d L / dt of the simulated motion; seed: 5/8 M R omega^2")  # fmt: skip
+        if len(t) >= 3:
+            F = measure.bearing_force(p, t, S[:, 0, 0], S[:, 0, 1])
+            keep(figs, "bearing force frequency", measure.crossing_frequency(t, F[:, 0]), p.omega, "rad/s")
+        return figs
+
+    @staticmethod
+    def _released_figures(tr: Traces, p) -> list[dict[str, Any]]:
+        t, S = tr.times[tr.main], tr.states[tr.main]
+        moments = dk.free_kernel_params(p)
+        figs: list[dict[str, Any]] = []
+        keep(figs, "wobble growth rate", measure.wobble_growth_rate(t, S[:, 0, :3]),
+              measure.wobble_growth_rate_theory(moments, S[0, 0, :3]), "1/s",
+              "spin about the intermediate axis: w_perp grows as exp(rate t)")  # fmt: skip
+        L = np.linalg.norm(dk.free_angular_momentum_space(moments, S[:, 0]), axis=-1)
+        figs.append(figure("final |L| change", abs(L[-1] - L[0]) / L[0], 0.0, "",
+                           "torque-free: |L| is conserved"))  # fmt: skip
+        return figs
 
 
 def _conic(a: float, b: float, c: float, reach: float, n: int = 721) -> tuple[np.ndarray, np.ndarray]:

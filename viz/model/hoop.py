@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -21,7 +21,9 @@ from dynamics import measure
 from dynamics.systems import HOOP, HOOP_MODES
 
 from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
+from .traces import Traces
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
 
@@ -206,3 +208,29 @@ class HoopModel(ExhibitModel):
     def initial_mode_amplitudes(self) -> np.ndarray:
         """The start's coordinates on the two mode shapes [rad]."""
         return self.modal_coordinates(self.sim.state0[0])
+
+    # ------------------------------------------------------------------ a recording's figures
+    @classmethod
+    def recorded_figures(cls, config, tr: Traces) -> list[dict[str, Any]]:
+        """Both normal-mode frequencies against linear theory (and mode 1's exact period at a
+        finite amplitude); the energy errors when two methods are compared."""
+        p = config.physics()
+        figs: list[dict[str, Any]] = []
+        freqs, shapes = hp.normal_modes(p)
+        t, S = tr.times[tr.main], tr.states[tr.main]
+        if len(tr.states) > 1:  # two methods: the energy drift is the point
+            for label in tr.states:
+                E = tr.energy_error[label][:, 0]
+                figs.append(figure(f"final energy error, {label}", float(E[-1]), None, ""))
+                figs.append(figure(f"largest |energy error|, {label}", float(np.abs(E).max()), None, ""))
+            return figs
+        amps = measure.modal_coordinates(S[0, 0, :2], shapes)
+        measured = measure.mode_frequencies(t, S[:, 0, :2], shapes)
+        for k in (0, 1):
+            keep(figs, f"mode {k + 1} frequency (linear theory)", measured[k], freqs[k], "rad/s")
+        a1 = abs(float(amps[0]))
+        if measured[0] and abs(amps[1]) < 1e-12 and a1 > 0.2:
+            figs.append(figure("mode 1 frequency (exact, finite amplitude)", measured[0],
+                               2 * math.pi / hp.mode1_period(p, a1), "rad/s",
+                               "rigid-pendulum period 4 K(sin^2(A/2)) / omega_1"))  # fmt: skip
+        return figs

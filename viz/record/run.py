@@ -15,7 +15,7 @@ from __future__ import annotations
 import contextlib
 import io
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -24,34 +24,11 @@ import dynamics
 
 from ..model import MODELS
 from ..model.base import ExhibitModel
+from ..model.traces import Traces
 from .demo import Demo
 
 ProgressFn = Callable[[int, int], None]
 MAX_STEPS = 1e8  # integration steps a recording may take, all runs and members together
-
-
-@dataclass
-class Traces:
-    """Samples of every run at every frame, by run label (the method's name, or
-    ``"<method> (compare)"`` when both runs use one method)."""
-
-    t: np.ndarray  # (K,) frame times (simulated)
-    times: dict[str, np.ndarray]  # label -> (K,) time of each sample (fixed step: last step <= t)
-    states: dict[str, np.ndarray]  # label -> (K, N, d)
-    energy: dict[str, np.ndarray]  # label -> (K, N)
-    energy_error: dict[str, np.ndarray]
-    error: dict[str, np.ndarray | None]
-    reference: dict[str, str | None]
-    steps: dict[str, int]
-    nfev: dict[str, int]
-    runs: dict[str, dict[str, Any]]  # label -> method, title, order, structure, step
-    ghost: np.ndarray | None  # (K, 1, d) linear theory (hoop)
-    event_log: list[dict[str, Any]] = field(default_factory=list)
-    measured: dict[str, Any] = field(default_factory=dict)  # the exhibit's readout figures
-
-    @property
-    def main(self) -> str:
-        return next(iter(self.states))
 
 
 @dataclass
