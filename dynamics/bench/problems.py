@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..assets import asset
 from ..cyclotron import CyclotronParams
 from ..disk import DiskParams
 from ..files import write_json_atomically
@@ -42,7 +43,7 @@ from ..hoop import HoopParams
 from ..simulation import Simulation
 from ..systems import Cyclotron, Hoop, ReleasedDisk
 
-REFERENCE_PATH = Path(__file__).resolve().parents[2] / "assets" / "bench" / "references.json"
+REFERENCE_PATH = asset("bench", "references.json")
 REFERENCE_TOL = 1e-13  # the DOP853 cross-check
 CROSS_CHECK_TOL = 1e-12  # scipy Radau
 LONG_DOUBLE_TOL = 1e-19  # heyoka in 80-bit long double

@@ -27,10 +27,11 @@ import msgspec
 
 import dynamics
 from dynamics import hoop
+from dynamics.assets import asset
 
 from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
 
-DEMO_DIR = Path(__file__).resolve().parents[2] / "assets" / "demos"
+DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
 _INITIAL_KEYS = {
     "cyclotron": {"speed", "vz", "centre", "beam", "speeds", "state"},
