@@ -27,6 +27,7 @@ run that blows up raises :class:`dynamics.IntegrationError`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -36,6 +37,7 @@ from . import analysis
 from . import params as _v
 from .params import SettingError
 from .simulation import Simulation
+from .steps import Fixed
 from .systems import SPECS
 
 #: The systems by the names the API, the command line and the demo files use.
@@ -102,16 +104,20 @@ class Run:
         return pd.DataFrame(data)
 
     def summary(self) -> dict[str, Any]:
-        """Method, step, work and final errors as a JSON-ready dict."""
+        """Method, step, work and final errors as a JSON-ready dict, under the names and signs
+        of ``mechviz simulate --json``: ``energy_drift`` the signed relative energy error at the
+        end (of the member that drifted most, for an ensemble), ``max_energy_error`` the largest
+        magnitude, ``error_vs_exact`` or ``error_vs_reference`` at the end."""
+        end = np.atleast_1d(self.energy_error[-1])
         out: dict[str, Any] = {
             "system": self.system, "method": self.method, "step": self.step,
             "t_end": float(self.t[-1]), "steps": self.steps,
             "rhs_evaluations": self.rhs_evaluations,
-            "final_energy_error": float(np.max(np.abs(self.energy_error[-1]))),
+            "energy_drift": float(end[np.argmax(np.abs(end))]),
             "max_energy_error": float(np.max(np.abs(self.energy_error))),
-        }  # fmt: skip
+        }
         if self.error is not None:
-            out[f"final_error_vs_{self.reference}"] = float(np.max(self.error[-1]))
+            out[f"error_vs_{self.reference}"] = float(np.max(self.error[-1]))
         return out
 
 
@@ -151,8 +157,10 @@ def simulate(
     reference: Literal["auto", "exact"] | None = "auto",
     **settings: Any,
 ) -> Run:
-    """Run ``system`` with ``method`` to ``t_end`` [s] and sample it ``samples`` times (first
-    and last included; a fixed-step sample falls on the last step at or before its time).
+    """Run ``system`` with ``method`` to ``t_end`` [s] and sample it ``samples`` times, equally
+    spaced, first and last included, each at exactly its time (a fixed step that does not divide
+    the interval between samples is shortened to the largest step that does, as the command
+    line does for ``--t-end``; :attr:`Run.step` says which).
 
     ``settings`` are the system's physical parameters (:func:`parameters`) and the settings of
     its start, each defaulting as everywhere else in mechviz (``mechviz simulate SYSTEM --help``
@@ -177,8 +185,13 @@ def simulate(
     t_end = _v.positive("t_end", t_end)
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
         raise SettingError("samples", f"samples must be a whole number of at least 2, got {samples!r}")
-    sim = Simulation(setup.system, setup.method, step=setup.step, state=setup.state,
-                     reference=reference)  # fmt: skip
+    step = setup.step
+    if isinstance(step, Fixed):
+        # Samples at exactly the times asked: the largest step <= dt that divides the interval
+        # between samples (as the command line lands on --t-end).
+        interval = t_end / (samples - 1)
+        step = Fixed(interval / max(1, math.ceil(interval / step.dt - 1e-9)))
+    sim = Simulation(setup.system, setup.method, step=step, state=setup.state, reference=reference)
     single = np.ndim(setup.state) == 1
     traj = sim.run(t_end, n_samples=samples)
 

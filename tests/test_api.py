@@ -87,4 +87,17 @@ def test_summary_is_plain_json():
 
     run = api.simulate("hoop", method="verlet", dt=0.05, t_end=2.0, samples=5, modes=(0.2, 0.1))
     s = json.loads(json.dumps(run.summary()))
-    assert s["method"] == "verlet" and s["steps"] == 40 and "final_error_vs_reference" in s
+    assert s["method"] == "verlet" and s["steps"] == 40 and "error_vs_reference" in s
+
+
+def test_fixed_step_samples_fall_at_exactly_the_times_asked():
+    """dt = 0.03 does not divide the 0.1 s between samples: the step is shortened to 0.025 s,
+    so every sample is at its time, and the central difference of the sampled angle is the rate
+    to within its own error, (omega h)^2 / 6 of the amplitude of the rate."""
+    run = api.simulate("hoop", method="rk4", dt=0.03, t_end=1.0, samples=11, modes=(0.05, 0.0))
+    np.testing.assert_allclose(run.t, np.linspace(0.0, 1.0, 11), rtol=0, atol=1e-12)
+    assert run.step == "dt=0.025 s" and run.steps == 40
+    rate = np.gradient(run.column("theta1"), run.t)[1:-1]
+    omega1 = api.analyze("hoop")["mode_frequencies"][0]
+    bound = 1.5 * (omega1 * 0.1) ** 2 / 6 * (omega1 * 0.05)
+    assert np.max(np.abs(rate - run.column("omega1")[1:-1])) < bound

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -20,8 +21,18 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(tmp_path):
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
     py = venv / "bin" / "python"
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    # the working tree's files as git sees them, copied: the build leaves nothing in the checkout
+    files = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, capture_output=True,
+        text=True, check=True,
+    ).stdout.split()
+    src = tmp_path / "src"
+    for name in files:
+        if (ROOT / name).is_file():
+            (src / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, src / name)
     pip = subprocess.run(
-        [str(py), "-m", "pip", "install", "-q", str(ROOT)],
+        [str(py), "-m", "pip", "install", "-q", str(src)],
         capture_output=True, text=True, timeout=1800, env=env, cwd=tmp_path,
     )
     assert pip.returncode == 0, pip.stderr[-2000:]
