@@ -56,6 +56,8 @@ def _option_error(exc: ValueError, args) -> CliError:
 
 
 def run_record(args: argparse.Namespace) -> int:
+    from dynamics.fileset import check_room
+
     from . import record as rec
 
     if args.list:
@@ -87,6 +89,8 @@ def run_record(args: argparse.Namespace) -> int:
     try:
         if out.exists() and not out.is_dir():
             raise CliError(f"--out: {out} exists and is not a folder")
+        for demo in demos:  # the deepest path the recording makes must be possible
+            check_room(out, demo.name, [f"{demo.name}{s}" for s in rec.SUFFIXES])
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
     if args.video or args.size:
@@ -95,7 +99,9 @@ def run_record(args: argparse.Namespace) -> int:
         check_record_options(args, demos)
     for demo in demos:
         try:
-            res = rec.record(demo, out, progress=ProgressBar(demo.name), theme=args.theme)
+            res = rec.record(
+                demo, out, progress=ProgressBar(demo.name), theme=args.theme, on_wait=_say_waiting
+            )
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")
@@ -107,6 +113,12 @@ def run_record(args: argparse.Namespace) -> int:
         if args.video and (status := film_record(res, args)):
             return status
     return 0
+
+
+def _say_waiting(message: str) -> None:
+    if sys.stderr.isatty():
+        sys.stderr.write("\n")
+    print(f"mechviz: {message}", file=sys.stderr, flush=True)
 
 
 def _report(res) -> None:
