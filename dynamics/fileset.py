@@ -113,7 +113,9 @@ class _Lock:
                 except BlockingIOError:
                     if self.on_wait is not None and not told:
                         where = self.home.parent
-                        self.on_wait(f"another mechviz process is writing to {where}; waiting for it")
+                        self.on_wait(
+                            f"another mechviz process is writing to {where}; waiting for it"
+                        )
                         told = True
                     fcntl.flock(fd, fcntl.LOCK_EX)
                 except OSError as exc:
@@ -164,9 +166,7 @@ def _tidy(out_dir: Path, name: str, file_names: list[str]) -> None:
     prefixes = tuple(f".{f}." for f in file_names)
     for p in out_dir.iterdir():
         n = p.name
-        if n.startswith(prefixes) and (
-            n.endswith((".partial", ".old")) or ".link-" in n
-        ):
+        if n.startswith(prefixes) and (n.endswith((".partial", ".old")) or ".link-" in n):
             _remove(p)
 
 

@@ -55,7 +55,13 @@ def assert_nothing_stray(folder: Path) -> None:
     """Only the names, the set's home, its ``current`` link and the one set it leads to."""
     current = fileset.current_set(folder, "a")
     assert current is not None
-    expected = {*NAMES, ".mechviz", ".mechviz/a", ".mechviz/a/current", f".mechviz/a/{current.name}"}
+    expected = {
+        *NAMES,
+        ".mechviz",
+        ".mechviz/a",
+        ".mechviz/a/current",
+        f".mechviz/a/{current.name}",
+    }
     expected |= {f".mechviz/a/{current.name}/{n}" for n in NAMES}
     assert set(tree(folder)) == expected
 
@@ -96,8 +102,11 @@ def run_child(folder: Path, kill_at: int) -> subprocess.CompletedProcess:
     data = json.dumps({k: v.decode("latin-1") for k, v in NEW.items()})
     return subprocess.run(
         [sys.executable, "-c", _CHILD, str(folder), str(kill_at)],
-        input=data, capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        input=data,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 @pytest.mark.parametrize("start", ["empty", "set", "earlier layout"])
@@ -150,7 +159,7 @@ def test_an_io_error_before_the_switch_keeps_the_old_set(tmp_path, monkeypatch):
         real_fsync(fd)
 
     monkeypatch.setattr(os, "fsync", failing)
-    with pytest.raises(OSError, match="No space left.*unchanged") as info:
+    with pytest.raises(OSError, match=r"No space left.*unchanged") as info:
         fileset.write_set(tmp_path, "a", NEW)
     assert info.value.unchanged
     assert shown(tmp_path) == OLD and tree(tmp_path) == before
@@ -197,8 +206,10 @@ with fileset._Lock(home, [], None):
 def test_a_second_writer_waits_for_the_first_and_both_sets_arrive_whole(tmp_path):
     holder = subprocess.Popen(
         [sys.executable, "-c", _HOLDER, str(tmp_path)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert holder.stdout.readline().strip() == "locked"
         waited = []
