@@ -19,7 +19,7 @@ The server answers five kinds of request and nothing else:
 The server (:mod:`viz.play_server`) has header and answer timeouts, a normal listen backlog and
 limits on connections per client and in all, so idle connections cannot starve a real request.
 A client that closes its connection early is not an error (no traceback). Names are printed
-with control characters escaped (:func:`printable`). :func:`reachable_urls`
+with control characters escaped (:func:`viz.printable.printable`). :func:`reachable_urls`
 and :func:`exposure_note` say where a server bound to HOST can be reached; ``mechviz view`` prints
 them too.
 """
@@ -39,6 +39,7 @@ from pathlib import Path
 from dynamics.cli import CliError
 
 from .play_server import GuardedHandler, GuardedServer
+from .printable import printable
 
 DEFAULT_PLAY_PORT = 8090
 _WILDCARD = ("0.0.0.0", "", "::")
@@ -112,19 +113,6 @@ def _client_index() -> bytes:
     import viser
 
     return (Path(viser.__file__).parent / "client" / "build" / "index.html").read_bytes()
-
-
-def printable(text: str, limit: int = 200) -> str:
-    """``text`` safe to print on a terminal: control characters (escape sequences included) and
-    bytes that are not valid text shown escaped (``\\x1b``, ``\\udcff``); longer than ``limit``
-    characters, the middle is elided."""
-    out = "".join(
-        c if c.isprintable() else c.encode("unicode_escape", "backslashreplace").decode("ascii")
-        for c in text
-    )
-    if len(out) > limit:
-        out = f"{out[: limit // 2]}...{out[-(limit // 2) :]}"
-    return out
 
 
 def _regular_inside(path: Path, folder: Path) -> Path | None:
