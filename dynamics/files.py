@@ -1,8 +1,9 @@
 """Writing a set of files so that a reader sees either the whole old set or the whole new one,
 and JSON that is valid whatever numbers it carries.
 
-Used by the benchmark's results and charts, the viewer's endurance results and the recorder's
-demo files.
+Used by the benchmark's results and charts and the viewer's endurance results. The switch
+renames each file in turn and rolls back on failure, which a process killed with SIGKILL cannot
+do; the recorder's demo files use :mod:`dynamics.fileset` instead, switched by a single rename.
 
 :func:`write_files_atomically` writes every file to a temporary name in the target folder and
 fsyncs it, then switches the set in one step: each old file is kept under a hard link, the new
@@ -134,7 +135,9 @@ def write_files_atomically(out_dir: str | os.PathLike, files: dict[str, bytes]) 
       are removed, and a folder this call created is removed again.
     - Raises :class:`WriteInterrupted` (a ``KeyboardInterrupt``) on SIGINT, with the same
       clean-up. A signal that arrives during the switch is held until the switch is over and
-      then undoes it, so the renames are never cut in half.
+      then undoes it, so the renames are never cut in half. One that arrives after the switch
+      (while the folder is synced) keeps the new set: SIGINT raises :class:`WriteInterrupted`
+      with ``committed`` set.
     - On SIGTERM or SIGHUP, cleans up the same way and then lets the signal do what it did
       before the call (by default: end the process).
 
