@@ -238,3 +238,20 @@ def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
     assert main(["play", str(tmp_path / ("p" * 5000))]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "File name too long" in err, err
+
+
+def test_one_recording_made_by_record_is_served_anew_after_it_is_recorded_again(tmp_path):
+    from dynamics import fileset
+
+    fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})
+    server, _ = play.make_play_server(tmp_path / "demo.viser", "127.0.0.1", 0)
+    threading.Thread(
+        target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True
+    ).start()
+    base = f"http://127.0.0.1:{server.server_address[1]}"
+    try:
+        fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING + b"2", "demo.json": b"{}"})
+        assert _get(f"{base}/recordings/demo.viser")[2] == RECORDING + b"2"
+    finally:
+        server.shutdown()
+        server.server_close()

@@ -157,6 +157,10 @@ def _recordings(path: Path) -> tuple[Path, dict[str, Path]]:
         if path.is_file():
             if path.suffix != ".viser":
                 raise CliError(f"{shown}: not a .viser recording")
+            here = path.absolute()
+            if _regular_inside(here, here.parent.resolve()) is not None:
+                # Resolved again at each request: a recording switched to a new set is served.
+                return here.parent.resolve(), {path.name: here}
             real = path.resolve()
             if _regular_inside(real, real.parent) is None:
                 raise CliError(f"{shown}: not a regular file with a single link")
