@@ -170,6 +170,16 @@ def _tidy(out_dir: Path, name: str, file_names: list[str]) -> None:
             _remove(p)
 
 
+def _require_real_folders(*folders: Path) -> None:
+    """``NotADirectoryError`` unless each is a folder itself, not a link to one: the clean-up
+    removes what it finds inside, so it must never be led elsewhere."""
+    for folder in folders:
+        if not stat.S_ISDIR(os.lstat(folder).st_mode):
+            raise NotADirectoryError(
+                errno.ENOTDIR, "not a folder of its own (a link?); remove it", str(folder)
+            )
+
+
 def _write_folder(folder: Path, files: dict[str, bytes]) -> None:
     folder.mkdir()
     for file_name, content in files.items():
@@ -267,6 +277,8 @@ def write_set(
     their handler is the default one, as :func:`dynamics.files.write_files_atomically` does.
     """
     out_dir = Path(out_dir)
+    if not name or name in (".", "..") or os.sep in name or "\0" in name:
+        raise ValueError(f"not a plain set name: {name!r}")
     file_names = list(files)
     for f in file_names:
         if not f or os.sep in f or f.startswith(".") or f in (HOME, CURRENT):
@@ -282,6 +294,7 @@ def write_set(
         try:
             lock.__enter__()
             created += _make_dirs(home)
+            _require_real_folders(out_dir / HOME, home)
             _tidy(out_dir, name, file_names)
             _take_over_earlier_layout(out_dir, name, file_names)
             old = current_set(out_dir, name)

@@ -234,3 +234,23 @@ def test_a_path_too_long_is_refused_before_anything_is_made(tmp_path):
         fileset.check_room(tmp_path / ("d" * 5000), "a", list(NAMES))
     assert info.value.errno == 36  # ENAMETOOLONG
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_link_in_place_of_the_hidden_folder_is_never_followed_by_the_clean_up(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "precious.txt").write_text("keep me")
+    out = tmp_path / "out"
+    (out / fileset.HOME).mkdir(parents=True)
+    (out / fileset.HOME / "a").symlink_to(elsewhere)
+    with pytest.raises(OSError, match="not a folder of its own"):
+        fileset.write_set(out, "a", NEW)
+    assert (elsewhere / "precious.txt").read_text() == "keep me"
+    assert sorted(p.name for p in elsewhere.iterdir()) == ["precious.txt"]
+
+
+@pytest.mark.parametrize("name", ["", ".", "..", "a/b"])
+def test_a_set_name_that_is_not_a_plain_name_is_refused(tmp_path, name):
+    with pytest.raises(ValueError, match="not a plain set name"):
+        fileset.write_set(tmp_path, name, NEW)
+    assert list(tmp_path.iterdir()) == []
