@@ -178,3 +178,10 @@ def test_sighup_while_syncing_after_the_switch_ends_quietly_with_the_new_files(t
 def test_the_builtin_demos_stay_within_the_limits():
     for d in rec.list_demos():
         demo_module.check_scale(d)
+
+
+def test_an_output_folder_below_a_file_is_one_line(tmp_path, capsys):
+    (tmp_path / "file").write_text("not a folder")
+    err = _one_line_status_2(capsys, ["record", "helix", "--out", str(tmp_path / "file" / "out")])
+    assert "is not a folder" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]

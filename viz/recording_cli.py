@@ -7,12 +7,14 @@ when a command runs.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from dynamics.cli import CliError, number
 
 from .play import add_command as _add_play
+from .printable import printable
 from .progress import ProgressBar
 
 
@@ -88,9 +90,10 @@ def run_record(args: argparse.Namespace) -> int:
     out = Path(args.out)
     try:
         if out.exists() and not out.is_dir():
-            raise CliError(f"--out: {out} exists and is not a folder")
+            raise CliError(f"--out: {printable(str(out))} exists and is not a folder")
         for demo in demos:  # the deepest path the recording makes must be possible
             check_room(out, demo.name, [f"{demo.name}{s}" for s in rec.SUFFIXES])
+        _check_writable(out)
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
     if args.video or args.size:
@@ -113,6 +116,17 @@ def run_record(args: argparse.Namespace) -> int:
         if args.video and (status := film_record(res, args)):
             return status
     return 0
+
+
+def _check_writable(out: Path) -> None:
+    """``CliError`` unless ``out`` is a folder, or can be made in one, that this user may write."""
+    existing = out.absolute()
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise CliError(f"--out: {printable(str(existing))} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise CliError(f"--out: {printable(str(existing))}: permission denied")
 
 
 def _say_waiting(message: str) -> None:
