@@ -1,8 +1,9 @@
 """Writing a set of files so that a reader sees either the whole old set or the whole new one,
 and JSON that is valid whatever numbers it carries.
 
-Used by the benchmark's results and charts, the viewer's endurance results and the recorder's
-demo files.
+Used by the benchmark's results and charts and the viewer's endurance results. The switch
+renames each file in turn and rolls back on failure, which a process killed with SIGKILL cannot
+do; the recorder's demo files use :mod:`dynamics.fileset` instead, switched by a single rename.
 
 :func:`write_files_atomically` writes every file to a temporary name in the target folder and
 fsyncs it, then switches the set in one step: each old file is kept under a hard link, the new
@@ -42,6 +43,8 @@ class _Outcome:
         (or no folder at all, if the call created it), no new and no temporary files. This is
         always the case unless putting the old files back failed too.
     new_files : names now holding the new content (empty when ``unchanged``).
+    committed : True when every new file is in place (the write was switched whole before the
+        signal or error came, as :func:`dynamics.fileset.write_set` does).
     signum : the signal that ended the write, or None.
     on_disk : one sentence stating the above, also the end of the exception's message.
     """
@@ -52,12 +55,17 @@ class _Outcome:
     signum: int | None
     on_disk: str
 
-    def _describe(self, out_dir: Path, new_files: list[str], signum: int | None) -> str:
+    def _describe(
+        self, out_dir: Path, new_files: list[str], signum: int | None, committed: bool = False
+    ) -> str:
         self.out_dir = out_dir
         self.new_files = tuple(new_files)
         self.unchanged = not new_files
+        self.committed = committed
         self.signum = signum
-        if self.unchanged:
+        if committed:
+            self.on_disk = f"{out_dir} holds the complete new set"
+        elif self.unchanged:
             self.on_disk = f"{out_dir} is unchanged"
         else:
             self.on_disk = (
@@ -71,8 +79,10 @@ class WriteFailed(_Outcome, OSError):
     """An I/O error (full disk, permissions, ...) ended :func:`write_files_atomically`; the
     cause is chained. An ``OSError``, so ``except OSError`` still catches it."""
 
-    def __init__(self, out_dir: Path, cause: BaseException, new_files: list[str]) -> None:
-        where = self._describe(out_dir, new_files, None)
+    def __init__(
+        self, out_dir: Path, cause: BaseException, new_files: list[str], *, committed: bool = False
+    ) -> None:
+        where = self._describe(out_dir, new_files, None, committed)
         self.message = f"writing to {out_dir} failed: {_reason(cause)}; {where}"
         super().__init__(getattr(cause, "errno", None), self.message)
 
@@ -84,8 +94,10 @@ class WriteInterrupted(_Outcome, KeyboardInterrupt):
     """Ctrl-C (SIGINT) ended :func:`write_files_atomically`. A ``KeyboardInterrupt``, so code
     that handles Ctrl-C keeps doing so."""
 
-    def __init__(self, out_dir: Path, signum: int, new_files: list[str]) -> None:
-        where = self._describe(out_dir, new_files, signum)
+    def __init__(
+        self, out_dir: Path, signum: int, new_files: list[str], *, committed: bool = False
+    ) -> None:
+        where = self._describe(out_dir, new_files, signum, committed)
         super().__init__(f"writing to {out_dir} interrupted; {where}")
 
     def __str__(self) -> str:
@@ -123,7 +135,9 @@ def write_files_atomically(out_dir: str | os.PathLike, files: dict[str, bytes]) 
       are removed, and a folder this call created is removed again.
     - Raises :class:`WriteInterrupted` (a ``KeyboardInterrupt``) on SIGINT, with the same
       clean-up. A signal that arrives during the switch is held until the switch is over and
-      then undoes it, so the renames are never cut in half.
+      then undoes it, so the renames are never cut in half. One that arrives after the switch
+      (while the folder is synced) keeps the new set: SIGINT raises :class:`WriteInterrupted`
+      with ``committed`` set.
     - On SIGTERM or SIGHUP, cleans up the same way and then lets the signal do what it did
       before the call (by default: end the process).
 
@@ -162,6 +176,7 @@ def write_files_atomically(out_dir: str | os.PathLike, files: dict[str, bytes]) 
                 del temps[name]
                 switched.append(name)
             guard.release()  # a signal held during the switch raises here: undone below
+            guard.hold()  # the new set is in place: later signals wait for the clean-up
         except BaseException as exc:
             guard.hold()  # the clean-up is not interrupted either
             left = _roll_back(out_dir, switched, backups, temps, created)
@@ -181,6 +196,11 @@ def write_files_atomically(out_dir: str | os.PathLike, files: dict[str, bytes]) 
             with contextlib.suppress(OSError):
                 backup.unlink()
         _fsync_dir(out_dir)
+        guard.restore()
+        if guard.pending is not None:  # came after the switch: the new set stays
+            if guard.pending != signal.SIGINT:
+                guard.redeliver(guard.pending)
+            raise WriteInterrupted(out_dir, guard.pending, list(files), committed=True)
 
 
 def _make_dirs(path: Path) -> list[Path]:

@@ -127,3 +127,131 @@ def test_binding_every_interface_says_so_and_lists_the_addresses():
     assert urls[0] == "http://127.0.0.1:8090"
     assert all(u.startswith("http://") and u.endswith(":8090") for u in urls)
     assert play.reachable_urls("::1", 80) == ["http://[::1]:80"]
+
+
+def test_a_hard_link_to_a_file_outside_the_folder_is_not_served(served):
+    folder, base, secret = served
+    (folder / "c.viser").unlink(missing_ok=True)
+    os.link(secret, folder / "hard.viser")
+    assert _get(f"{base}/recordings/hard.viser")[0] == 404
+    # Nor a recording that became a hard link after the server started.
+    (folder / "a.viser").unlink()
+    os.link(secret, folder / "a.viser")
+    status, _, body = _get(f"{base}/recordings/a.viser")
+    assert status == 404 and b"root:" not in body
+
+
+def test_a_recording_made_by_record_is_served_through_its_links(tmp_path):
+    from dynamics import fileset
+
+    fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})
+    server, base = _serve(tmp_path)
+    try:
+        assert _get(f"{base}/recordings/demo.viser")[2] == RECORDING
+        fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING + b"2", "demo.json": b"{}"})
+        assert _get(f"{base}/recordings/demo.viser")[2] == RECORDING + b"2"
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def _raise_descriptor_limit(needed: int) -> None:
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft != resource.RLIM_INFINITY and soft < needed:
+        if hard != resource.RLIM_INFINITY and hard < needed:
+            pytest.skip(f"needs {needed} file descriptors; the hard limit is {hard}")
+        resource.setrlimit(resource.RLIMIT_NOFILE, (needed, hard))
+
+
+def test_a_request_is_answered_while_1100_idle_connections_are_open(tmp_path):
+    import re
+    import resource
+
+    (tmp_path / "a.viser").write_bytes(RECORDING)
+    _raise_descriptor_limit(2048)  # this process holds the client end of every connection
+    hard = resource.getrlimit(resource.RLIMIT_NOFILE)[1]
+
+    def usual_limit():  # the server runs with the usual 1,024 descriptors
+        resource.setrlimit(resource.RLIMIT_NOFILE, (1024, hard))
+
+    server = subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+        preexec_fn=usual_limit,
+    )
+    idle = []
+    try:
+        port = int(re.search(r":(\d+)/", server.stdout.readline()).group(1))
+        for _ in range(1100):
+            idle.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/recordings/a.viser", timeout=2) as r:
+            assert r.status == 200 and r.read() == RECORDING
+    finally:
+        for s in idle:
+            s.close()
+        server.terminate()
+        server.wait(timeout=30)
+        server.stdout.close()
+
+
+def test_a_connection_that_sends_no_request_is_closed_after_the_header_timeout(tmp_path):
+    (tmp_path / "a.viser").write_bytes(RECORDING)
+    server, _ = _serve(tmp_path)
+    server.header_timeout = 0.5
+    try:
+        with socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=30) as s:
+            s.sendall(b"GET /recordings/a.viser HTTP/1.0\r\n")  # the headers never end
+            assert s.recv(100) == b""  # closed by the server, not by our 30 s timeout
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def test_file_names_with_terminal_escapes_are_printed_escaped(tmp_path, capsys):
+    evil = "a\x1b]0;pwned\x07\x1b[2J.viser"
+    (tmp_path / evil).write_bytes(RECORDING)
+    assert "\x1b" not in play.printable(evil) and "\\x1b" in play.printable(evil)
+    args = type("Args", (), {"path": str(tmp_path), "host": "127.0.0.1", "port": 0})()
+    server_started = threading.Event()
+    real_make = play.make_play_server
+
+    def make_then_stop(*a, **k):
+        server, urls = real_make(*a, **k)
+        server.serve_forever = lambda **kw: server_started.set()
+        return server, urls
+
+    play.make_play_server = make_then_stop
+    try:
+        assert play.run_play(args) == 0
+    finally:
+        play.make_play_server = real_make
+    out = capsys.readouterr().out
+    assert server_started.is_set() and "\x1b" not in out and "\\x1b]0;pwned" in out
+
+
+def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
+    from viz.cli import main
+
+    assert main(["play", str(tmp_path / ("p" * 5000))]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "File name too long" in err, err
+
+
+def test_one_recording_made_by_record_is_served_anew_after_it_is_recorded_again(tmp_path):
+    from dynamics import fileset
+
+    fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})
+    server, _ = play.make_play_server(tmp_path / "demo.viser", "127.0.0.1", 0)
+    threading.Thread(
+        target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True
+    ).start()
+    base = f"http://127.0.0.1:{server.server_address[1]}"
+    try:
+        fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING + b"2", "demo.json": b"{}"})
+        assert _get(f"{base}/recordings/demo.viser")[2] == RECORDING + b"2"
+    finally:
+        server.shutdown()
+        server.server_close()

@@ -10,6 +10,8 @@ import argparse
 import importlib
 import sys
 
+from .interrupts import hold_sigint, release_sigint
+
 # view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli),
 # video (viz.video_cli), atlas (viz.atlas_cli).
 _COMMAND_MODULES = (
@@ -19,6 +21,7 @@ _COMMAND_MODULES = (
     "viz.video_cli",
     "viz.atlas_cli",
 )
+_LIGHT_COMMANDS = ("analyze", "simulate")  # no viewer, no meshes
 
 
 class _Parser(argparse.ArgumentParser):
@@ -43,11 +46,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # Ctrl-C is held from the first instruction until the libraries are imported, so that none
+    # of them can swallow it (viz.interrupts), and then delivered: status 130, nothing written.
+    held = hold_sigint()
     try:
-        from dynamics.cli import CliError
+        try:
+            from dynamics.cli import CliError
 
-        parser = build_parser()
-        args = parser.parse_args(argv)
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            if args.command not in _LIGHT_COMMANDS:
+                importlib.import_module("trimesh")  # viser's and the exhibits' meshes
+        finally:
+            release_sigint(held)
         try:
             return int(args.func(args) or 0)
         except CliError as exc:

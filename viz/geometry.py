@@ -11,7 +11,11 @@ import math
 from collections import deque
 
 import numpy as np
-import trimesh
+
+from .interrupts import sigint_held
+
+with sigint_held():  # trimesh swallows a KeyboardInterrupt raised while it imports
+    import trimesh
 
 # Colour palette (RGB uint8) shared by all exhibits. Mid-tones: every colour keeps a contrast of
 # at least 3:1 (the WCAG threshold for graphics) against the light theme's white background and

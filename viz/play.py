@@ -9,11 +9,17 @@ The server answers five kinds of request and nothing else:
 ``/list``
     an HTML list of the recordings, every name escaped.
 ``/recordings/NAME``
-    the bytes of recording ``NAME``: a regular file named ``*.viser`` found in the folder when the
-    server started that, when requested, still resolves (symlinks followed) to a regular file
-    inside that folder; anything else is 404, so a link to ``/etc/passwd`` is never served.
+    the bytes of recording ``NAME``: a file named ``*.viser`` found in the folder when the server
+    started that, when requested, still resolves (symlinks followed) to a regular file inside
+    that folder with a single name (a hard link may lead anywhere, so a file with more than one
+    link is not served); anything else is 404, so a link to ``/etc/passwd`` is never served.
+    The recordings that ``mechviz record`` writes are links into its hidden set folder
+    (:mod:`dynamics.fileset`), inside the folder: each request serves the current set.
 
-A client that closes its connection early is not an error (no traceback). :func:`reachable_urls`
+The server (:mod:`viz.play_server`) has header and answer timeouts, a normal listen backlog and
+limits on connections per client and in all, so idle connections cannot starve a real request.
+A client that closes its connection early is not an error (no traceback). Names are printed
+with control characters escaped (:func:`viz.printable.printable`). :func:`reachable_urls`
 and :func:`exposure_note` say where a server bound to HOST can be reached; ``mechviz view`` prints
 them too.
 """
@@ -21,15 +27,19 @@ them too.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import html
-import http.server
+import os
 import socket
 import stat
 import urllib.parse
 from pathlib import Path
 
 from dynamics.cli import CliError
+
+from .play_server import GuardedHandler, GuardedServer
+from .printable import printable
 
 DEFAULT_PLAY_PORT = 8090
 _WILDCARD = ("0.0.0.0", "", "::")
@@ -106,44 +116,67 @@ def _client_index() -> bytes:
 
 
 def _regular_inside(path: Path, folder: Path) -> Path | None:
-    """``path`` resolved, if it is a regular file inside ``folder`` (resolved), else None."""
+    """``path`` resolved, if it is a regular file with one link inside ``folder`` (resolved),
+    else None."""
     try:
         real = path.resolve(strict=True)
-        if not stat.S_ISREG(real.stat().st_mode):
-            return None
+        st = real.stat()
     except (OSError, RuntimeError):
+        return None
+    if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
         return None
     return real if real.is_relative_to(folder) else None
 
 
+def _read_served(path: Path, folder: Path) -> bytes | None:
+    """The bytes of ``path`` if :func:`_regular_inside` allows it, read from the very file that
+    was checked (opened without following links, then compared by device and inode)."""
+    for _ in range(3):  # a recording switched to a new set between the check and the open
+        real = _regular_inside(path, folder)
+        if real is None:
+            return None
+        try:
+            fd = os.open(real, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+        except OSError:
+            continue
+        with os.fdopen(fd, "rb") as fh:
+            st = os.fstat(fd)
+            with contextlib.suppress(OSError):
+                same = real.stat()
+                if st.st_nlink == 1 and (st.st_dev, st.st_ino) == (same.st_dev, same.st_ino):
+                    return fh.read()
+    return None
+
+
 def _recordings(path: Path) -> tuple[Path, dict[str, Path]]:
     """The folder served and its recordings (name -> path) at ``path``."""
-    if not path.exists():
-        raise CliError(f"{path}: no such file or folder")
-    if path.is_file():
-        if path.suffix != ".viser":
-            raise CliError(f"{path}: not a .viser recording")
-        real = path.resolve()
-        return real.parent, {path.name: real}
-    folder = path.resolve()
-    found = {}
-    for p in sorted(folder.glob("*.viser")):
-        if _regular_inside(p, folder) is not None:
-            found[p.name] = p
+    shown = printable(str(path))
+    try:
+        if not path.exists():
+            raise CliError(f"{shown}: no such file or folder")
+        if path.is_file():
+            if path.suffix != ".viser":
+                raise CliError(f"{shown}: not a .viser recording")
+            here = path.absolute()
+            if _regular_inside(here, here.parent.resolve()) is not None:
+                # Resolved again at each request: a recording switched to a new set is served.
+                return here.parent.resolve(), {path.name: here}
+            real = path.resolve()
+            if _regular_inside(real, real.parent) is None:
+                raise CliError(f"{shown}: not a regular file with a single link")
+            return real.parent, {path.name: real}
+        folder = path.resolve()
+        found = {}
+        for p in sorted(folder.glob("*.viser")):
+            if _regular_inside(p, folder) is not None:
+                found[p.name] = p
+    except OSError as exc:  # a name too long, a folder we may not read
+        raise CliError(f"{shown}: {exc.strerror or exc}") from None
     if not found:
-        raise CliError(f"{path}: no .viser recordings in this folder (regular files inside it)")
+        raise CliError(
+            f"{shown}: no .viser recordings in this folder (regular files inside it, one link each)"
+        )
     return folder, found
-
-
-class _Server(http.server.ThreadingHTTPServer):
-    daemon_threads = True
-
-    def handle_error(self, request, client_address) -> None:
-        import sys
-
-        if isinstance(sys.exc_info()[1], ConnectionError | TimeoutError):
-            return  # the browser went away (closed tab, reload): nothing to report
-        super().handle_error(request, client_address)
 
 
 def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PLAY_PORT):
@@ -162,7 +195,7 @@ def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PL
     def playback_url(name: str) -> str:
         return f"/?playbackPath=recordings/{urllib.parse.quote(name)}"
 
-    class Handler(http.server.BaseHTTPRequestHandler):
+    class Handler(GuardedHandler):
         def do_GET(self) -> None:
             parts = urllib.parse.urlsplit(self.path)
             route = parts.path
@@ -183,14 +216,9 @@ def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PL
                 return self._send(page.encode(), "text/html; charset=utf-8")
             if route.startswith("/recordings/"):
                 name = urllib.parse.unquote(route.removeprefix("/recordings/"))
-                real = _regular_inside(recordings[name], folder) if name in recordings else None
-                if real is not None:
-                    try:
-                        data = real.read_bytes()
-                    except OSError:
-                        data = None
-                    if data is not None:
-                        return self._send(data, "application/octet-stream")
+                data = _read_served(recordings[name], folder) if name in recordings else None
+                if data is not None:
+                    return self._send(data, "application/octet-stream")
             self.send_error(404)
 
         def do_HEAD(self) -> None:
@@ -217,7 +245,7 @@ def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PL
     first = port
     for attempt in range(100):
         try:
-            server = _Server((host, port), Handler)
+            server = GuardedServer((host, port), Handler)
             break
         except OSError as exc:
             if exc.errno != errno.EADDRINUSE or port == 0 or attempt == 99 or port == 65535:
@@ -240,7 +268,7 @@ def run_play(args: argparse.Namespace) -> int:
     if args.port not in (0, port):
         print(f"port {args.port} is busy; using {port}")
     for name, url in urls.items():
-        print(f"{name}: {url}")
+        print(f"{printable(name)}: {url}")
     others = reachable_urls(args.host, port)[1:]
     if others:
         print("also at: " + ", ".join(f"{u}/" for u in others))

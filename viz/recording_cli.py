@@ -7,12 +7,14 @@ when a command runs.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from dynamics.cli import CliError, number
 
 from .play import add_command as _add_play
+from .printable import printable
 from .progress import ProgressBar
 
 
@@ -56,6 +58,8 @@ def _option_error(exc: ValueError, args) -> CliError:
 
 
 def run_record(args: argparse.Namespace) -> int:
+    from dynamics.fileset import check_room
+
     from . import record as rec
 
     if args.list:
@@ -86,7 +90,10 @@ def run_record(args: argparse.Namespace) -> int:
     out = Path(args.out)
     try:
         if out.exists() and not out.is_dir():
-            raise CliError(f"--out: {out} exists and is not a folder")
+            raise CliError(f"--out: {printable(str(out))} exists and is not a folder")
+        for demo in demos:  # the deepest path the recording makes must be possible
+            check_room(out, demo.name, [f"{demo.name}{s}" for s in rec.SUFFIXES])
+        _check_writable(out)
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
     if args.video or args.size:
@@ -95,7 +102,9 @@ def run_record(args: argparse.Namespace) -> int:
         check_record_options(args, demos)
     for demo in demos:
         try:
-            res = rec.record(demo, out, progress=ProgressBar(demo.name), theme=args.theme)
+            res = rec.record(
+                demo, out, progress=ProgressBar(demo.name), theme=args.theme, on_wait=_say_waiting
+            )
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")
@@ -107,6 +116,23 @@ def run_record(args: argparse.Namespace) -> int:
         if args.video and (status := film_record(res, args)):
             return status
     return 0
+
+
+def _check_writable(out: Path) -> None:
+    """``CliError`` unless ``out`` is a folder, or can be made in one, that this user may write."""
+    existing = out.absolute()
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise CliError(f"--out: {printable(str(existing))} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise CliError(f"--out: {printable(str(existing))}: permission denied")
+
+
+def _say_waiting(message: str) -> None:
+    if sys.stderr.isatty():
+        sys.stderr.write("\n")
+    print(f"mechviz: {message}", file=sys.stderr, flush=True)
 
 
 def _report(res) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import threading
@@ -19,6 +20,8 @@ from pathlib import Path
 from dynamics.cli import CliError
 
 from . import video
+from .printable import printable
+from .video_input import read_clip
 
 
 def size_type(text: str) -> tuple[int, int]:
@@ -121,20 +124,28 @@ def run_video(args: argparse.Namespace) -> int:
     if args.fps is not None and not 1 <= args.fps <= 240:
         raise CliError(f"--fps: must be a whole number from 1 to 240, got {args.fps}")
     try:
-        clip = video.clip_from_file(src, fps=args.fps)
+        clip = read_clip(src, fps=args.fps)
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if args.out:
         out = Path(args.out)
         suffix = out.suffix.lstrip(".").lower()
         if args.format is None and suffix not in video.FORMATS:
-            raise CliError(f"--out: end the name in .mp4 or .gif (or give --format), got {out.name}")
+            raise CliError(
+                f"--out: end the name in .mp4 or .gif (or give --format), got {printable(out.name)}"
+            )
         fmt = args.format or suffix
-        if out.is_dir():
-            raise CliError(f"--out: {out} is a folder; give a file name")
     else:
         fmt = args.format or "mp4"
         out = src.with_suffix(f".{fmt}")
+    try:
+        if out.is_dir():
+            raise CliError(f"--out: {printable(str(out))} is a folder; give a file name")
+        os.lstat(out.parent / f".{out.name}.{os.getpid()}.partial")  # the name the writer makes
+    except FileNotFoundError:
+        pass
+    except OSError as exc:  # a name too long for the file system, a folder we may not read
+        raise CliError(f"--out: {exc.strerror or exc}") from None
     flags = {"video": "--format", "size": "--size", "fps": "--fps"}
     return _film(clip, out, fmt, args.size or video.DEFAULT_SIZE, flags)
 

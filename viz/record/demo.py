@@ -30,6 +30,7 @@ from dynamics import hoop
 from dynamics.assets import asset
 
 from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
+from ..printable import printable
 
 DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
@@ -208,17 +209,22 @@ def load_demo(name_or_path: str | os.PathLike) -> Demo:
     the file name and the key at fault."""
     text = str(name_or_path)
     path = Path(text)
-    if path.suffix != ".toml" or not path.exists():
-        path = DEMO_DIR / f"{text}.toml"
-        if not path.exists():
-            raise ValueError(
-                f"unknown demo {text!r}; choose one of {', '.join(demo_names())} "
-                "(or give the path of a .toml demo file)"
-            )
-    if not path.is_file():
-        raise ValueError(f"{path.name}: not a file")
+    try:
+        if path.suffix != ".toml" or not path.exists():
+            path = DEMO_DIR / f"{text}.toml"
+            if not path.exists():
+                raise ValueError(
+                    f"unknown demo {printable(repr(text))}; choose one of {', '.join(demo_names())} "
+                    "(or give the path of a .toml demo file)"
+                )
+        if not path.is_file():
+            raise ValueError(f"{printable(path.name)}: not a file")
+    except OSError as exc:  # a name too long for the file system, a folder we may not read
+        raise ValueError(f"{printable(text)}: {exc.strerror or exc}") from None
     try:
         raw = tomllib.loads(path.read_bytes().decode("utf-8"))
+    except RecursionError:
+        raise ValueError(f"{path.name}: tables or arrays nested too deeply") from None
     except UnicodeDecodeError:
         raise ValueError(f"{path.name}: not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
@@ -243,6 +249,8 @@ def parse_demo(raw: dict[str, Any], *, name: str, source: str | None = None) -> 
         demo = msgspec.convert({**raw, "name": name, "source": source}, Demo, strict=True)
     except msgspec.ValidationError as exc:
         raise ValueError(f"{where}: {_schema_message(str(exc))}") from None
+    except RecursionError:
+        raise ValueError(f"{where}: tables or arrays nested too deeply") from None
     try:
         demo = with_defaults(demo)
         check(demo)
@@ -359,6 +367,29 @@ def check(d: Demo) -> None:
         raise dynamics.SettingError(key, shown) from None
     except (ValueError, TypeError) as exc:
         raise ValueError(str(exc)) from None
+    check_scale(d)
+
+
+#: Limits that keep a recording's work in proportion to the demo; each is refused up front
+#: with the key that passes it. The step count is bounded separately (viz.record.run.MAX_STEPS).
+MAX_EVENTS = 100  # scripted events per recording: each cuts the run and is drawn in the chart
+MIN_RTOL = 1e-15  # below it float64 rounding, not the tolerance, limits the step (and Taylor's
+#                  method raises its order, and its cost per step, without end)
+
+
+def check_scale(d: Demo) -> None:
+    """Raise ``ValueError`` naming the key if ``d`` asks for more work than its scale needs."""
+    if len(d.events) > MAX_EVENTS:
+        raise ValueError(f"events: {len(d.events)} scripted events; the limit is {MAX_EVENTS}")
+    runs = [("", d.rtol)]
+    if d.compare is not None:
+        runs.append(("compare.", d.compare.rtol if d.compare.rtol is not None else d.rtol))
+    for where, rtol in runs:
+        if rtol is not None and rtol < MIN_RTOL:
+            raise ValueError(
+                f"{where}rtol = {rtol:g} is below {MIN_RTOL:g}, where float64 rounding and not "
+                "the tolerance sets the error"
+            )
 
 
 def _check_run(d: Demo, where: str, method: str, dt, rtol, eff_dt, eff_rtol) -> None:

@@ -240,9 +240,24 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
     return out.getvalue()
 
 
+#: Period marks drawn at most on the chart: a recording that spans more periods marks every
+#: k-th, so the chart's work stays bounded whatever the demo's speed.
+MAX_PERIOD_MARKS = 200
+
+
 def _mark_periods(ax, T, t_end, label, color="k"):
-    for i, tv in enumerate(np.arange(T, t_end + 1e-9, T)):
-        ax.axvline(tv, color=color, ls="--", lw=0.8, alpha=0.6, label=label if i == 0 else None)
+    ratio = t_end / T if T > 0 else math.nan
+    n = math.floor(ratio + 1e-9) if math.isfinite(ratio) else 0
+    if n < 1:
+        return
+    every = max(1, math.ceil(n / MAX_PERIOD_MARKS))
+    if every > 1:
+        label = f"{label}, every {every}th"
+    marks = T * np.arange(every, n + 1, every, dtype=float)
+    ax.vlines(
+        marks, 0, 1, transform=ax.get_xaxis_transform(), colors=color, linestyles="--",
+        lw=0.8, alpha=0.6, label=label,
+    )
 
 
 def step_text(tr: Traces) -> str:

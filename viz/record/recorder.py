@@ -3,13 +3,16 @@
 ``DEMO.viser`` (viser's scene recording, played by ``mechviz play`` with a time slider),
 ``DEMO.html`` (the same in viser's self-contained page; plays from file://), ``DEMO.csv``,
 ``DEMO.png`` and ``DEMO.json`` (:mod:`viz.record.outputs`). All five are built in memory, then
-written by :func:`dynamics.files.write_files_atomically`: a recording that fails or is
-interrupted leaves the folder as it was, and :class:`RecordingFailed` says what it holds.
+written as one set by :func:`dynamics.fileset.write_set` (the names in the folder are links into
+a hidden set folder, switched by a single rename): a recording that fails, is interrupted or is
+killed leaves the folder with the whole old set or the whole new one, a second recording into
+the same folder waits for the first, and :class:`RecordingFailed` says what the folder holds.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -20,7 +23,8 @@ from pathlib import Path
 from typing import Any
 
 import dynamics
-from dynamics.files import WriteFailed, WriteInterrupted, json_safe, write_files_atomically
+from dynamics.files import WriteFailed, WriteInterrupted, json_safe
+from dynamics.fileset import WaitFn, check_room, write_set
 
 from .demo import Demo, load_demo
 from .figures import figures
@@ -66,17 +70,21 @@ def record(
     *,
     progress: ProgressFn | None = None,
     theme: str = "light",
+    on_wait: WaitFn | None = None,
 ) -> RecordResult:
     """Record ``demo`` into ``out_dir`` (the five files of the module docstring).
 
     ``progress(frame, frames)`` is called after each frame. Raises :class:`RecordingFailed`
     (the cause chained) if a run blows up or anything fails before the files are in place;
     ``KeyboardInterrupt`` becomes ``RecordingFailed`` with ``interrupted`` set. Either way the
-    folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark")."""
+    folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark").
+    ``on_wait(message)`` is called if another process is writing to ``out_dir`` (the recording
+    then waits for it before switching its files in)."""
     d = load_demo(demo) if isinstance(demo, str) else demo
     out = Path(out_dir)
     t_start = time.perf_counter()
     try:
+        check_room(out, d.name, [f"{d.name}{s}" for s in SUFFIXES])
         rec = run_demo(d, progress, theme=theme)
         tr = rec.traces
         figs = figures(d, tr)
@@ -95,9 +103,10 @@ def record(
         if reasons:
             man["null_reasons"] = reasons
         files[f"{d.name}.json"] = (json.dumps(man, indent=2, allow_nan=False) + "\n").encode()
-        write_files_atomically(out, files)
+        write_set(out, d.name, files, on_wait=on_wait)
     except WriteInterrupted as exc:  # the write says itself what it left on disk
-        err = RecordingFailed(f"recording of {d.name} interrupted; {exc.on_disk}")
+        where = f"{out} holds the complete new recording" if exc.committed else exc.on_disk
+        err = RecordingFailed(f"recording of {d.name} interrupted; {where}")
         err.interrupted = True
         raise err from exc
     except WriteFailed as exc:
@@ -110,7 +119,7 @@ def record(
         err = RecordingFailed(
             f"recording of {d.name} failed: {exc}; {existing_recording(out, d.name)}"
         )
-        err.bad_input = isinstance(exc, ValueError)
+        err.bad_input = isinstance(exc, ValueError) or getattr(exc, "errno", 0) == errno.ENAMETOOLONG
         raise err from exc
     wall = time.perf_counter() - t_start
     return RecordResult(d, {s: out / f"{d.name}{s}" for s in SUFFIXES}, man, wall, d.frames)

@@ -1,0 +1,256 @@
+"""A set of files switched by one rename (:mod:`dynamics.fileset`): a writer killed with SIGKILL
+after any of its file-system steps leaves the whole old set or the whole new one, every file
+matching the manifest; the next writer leaves nothing else; a second writer waits for the first."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from dynamics import fileset
+from dynamics.files import WriteInterrupted
+
+NAMES = ("a.viser", "a.csv", "a.json")
+
+
+def make_set(tag: str) -> dict[str, bytes]:
+    """Three files, the last a manifest with the size and SHA-256 of the others."""
+    files = {"a.viser": f"{tag} viser\n".encode() * 50, "a.csv": f"{tag} csv\n".encode()}
+    man = {n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()}
+    files["a.json"] = json.dumps({"tag": tag, "files": man}).encode()
+    return files
+
+
+OLD, NEW = make_set("old"), make_set("new")
+
+
+def shown(folder: Path) -> dict[str, bytes]:
+    """What a reader sees under the set's names (a dangling link shows nothing)."""
+    return {n: (folder / n).read_bytes() for n in NAMES if (folder / n).exists()}
+
+
+def assert_whole_set(folder: Path, allowed) -> None:
+    """The names show exactly one of ``allowed`` (each a whole set, or {} for none), and every
+    file agrees with the manifest shown beside it."""
+    seen = shown(folder)
+    assert any(seen == a for a in allowed), sorted(seen)
+    if seen:
+        man = json.loads(seen["a.json"])["files"]
+        for n, meta in man.items():
+            assert hashlib.sha256(seen[n]).hexdigest() == meta["sha256"], n
+
+
+def tree(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
+
+
+def assert_nothing_stray(folder: Path) -> None:
+    """Only the names, the set's home, its ``current`` link and the one set it leads to."""
+    current = fileset.current_set(folder, "a")
+    assert current is not None
+    expected = {
+        *NAMES,
+        ".mechviz",
+        ".mechviz/a",
+        ".mechviz/a/current",
+        f".mechviz/a/{current.name}",
+    }
+    expected |= {f".mechviz/a/{current.name}/{n}" for n in NAMES}
+    assert set(tree(folder)) == expected
+
+
+def write_earlier_layout(folder: Path, files: dict[str, bytes]) -> None:
+    """What the earlier writer left: the files themselves, plus temporaries of a killed run."""
+    folder.mkdir(exist_ok=True)
+    for n, b in files.items():
+        (folder / n).write_bytes(b)
+    (folder / ".a.viser.4242.partial").write_bytes(b"half")
+    (folder / ".a.csv.4242.old").write_bytes(b"older")
+
+
+_CHILD = """
+import os, signal, sys
+from pathlib import Path
+kill_at, count = int(sys.argv[2]), 0
+def counted(real):
+    def op(*args, **kwargs):
+        global count
+        result = real(*args, **kwargs)
+        count += 1
+        if count == kill_at:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return result
+    return op
+for name in ("rename", "replace", "symlink", "unlink", "rmdir", "mkdir"):
+    setattr(os, name, counted(getattr(os, name)))
+from dynamics import fileset
+import json
+files = {k: v.encode("latin-1") for k, v in json.loads(sys.stdin.read()).items()}
+fileset.write_set(Path(sys.argv[1]), "a", files)
+print(count)
+"""
+
+
+def run_child(folder: Path, kill_at: int) -> subprocess.CompletedProcess:
+    data = json.dumps({k: v.decode("latin-1") for k, v in NEW.items()})
+    return subprocess.run(
+        [sys.executable, "-c", _CHILD, str(folder), str(kill_at)],
+        input=data,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+@pytest.mark.parametrize("start", ["empty", "set", "earlier layout"])
+def test_sigkill_after_any_step_leaves_a_whole_set_and_the_next_write_cleans_up(tmp_path, start):
+    def prepare(folder: Path) -> dict[str, bytes]:
+        if start == "set":
+            fileset.write_set(folder, "a", OLD)
+            return OLD
+        if start == "earlier layout":
+            write_earlier_layout(folder, OLD)
+            return OLD
+        return {}
+
+    probe = tmp_path / "probe"
+    prepare(probe)
+    done = run_child(probe, 0)
+    assert done.returncode == 0, done.stderr
+    steps = int(done.stdout)
+    assert shown(probe) == NEW
+    assert steps >= 2
+    for k in range(1, steps + 1):
+        folder = tmp_path / f"kill{k}"
+        before = prepare(folder)
+        res = run_child(folder, k)
+        assert res.returncode == -signal.SIGKILL, (k, res.stderr)
+        assert_whole_set(folder, [before, NEW])
+        fileset.write_set(folder, "a", make_set(f"next{k}"))
+        assert shown(folder) == make_set(f"next{k}")
+        assert_nothing_stray(folder)
+
+
+def test_a_set_replaces_the_earlier_layout_and_readers_see_the_names(tmp_path):
+    write_earlier_layout(tmp_path, OLD)
+    fileset.write_set(tmp_path, "a", NEW)
+    assert shown(tmp_path) == NEW
+    assert_nothing_stray(tmp_path)
+    assert all((tmp_path / n).is_symlink() for n in NAMES)
+
+
+def test_an_io_error_before_the_switch_keeps_the_old_set(tmp_path, monkeypatch):
+    fileset.write_set(tmp_path, "a", OLD)
+    before = tree(tmp_path)
+    real_fsync = os.fsync
+    calls = []
+
+    def failing(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", failing)
+    with pytest.raises(OSError, match=r"No space left.*unchanged") as info:
+        fileset.write_set(tmp_path, "a", NEW)
+    assert info.value.unchanged
+    assert shown(tmp_path) == OLD and tree(tmp_path) == before
+
+
+def test_a_failed_first_write_leaves_no_folder(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "fsync", lambda fd: (_ for _ in ()).throw(OSError(28, "No space")))
+    with pytest.raises(OSError, match="No space"):
+        fileset.write_set(tmp_path / "new" / "out", "a", NEW)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_after_the_switch_keeps_the_new_set_and_says_so(tmp_path, monkeypatch):
+    fileset.write_set(tmp_path, "a", OLD)
+    real_replace = os.replace
+
+    def replace_then_interrupt(src, dst):
+        real_replace(src, dst)
+        if Path(dst).name == fileset.CURRENT:
+            signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setattr(os, "replace", replace_then_interrupt)
+    with pytest.raises(WriteInterrupted, match="holds the complete new set") as info:
+        fileset.write_set(tmp_path, "a", NEW)
+    monkeypatch.undo()
+    assert info.value.committed and not info.value.unchanged
+    assert shown(tmp_path) == NEW
+    assert_nothing_stray(tmp_path)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+_HOLDER = """
+import sys
+from pathlib import Path
+from dynamics import fileset
+home = Path(sys.argv[1]) / fileset.HOME
+home.mkdir(parents=True, exist_ok=True)
+with fileset._Lock(home, [], None):
+    print("locked", flush=True)
+    sys.stdin.readline()
+"""
+
+
+def test_a_second_writer_waits_for_the_first_and_both_sets_arrive_whole(tmp_path):
+    holder = subprocess.Popen(
+        [sys.executable, "-c", _HOLDER, str(tmp_path)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        waited = []
+
+        def on_wait(message):
+            waited.append(message)
+            holder.stdin.write("go\n")  # the holder lets go only once this writer waits
+            holder.stdin.flush()
+
+        fileset.write_set(tmp_path, "a", NEW, on_wait=on_wait)
+        assert holder.wait(timeout=60) == 0
+    finally:
+        holder.kill()
+        holder.wait()
+    assert len(waited) == 1 and "waiting" in waited[0]
+    assert shown(tmp_path) == NEW
+    assert_nothing_stray(tmp_path)
+
+
+def test_a_path_too_long_is_refused_before_anything_is_made(tmp_path):
+    with pytest.raises(OSError) as info:
+        fileset.check_room(tmp_path / ("d" * 5000), "a", list(NAMES))
+    assert info.value.errno == 36  # ENAMETOOLONG
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_link_in_place_of_the_hidden_folder_is_never_followed_by_the_clean_up(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "precious.txt").write_text("keep me")
+    out = tmp_path / "out"
+    (out / fileset.HOME).mkdir(parents=True)
+    (out / fileset.HOME / "a").symlink_to(elsewhere)
+    with pytest.raises(OSError, match="not a folder of its own"):
+        fileset.write_set(out, "a", NEW)
+    assert (elsewhere / "precious.txt").read_text() == "keep me"
+    assert sorted(p.name for p in elsewhere.iterdir()) == ["precious.txt"]
+
+
+@pytest.mark.parametrize("name", ["", ".", "..", "a/b"])
+def test_a_set_name_that_is_not_a_plain_name_is_refused(tmp_path, name):
+    with pytest.raises(ValueError, match="not a plain set name"):
+        fileset.write_set(tmp_path, name, NEW)
+    assert list(tmp_path.iterdir()) == []
