@@ -223,8 +223,31 @@ def _params(args: argparse.Namespace, system: str):
         return cls(**kwargs)
     except ValueError as exc:
         field = str(exc).split()[0]
+        if field not in kwargs:  # a default derived from what was given (the bead from the disk)
+            raise CliError(f"{_shown(args, _flags(system))}: {exc}") from None
         flag = next((f for f, n in PARAM_FLAGS[system].items() if n == field), field)
         raise CliError(f"{flag}: {exc}") from None
+
+
+def _shown(args: argparse.Namespace, flags: dict[str, str]) -> str:
+    """The flags of ``flags`` (option -> attribute) given on the command line, with values."""
+    given = [f"{f} {getattr(args, a):g}" for f, a in flags.items() if getattr(args, a) is not None]
+    return ", ".join(given) or "the defaults"
+
+
+def _blame(args: argparse.Namespace, flags: dict[str, str], bad) -> str:
+    """The given flags whose default alone makes ``bad(args)`` false (else every one given), as
+    :func:`_shown` writes them: the fields a refusal names."""
+    blamed = {}
+    for f, a in flags.items():
+        if getattr(args, a, None) is None:
+            continue
+        trial = copy.copy(args)
+        setattr(trial, a, None)
+        with contextlib.suppress(CliError, ValueError, ArithmeticError):
+            if not bad(trial):
+                blamed[f] = a
+    return _shown(args, blamed or flags)
 
 
 def _speed(args: argparse.Namespace) -> float:
@@ -398,9 +421,15 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     period = sysm.time_scale(state)
     if math.ulp(t_end) > 1e-6 * period:
+        def too_coarse(a: argparse.Namespace) -> bool:
+            trial_system, trial_state = _system_and_state(system, a)
+            return math.ulp(t_end) > 1e-6 * trial_system.time_scale(trial_state)
+
+        params = _blame(args, flags, too_coarse)
         raise CliError(
             f"--t-end {t_end:g}: a double near it resolves time only to {math.ulp(t_end):.2g} s, "
-            f"too coarse for the motion's shortest period ({period:.3g} s)"
+            f"too coarse for the motion's shortest period ({period:.3g} s"
+            + ("" if params == "the defaults" else f", set by {params}") + ")"
         )
     if method.adaptive and args.dt is not None:
         raise CliError(f"--dt: {method.name} is adaptive; give --rtol instead")
@@ -434,8 +463,13 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     steps = sim.estimated_steps(t_end)
     if not steps <= args.max_steps:
-        what = f"{method.name} at rtol {sim.rtol:g}" if method.adaptive else f"--dt {dt:g}"
         ref = " and the DOP853 reference run" if sim.reference_kind == "reference" else ""
+        if not method.adaptive:
+            what = f"--dt {dt:g}"
+        elif args.rtol is not None:
+            what = f"--rtol {sim.rtol:g} ({method.name})"
+        else:
+            what = f"{method.name} at rtol {sim.rtol:g}"
         raise CliError(
             f"--t-end {t_end:g}: about {steps:.2g} steps of {what}{ref} (the motion's shortest "
             f"period is {period:.3g} s), above the limit of {args.max_steps:.3g} "
