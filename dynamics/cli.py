@@ -21,9 +21,7 @@ import json
 import math
 import os
 import re
-import signal
 import sys
-import threading
 import time
 from typing import Any
 
@@ -32,6 +30,7 @@ import numpy as np
 from . import cyclotron, disk, hoop
 from .files import json_safe
 from .integrators import METHODS, IntegrationError, get_method
+from .interrupt import ctrl_c_within_a_second
 from .simulation import (
     MIN_COMPARED_TOL,
     REFERENCE_ACCURACY,
@@ -641,40 +640,3 @@ def _run_simulate(args: argparse.Namespace) -> int:
         result = simulate(args.system, args)
     _emit(result, args.json)
     return 0
-
-
-@contextlib.contextmanager
-def ctrl_c_within_a_second():
-    """Ctrl-C raises ``KeyboardInterrupt`` as usual, and if the process has not ended a second
-    later (numba's compiler, which runs Python callbacks from C, swallows the exception), prints
-    the usual line and exits with status 130. Only around work that writes no files (the
-    bench wraps its measurements, not its writing)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    done = threading.Event()
-
-    def hard_exit() -> None:
-        if not done.is_set():
-            sys.stderr.write("mechviz: interrupted\n")
-            sys.stderr.flush()
-            os._exit(130)
-
-    def on_sigint(signum, frame) -> None:
-        timer = threading.Timer(1.0, hard_exit)
-        timer.daemon = True
-        timer.start()
-        raise KeyboardInterrupt
-
-    def unraisable(info) -> None:  # the swallowed KeyboardInterrupt is not worth a traceback
-        if not issubclass(info.exc_type, KeyboardInterrupt):
-            previous_hook(info)
-
-    previous = signal.signal(signal.SIGINT, on_sigint)
-    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
-    try:
-        yield
-    finally:
-        done.set()
-        signal.signal(signal.SIGINT, previous)
-        sys.unraisablehook = previous_hook

@@ -88,7 +88,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.endurance is not None:
         return _endurance(args)
     from dynamics.bench import peers, run_bench, summary
-    from dynamics.cli import ctrl_c_within_a_second
+    from dynamics.interrupt import ctrl_c_within_a_second
 
     from .warm import fill_cache_in_parallel
 

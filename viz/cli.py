@@ -37,19 +37,23 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    try:
-        from dynamics.cli import CliError
+    from dynamics.interrupt import exit_status, signals_end_like_ctrl_c
 
-        parser = build_parser()
-        args = parser.parse_args(argv)
+    # SIGTERM and SIGHUP end a command as Ctrl-C does: its children and temporary folders go too
+    with signals_end_like_ctrl_c():
         try:
-            return int(args.func(args) or 0)
-        except CliError as exc:
-            print(f"mechviz: error: {exc}", file=sys.stderr)
-            return 2
-    except KeyboardInterrupt:  # at any moment, start-up included: one line, status 130
-        print("mechviz: interrupted", file=sys.stderr)
-        return 130
+            from dynamics.cli import CliError
+
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            try:
+                return int(args.func(args) or 0)
+            except CliError as exc:
+                print(f"mechviz: error: {exc}", file=sys.stderr)
+                return 2
+        except KeyboardInterrupt as exc:  # at any moment, start-up included: one line
+            print("mechviz: interrupted", file=sys.stderr)
+            return exit_status(exc)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ callback's thread, so no frame of the simulation loop waits for the compiler.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -60,14 +61,28 @@ def warm_all(
     return time.perf_counter() - t0
 
 
-def _end_on_ctrl_c() -> None:
-    """A worker's set-up: Ctrl-C (sent to the whole process group) ends it at once. numba's
-    compiler would swallow the ``KeyboardInterrupt``, and its cache files are written whole
-    (renamed into place), so nothing is left half-written."""
+def _end_with_parent(parent: int) -> None:
+    """A worker's set-up: Ctrl-C (sent to the whole process group) ends it at once, and so does
+    the end of ``parent`` (the process that started it), however that ends: SIGKILL included.
+    numba's compiler would swallow the ``KeyboardInterrupt``, and its cache files are written
+    whole (renamed into place), so nothing is left half-written."""
     import os
     import signal
 
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
+    signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
+    with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
+
+    def watch() -> None:  # elsewhere (and if the parent ended before prctl): poll for it
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(143)
+
+    threading.Thread(target=watch, name="mechviz-parent-watch", daemon=True).start()
 
 
 def _warm_chunk(pairs: list[tuple[str, str]]) -> float:
@@ -94,7 +109,6 @@ def fill_cache_in_parallel(
     ``meanwhile`` runs in this process while the workers compile (compilation this process
     needs and cannot cache, such as a peer's).
     """
-    import concurrent.futures
     import hashlib
     import multiprocessing
     import os
@@ -113,14 +127,19 @@ def fill_cache_in_parallel(
     n = max(1, min(workers or os.cpu_count() or 1, len(pairs)))
     # spawn, not fork: a forked child would share this process's numba and threading state
     context = multiprocessing.get_context("spawn")
-    with concurrent.futures.ProcessPoolExecutor(
-        n, mp_context=context, initializer=_end_on_ctrl_c
-    ) as pool:
-        jobs = [pool.submit(_warm_chunk, pairs[i::n]) for i in range(n)]
+    pool = context.Pool(n, initializer=_end_with_parent, initargs=(os.getpid(),))
+    try:
+        jobs = [pool.apply_async(_warm_chunk, (pairs[i::n],)) for i in range(n)]
         if meanwhile is not None:
             meanwhile()
         for job in jobs:
-            job.result()
+            job.get()
+        pool.close()
+    except BaseException:  # Ctrl-C, SIGTERM, a failure: the workers end now, not when done
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.touch()
     return time.perf_counter() - t0, n

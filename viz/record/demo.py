@@ -297,7 +297,7 @@ def check(d: Demo) -> None:
         if not 0.0 <= e.t <= d.simulated_time:
             raise ValueError(
                 f"events[{i}].t = {e.t!r} s lies outside the recording (0 to {d.simulated_time:g} s "
-                "of simulated time)"
+                f"of simulated time: speed = {d.speed:g} x duration = {d.duration:g} s)"
             )
         if not math.isfinite(e.dv):
             raise ValueError(f"events[{i}].dv must be finite, got {e.dv!r}")
@@ -307,10 +307,14 @@ def check(d: Demo) -> None:
         eff_dt = c.dt if c.dt is not None else d.dt
         eff_rtol = c.rtol if c.rtol is not None else d.rtol
         _check_run(d, "compare.", c.method, c.dt, c.rtol, eff_dt, eff_rtol)
+    from .scales import check_scales, in_demo_terms
+
     try:
         d.config()
     except (ValueError, TypeError) as exc:
-        raise ValueError(str(exc)) from None
+        raise ValueError(in_demo_terms(str(exc), d)) from None
+
+    check_scales(d)  # what the values make together: every derived scale a double can hold
 
 
 def _check_run(d: Demo, where: str, method: str, dt, rtol, eff_dt, eff_rtol) -> None:
