@@ -7,7 +7,8 @@
   process at once and leave all that behind.
 - :func:`ctrl_c_within_a_second` (around work that writes no files): if the process has not
   ended a second after one of these signals (numba's compiler, which runs Python callbacks from
-  C, swallows the exception), it prints the usual line and exits at once.
+  C, swallows the exception), it prints the usual line and exits at once; and if the work
+  ends within that second although the exception was swallowed, it is raised as the block ends.
 
 A second signal while the first is being handled ends the process at once as well.
 """
@@ -86,7 +87,10 @@ def ctrl_c_within_a_second() -> Iterator[None]:
             sys.stderr.flush()
             os._exit(128 + signum)
 
+    received: list[int] = []
+
     def on_signal(signum, frame) -> None:
+        received.append(signum)
         timer = threading.Timer(HARD_EXIT_SECONDS, hard_exit, args=(signum,))
         timer.daemon = True
         timer.start()
@@ -107,3 +111,7 @@ def ctrl_c_within_a_second() -> Iterator[None]:
         for s, handler in previous.items():
             signal.signal(s, handler)
         sys.unraisablehook = previous_hook
+    if received:  # swallowed on the way (numba's compiler, matplotlib's layout): it counts here
+        if received[0] == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise Terminated(received[0])

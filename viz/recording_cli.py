@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from dynamics.cli import CliError, number
+from dynamics.interrupt import ctrl_c_within_a_second
 
 from .play import add_command as _add_play
 from .progress import ProgressBar
@@ -56,7 +57,8 @@ def _option_error(exc: ValueError, args) -> CliError:
 
 
 def run_record(args: argparse.Namespace) -> int:
-    from . import record as rec
+    with ctrl_c_within_a_second():  # a Ctrl-C that an import swallows (trimesh's) still counts
+        from . import record as rec
 
     if args.list:
         demos = rec.list_demos()
@@ -95,7 +97,10 @@ def run_record(args: argparse.Namespace) -> int:
         check_record_options(args, demos)
     for demo in demos:
         try:
-            res = rec.record(demo, out, progress=ProgressBar(demo.name), theme=args.theme)
+            res = rec.record(
+                demo, out, progress=ProgressBar(demo.name), theme=args.theme,
+                interruptible=ctrl_c_within_a_second,
+            )  # fmt: skip
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")

@@ -15,6 +15,7 @@ import json
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -66,27 +67,31 @@ def record(
     *,
     progress: ProgressFn | None = None,
     theme: str = "light",
+    interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
 ) -> RecordResult:
     """Record ``demo`` into ``out_dir`` (the five files of the module docstring).
 
     ``progress(frame, frames)`` is called after each frame. Raises :class:`RecordingFailed`
     (the cause chained) if a run blows up or anything fails before the files are in place;
     ``KeyboardInterrupt`` becomes ``RecordingFailed`` with ``interrupted`` set. Either way the
-    folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark")."""
+    folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark").
+    ``interruptible``: a context manager around everything but the writing (the command line's
+    ends the run within a second of Ctrl-C even where numba's compiler swallows it)."""
     d = load_demo(demo) if isinstance(demo, str) else demo
     out = Path(out_dir)
     t_start = time.perf_counter()
     try:
-        rec = run_demo(d, progress, theme=theme)
-        tr = rec.traces
-        figs = figures(d, tr)
-        files = {
-            f"{d.name}.viser": rec.viser,
-            f"{d.name}.html": rec.html,
-            f"{d.name}.csv": traces_csv(d, tr),
-            f"{d.name}.png": chart_png(d, tr, figs),
-        }
-        man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
+        with interruptible():
+            rec = run_demo(d, progress, theme=theme)
+            tr = rec.traces
+            figs = figures(d, tr)
+            files = {
+                f"{d.name}.viser": rec.viser,
+                f"{d.name}.html": rec.html,
+                f"{d.name}.csv": traces_csv(d, tr),
+                f"{d.name}.png": chart_png(d, tr, figs),
+            }
+            man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
         man["files"] = {
             n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()
         }

@@ -219,6 +219,10 @@ def _check_start(d: Demo, cfg, span: float) -> None:
         blamed = [k for k in keys if bad({**speeds, k: 1.0}) is None] or keys
         shown = ", ".join(f"{k} = {_value(d, k)}" for k in blamed) or "the start"
         raise ValueError(f"{shown}: {what} would be beyond the largest double")
+    if d.exhibit == "hoop" and d.initial.modes is not None:
+        for i, a in enumerate(d.initial.modes):
+            if not abs(a) < 3.0:  # as the exhibit's own amplitude: the modes are small swings
+                raise ValueError(f"initial.modes[{i}] must be an angle below 3 rad, got {a!r}")
     if d.exhibit == "hoop" and d.initial.state is not None:
         import dynamics
 
