@@ -112,6 +112,7 @@ def fill_cache_in_parallel(
     import hashlib
     import multiprocessing
     import os
+    import signal
     from pathlib import Path
 
     import numba
@@ -127,7 +128,13 @@ def fill_cache_in_parallel(
     n = max(1, min(workers or os.cpu_count() or 1, len(pairs)))
     # spawn, not fork: a forked child would share this process's numba and threading state
     context = multiprocessing.get_context("spawn")
-    pool = context.Pool(n, initializer=_end_with_parent, initargs=(os.getpid(),))
+    # Started with Ctrl-C ignored (kept across exec): a worker still importing when it comes
+    # ends quietly when its set-up runs, instead of printing a traceback from the import.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        pool = context.Pool(n, initializer=_end_with_parent, initargs=(os.getpid(),))
+    finally:
+        signal.signal(signal.SIGINT, previous)
     try:
         jobs = [pool.apply_async(_warm_chunk, (pairs[i::n],)) for i in range(n)]
         if meanwhile is not None:
