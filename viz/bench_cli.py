@@ -56,10 +56,10 @@ def _endurance(args: argparse.Namespace) -> int:
 
     from .endurance import EnduranceUnavailable, format_summary, run_endurance
 
-    if not 0 < args.endurance <= MAX_ENDURANCE_S:
+    if not 1 <= args.endurance <= MAX_ENDURANCE_S:
         raise CliError(
-            f"--endurance: must be a number of seconds from 0 to {MAX_ENDURANCE_S:g} "
-            f"(a day), got {args.endurance}"
+            f"--endurance: must be a number of seconds from 1 to {MAX_ENDURANCE_S:g} "
+            f"(a day), got {args.endurance:g}"
         )
     out = Path(args.out) / "endurance.json"
     try:
@@ -156,6 +156,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub) -> None:
+    from dynamics.cli import number
+
     p = sub.add_parser(
         "bench",
         help="benchmark speed against accuracy; write results.json and charts",
@@ -180,7 +182,7 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--endurance",
-        type=float,
+        type=number,
         metavar="SECONDS",
         help="run only the viewer endurance benchmark for SECONDS, up to a day (600 for the "
         "10-minute endurance target) with --clients headless Chromium pages; writes "
