@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from dynamics.cli import CliError, number
-from dynamics.interrupt import ctrl_c_within_a_second
+from dynamics.interrupt import ctrl_c_within_a_second, exit_status
 
 from .play import add_command as _add_play
 from .progress import ProgressBar
@@ -105,8 +105,9 @@ def run_record(args: argparse.Namespace) -> int:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")
             print(f"mechviz: error: {exc}", file=sys.stderr)
-            if exc.interrupted:
-                return 130
+            if exc.interrupted:  # 130 for Ctrl-C, 128 + the signal for SIGTERM and SIGHUP
+                cause = exc.__cause__
+                return exit_status(cause) if isinstance(cause, KeyboardInterrupt) else 130
             return 2 if exc.bad_input else 1
         _report(res)
         if args.video and (status := film_record(res, args)):
