@@ -8,6 +8,7 @@ callback's thread, so no frame of the simulation loop waits for the compiler.
 from __future__ import annotations
 
 import contextlib
+import signal
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -61,16 +62,37 @@ def warm_all(
     return time.perf_counter() - t0
 
 
+_END_SIGNALS = {getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)}
+
+
+@contextlib.contextmanager
+def _quiet_start():
+    """While workers start: Ctrl-C ignored and SIGTERM / SIGHUP held (both kept across exec,
+    until a worker's set-up): a signal that comes then neither leaves a pool half made here
+    nor makes a worker still importing print a traceback. A held signal is handled as this
+    ends."""
+    masks = hasattr(signal, "pthread_sigmask")  # not on Windows
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _END_SIGNALS) if masks else None
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if masks:
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
 def _end_with_parent(parent: int) -> None:
     """A worker's set-up: Ctrl-C (sent to the whole process group) ends it at once, and so does
     the end of ``parent`` (the process that started it), however that ends: SIGKILL included.
     numba's compiler would swallow the ``KeyboardInterrupt``, and its cache files are written
     whole (renamed into place), so nothing is left half-written."""
     import os
-    import signal
 
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
     signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
+    if hasattr(signal, "pthread_sigmask"):  # held while it started
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _END_SIGNALS)
     with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
         import ctypes
 
@@ -85,14 +107,16 @@ def _end_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="mechviz-parent-watch", daemon=True).start()
 
 
-def _warm_chunk(pairs: list[tuple[str, str]]) -> float:
-    """In a worker process: compile ``pairs``, Taylor's parallel ensemble loop included."""
+def _warm_chunk(pairs: list[tuple[str, str]], parent: int) -> None:
+    """A worker process: compile ``pairs``, Taylor's parallel ensemble loop included; it ends
+    with ``parent`` (:func:`_end_with_parent`)."""
+    _end_with_parent(parent)
     from dynamics.integrators import taylor
 
     # this process only: the single-state warm-up takes the serial loop, the two-member one
     # the parallel loop (which ensembles of ``PARALLEL_MIN`` members or more use)
     taylor.PARALLEL_MIN = 2
-    return warm_all(pairs)
+    warm_all(pairs)
 
 
 def fill_cache_in_parallel(
@@ -112,7 +136,6 @@ def fill_cache_in_parallel(
     import hashlib
     import multiprocessing
     import os
-    import signal
     from pathlib import Path
 
     import numba
@@ -128,25 +151,31 @@ def fill_cache_in_parallel(
     n = max(1, min(workers or os.cpu_count() or 1, len(pairs)))
     # spawn, not fork: a forked child would share this process's numba and threading state
     context = multiprocessing.get_context("spawn")
-    # Started with Ctrl-C ignored (kept across exec): a worker still importing when it comes
-    # ends quietly when its set-up runs, instead of printing a traceback from the import.
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    procs: list = []
     try:
-        pool = context.Pool(n, initializer=_end_with_parent, initargs=(os.getpid(),))
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    try:
-        jobs = [pool.apply_async(_warm_chunk, (pairs[i::n],)) for i in range(n)]
+        with _quiet_start():
+            for i in range(n):
+                procs.append(context.Process(
+                    target=_warm_chunk, args=(pairs[i::n], os.getpid()),
+                    name=f"mechviz-warm-{i}", daemon=True,
+                ))  # fmt: skip
+                procs[-1].start()
         if meanwhile is not None:
             meanwhile()
-        for job in jobs:
-            job.get()
-        pool.close()
+        for p in procs:
+            p.join()
+        failed = [p.name for p in procs if p.exitcode != 0]
+        if failed:
+            raise RuntimeError(f"compiling ahead failed in {', '.join(failed)} (its error above)")
     except BaseException:  # Ctrl-C, SIGTERM, a failure: the workers end now, not when done
-        pool.terminate()
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
         raise
     finally:
-        pool.join()
+        for p in procs:
+            if p.pid is not None:
+                p.join()
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.touch()
     return time.perf_counter() - t0, n
