@@ -71,7 +71,16 @@ COMMANDS = {
     ("analyze", "disk"): [],
     ("analyze", "hoop"): [],
     ("simulate", "cyclotron"): ["--t-end", "1", "--method", "boris", "--dt", "0.01"],
-    ("simulate", "disk"): ["--motion", "released", "--t-end", "1", "--method", "rk4", "--dt", "0.01"],
+    ("simulate", "disk"): [
+        "--motion",
+        "released",
+        "--t-end",
+        "1",
+        "--method",
+        "rk4",
+        "--dt",
+        "0.01",
+    ],
     ("simulate", "hoop"): ["--t-end", "1", "--method", "rk4", "--dt", "0.01"],
 }
 
@@ -122,8 +131,10 @@ def test_every_count_and_number_of_the_other_commands_is_refused_by_name(command
     base, sentinel = GATED[command]
     a_file = tmp_path / "a-file"
     a_file.write_text("")
-    base = [b.replace("{file}", str(a_file)).replace("{missing}", str(tmp_path / "missing"))
-            for b in base]  # fmt: skip
+    base = [
+        b.replace("{file}", str(a_file)).replace("{missing}", str(tmp_path / "missing"))
+        for b in base
+    ]
     flags = [f for f in numeric_options(*command) if f not in ("--host",)]
     assert flags, command
     for flag in flags:
@@ -302,10 +313,21 @@ def test_every_accepted_extreme_demo_records_or_is_refused_by_key(tmp_path):
         except ValueError:
             continue
         out = subprocess.run(
-            [sys.executable, "-m", "viz.cli", "record", str(f), "--out", str(tmp_path / "o"),
-             "--fps", "5"],
-            capture_output=True, text=True, timeout=TIMEOUT,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "viz.cli",
+                "record",
+                str(f),
+                "--out",
+                str(tmp_path / "o"),
+                "--fps",
+                "5",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT,
+        )
         checked += 1
         lines = [x for x in out.stderr.replace("\r", "\n").splitlines() if "error" in x]
         assert "Traceback" not in out.stderr, (name, keys, value, out.stderr[-2000:])
@@ -320,7 +342,9 @@ def test_every_accepted_extreme_demo_records_or_is_refused_by_key(tmp_path):
 def test_view_answers_a_bad_host_at_once_as_a_process(host):
     out = subprocess.run(
         [sys.executable, "-m", "viz.cli", "view", "--host", host, "--port", "0"],
-        capture_output=True, text=True, timeout=TIMEOUT,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+    )
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "--host" in out.stderr
     assert "compiling" not in out.stdout  # refused before anything compiles

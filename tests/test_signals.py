@@ -68,9 +68,12 @@ def start(args: list[str], tmp: Path, **env) -> subprocess.Popen:
     tmp.mkdir(exist_ok=True)
     return subprocess.Popen(
         [sys.executable, "-m", "viz.cli", *args],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
         env={**os.environ, "TMPDIR": str(tmp), **env},
-    )  # fmt: skip
+    )
 
 
 def terminate_and_check(proc: subprocess.Popen, tmp: Path) -> str:
@@ -86,10 +89,12 @@ def terminate_and_check(proc: subprocess.Popen, tmp: Path) -> str:
 
 def test_sigterm_ends_bench_while_its_workers_compile(tmp_path):
     cache = tmp_path / "cache"
-    proc = start(["bench", "--quick", "--out", str(tmp_path / "out")], tmp_path / "tmp",
-                 NUMBA_CACHE_DIR=str(cache))  # fmt: skip
-    wait_for(lambda: len(descendants(proc.pid)) >= 2 and cache.exists(), 120,
-             "the compile workers")  # fmt: skip
+    proc = start(
+        ["bench", "--quick", "--out", str(tmp_path / "out")],
+        tmp_path / "tmp",
+        NUMBA_CACHE_DIR=str(cache),
+    )
+    wait_for(lambda: len(descendants(proc.pid)) >= 2 and cache.exists(), 120, "the compile workers")
     terminate_and_check(proc, tmp_path / "tmp")
     assert not (tmp_path / "out").exists()
 
@@ -109,17 +114,33 @@ def test_sigterm_ends_video_while_chromium_draws(tmp_path):
         pytest.skip("no Chromium (apt-get install chromium)")
     rec = tmp_path / "rec"
     subprocess.run(
-        [sys.executable, "-m", "viz.cli", "record", "helix", "--out", str(rec), "--duration",
-         "10", "--fps", "10"],
-        check=True, capture_output=True, timeout=300 * FACTOR,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "viz.cli",
+            "record",
+            "helix",
+            "--out",
+            str(rec),
+            "--duration",
+            "10",
+            "--fps",
+            "10",
+        ],
+        check=True,
+        capture_output=True,
+        timeout=300 * FACTOR,
+    )
     tmp = tmp_path / "tmp"
     video = tmp_path / "helix.mp4"
     proc = start(["video", str(rec / "helix.viser"), "--out", str(video)], tmp)
     wait_for(
-        lambda: any("chrom" in name.lower() for name in descendants(proc.pid).values())
-        and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir()),
-        120, "Chromium to start drawing",
-    )  # fmt: skip
+        lambda: (
+            any("chrom" in name.lower() for name in descendants(proc.pid).values())
+            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
+        ),
+        120,
+        "Chromium to start drawing",
+    )
     terminate_and_check(proc, tmp)
     assert not video.exists()

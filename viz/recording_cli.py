@@ -98,9 +98,12 @@ def run_record(args: argparse.Namespace) -> int:
     for demo in demos:
         try:
             res = rec.record(
-                demo, out, progress=ProgressBar(demo.name), theme=args.theme,
+                demo,
+                out,
+                progress=ProgressBar(demo.name),
+                theme=args.theme,
                 interruptible=ctrl_c_within_a_second,
-            )  # fmt: skip
+            )
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")

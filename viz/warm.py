@@ -155,11 +155,14 @@ def fill_cache_in_parallel(
     try:
         with _quiet_start():
             for i in range(n):
-                procs.append(context.Process(
-                    target=_warm_chunk, args=(pairs[i::n], os.getpid()),
-                    name=f"mechviz-warm-{i}", daemon=True,
-                ))  # fmt: skip
-                procs[-1].start()
+                proc = context.Process(
+                    target=_warm_chunk,
+                    args=(pairs[i::n], os.getpid()),
+                    name=f"mechviz-warm-{i}",
+                    daemon=True,
+                )
+                procs.append(proc)
+                proc.start()
         if meanwhile is not None:
             meanwhile()
         for p in procs:

@@ -129,10 +129,9 @@ def targets_summary(result: dict) -> str:
         key, acc = name.split(" ")
         e = (result.get("ratios", {}).get(key) or {}).get(acc) or {}
         bound = ">=" if e.get("ratio_is_lower_bound") else ""
-        shown = (
-            "no figure" if e.get("ratio") is None
-            else f"{bound}{_near(e['ratio'], SCIPY_FACTOR, 0)}x"
-        )  # fmt: skip
+        shown = "no figure"
+        if e.get("ratio") is not None:
+            shown = f"{bound}{_near(e['ratio'], SCIPY_FACTOR, 0)}x"
         against = (e.get("scipy") or {}).get("method", "no scipy option reaching it")
         figures.append((f"{key} at {acc} ({shown}", against))
     against = {m for _, m in figures}
@@ -148,8 +147,8 @@ def targets_summary(result: dict) -> str:
     )  # fmt: skip
     fa = result.get("first_answer")
     first = t.get("first_answer_at_least_as_fast_as_odeint")
-    if fa and first is not None and all("median_s" in fa.get(k, {}) for k in
-                                         ("taylor", "dop853", "scipy-odeint")):  # fmt: skip
+    measured = fa and all("median_s" in fa.get(k, {}) for k in ("taylor", "dop853", "scipy-odeint"))
+    if measured and first is not None:
         ours = min(fa["taylor"]["median_s"], fa["dop853"]["median_s"])
         theirs = fa["scipy-odeint"]["median_s"]
         verdict = "met" if first else f"missed by {ours / theirs:.1f}x"

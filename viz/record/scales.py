@@ -122,9 +122,11 @@ def check_scales(d: Demo) -> None:
         names = _blamed(d, params, defaults, lambda p: _problem(d.exhibit, p, speed) is not None)
         if not names and speed is not None and _problem(d.exhibit, params, None) is None:
             names = [f"initial.speed = {speed:g}"]
-        shown = ", ".join(names) or ", ".join(
-            f"parameters.{k} = {v:g}" for k, v in d.parameters.items()
-        ) or "the parameters"
+        shown = (
+            ", ".join(names)
+            or ", ".join(f"parameters.{k} = {v:g}" for k, v in d.parameters.items())
+            or "the parameters"
+        )
         raise ValueError(f"{shown}: {problem}")
     span = d.simulated_time
     _check_steps(d, span)
@@ -237,7 +239,7 @@ def _check_start(d: Demo, cfg, span: float) -> None:
 
 def _value(d: Demo, key: str) -> str:
     if key.startswith("events["):
-        return f"{d.events[int(key[7:key.index(']')])].dv:g}"
+        return f"{d.events[int(key[7 : key.index(']')])].dv:g}"
     value = getattr(d.initial, key.split(".")[1])
     return f"{value:g}" if isinstance(value, float) else str(list(value))
 
@@ -272,4 +274,4 @@ def in_demo_terms(message: str, d: Demo) -> str:
         key = _CONFIG_KEYS[name]
     else:
         return message
-    return f"{key}{word[len(name):]}{sep}{rest}"
+    return f"{key}{word[len(name) :]}{sep}{rest}"
