@@ -12,56 +12,17 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
+from waiting import alive, descendants, scaled, wait_until
 
-FACTOR = float(os.environ.get("MECHVIZ_TIMEOUT_FACTOR", "1"))
 pytestmark = pytest.mark.slow
-
-
-def _stat(pid: str) -> tuple[str, str, int] | None:
-    """(name, state, parent pid) of a process, or None if it is gone."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return None
-    fields = stat[stat.rindex(")") + 2 :].split()
-    return stat[stat.index("(") + 1 : stat.rindex(")")], fields[0], int(fields[1])
-
-
-def descendants(pid: int) -> dict[int, str]:
-    """pid -> name of every live process descended from ``pid`` (Linux /proc); Chromium starts
-    sessions of its own, so a session id would not find it."""
-    parents: dict[int, list[int]] = {}
-    names = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit() and (st := _stat(entry.name)) and st[1] != "Z":
-            parents.setdefault(st[2], []).append(int(entry.name))
-            names[int(entry.name)] = st[0]
-    found, todo = {}, [pid]
-    while todo:
-        for child in parents.get(todo.pop(), []):
-            found[child] = names[child]
-            todo.append(child)
-    return found
-
-
-def alive(pids) -> list[int]:
-    return [p for p in pids if (st := _stat(str(p))) is not None and st[1] != "Z"]
 
 
 def cpu_seconds(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def wait_for(condition, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout * FACTOR
-    while not condition():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        time.sleep(0.05)
 
 
 def start(args: list[str], tmp: Path, **env) -> subprocess.Popen:
@@ -79,10 +40,10 @@ def start(args: list[str], tmp: Path, **env) -> subprocess.Popen:
 def terminate_and_check(proc: subprocess.Popen, tmp: Path) -> str:
     children = descendants(proc.pid)
     proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=60 * FACTOR)
+    _, err = proc.communicate(timeout=scaled(60))
     assert proc.returncode == 128 + signal.SIGTERM, err[-2000:]
     assert "Traceback" not in err, err[-2000:]
-    wait_for(lambda: not alive(children), 20, f"the command's processes to end: {children}")
+    wait_until(lambda: not alive(children), 20, f"the command's processes to end: {children}")
     assert [p.name for p in tmp.iterdir()] == []
     return err
 
@@ -94,7 +55,9 @@ def test_sigterm_ends_bench_while_its_workers_compile(tmp_path):
         tmp_path / "tmp",
         NUMBA_CACHE_DIR=str(cache),
     )
-    wait_for(lambda: len(descendants(proc.pid)) >= 2 and cache.exists(), 120, "the compile workers")
+    wait_until(
+        lambda: len(descendants(proc.pid)) >= 2 and cache.exists(), 120, "the compile workers"
+    )
     terminate_and_check(proc, tmp_path / "tmp")
     assert not (tmp_path / "out").exists()
 
@@ -102,7 +65,7 @@ def test_sigterm_ends_bench_while_its_workers_compile(tmp_path):
 def test_sigterm_ends_record_at_work(tmp_path):
     out = tmp_path / "out"
     proc = start(["record", "helix", "--out", str(out), "--duration", "20"], tmp_path / "tmp")
-    wait_for(lambda: cpu_seconds(proc.pid) > 2.0, 120, "the recording to be at work")
+    wait_until(lambda: cpu_seconds(proc.pid) > 2.0, 120, "the recording to be at work")
     terminate_and_check(proc, tmp_path / "tmp")
     assert not out.exists() or list(out.iterdir()) == []
 
@@ -129,12 +92,12 @@ def test_sigterm_ends_video_while_chromium_draws(tmp_path):
         ],
         check=True,
         capture_output=True,
-        timeout=300 * FACTOR,
+        timeout=scaled(300),
     )
     tmp = tmp_path / "tmp"
     video = tmp_path / "helix.mp4"
     proc = start(["video", str(rec / "helix.viser"), "--out", str(video)], tmp)
-    wait_for(
+    wait_until(
         lambda: (
             any("chrom" in name.lower() for name in descendants(proc.pid).values())
             and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import TypeVar
 
 T = TypeVar("T")
@@ -48,3 +49,34 @@ def frames_later(app, n: int, timeout_s: float = 30.0) -> None:
     """Wait until the viewer ``app`` has drawn ``n`` more frames (its loop is running)."""
     start = app.frame
     wait_until(lambda: app.frame >= start + n, timeout_s, f"{n} frames of the viewer")
+
+
+def _stat(pid: str) -> tuple[str, str, int] | None:
+    """(name, state, parent pid) of a process, or None if it is gone."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = stat[stat.rindex(")") + 2 :].split()
+    return stat[stat.index("(") + 1 : stat.rindex(")")], fields[0], int(fields[1])
+
+
+def descendants(pid: int) -> dict[int, str]:
+    """pid -> name of every live process descended from ``pid`` (Linux /proc); Chromium starts
+    sessions of its own, so a session id would not find it."""
+    parents: dict[int, list[int]] = {}
+    names = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit() and (st := _stat(entry.name)) and st[1] != "Z":
+            parents.setdefault(st[2], []).append(int(entry.name))
+            names[int(entry.name)] = st[0]
+    found, todo = {}, [pid]
+    while todo:
+        for child in parents.get(todo.pop(), []):
+            found[child] = names[child]
+            todo.append(child)
+    return found
+
+
+def alive(pids) -> list[int]:
+    return [p for p in pids if (st := _stat(str(p))) is not None and st[1] != "Z"]
