@@ -1,4 +1,5 @@
-# mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
+# mechviz: `make run` serves the viewer, `make test` runs every test (`make test-fast`: those not
+# marked slow or browser, for the edit-test loop), `make bench` charts speed
 # against accuracy (into a temporary folder). `make screenshots`, `make bench-docs` and
 # `make readme-gif` refresh the pictures and tables committed under docs/ (`bench-docs` also the
 # README's benchmark figures); nothing else writes there. Each target creates .venv and installs
@@ -7,7 +8,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench bench-docs screenshots readme-gif lint clean
+.PHONY: run test test-fast bench bench-docs screenshots readme-gif lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +28,10 @@ run: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
+
+test-fast: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q -m "not slow and not browser"
 
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench
