@@ -313,6 +313,7 @@ def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_rep
     assert Settings.for_mode(False).one_sample_from == float("inf")
 
 
+@pytest.mark.slow
 def test_the_compile_cache_is_filled_by_worker_processes_once_per_checkout(tmp_path, monkeypatch):
     import numba
 

@@ -1,6 +1,7 @@
 """The headless command line: `mechviz analyze` and `mechviz simulate`."""
 
 import contextlib
+import io
 import json
 import math
 import os
@@ -15,9 +16,17 @@ from waiting import descendants, scaled, wait_until
 
 
 def mechviz(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "viz.cli", *args], capture_output=True, text=True, timeout=300
-    )
+    """``mechviz ARGS`` run in this process (``main(argv)``, the exit status and both streams
+    captured): what a shell sees, without the start-up of a new interpreter each time."""
+    from viz.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(list(args))
+        except SystemExit as exc:  # argparse's refusals
+            code = exc.code if isinstance(exc.code, int) else 1
+    return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())
 
 
 def test_analyze_cyclotron_json_gives_the_seed_results():
@@ -247,6 +256,7 @@ def test_inputs_whose_consequences_do_not_fit_a_double_are_bad_input(args, needl
     assert needle in lines[0] and "Traceback" not in out.stderr
 
 
+@pytest.mark.slow
 def test_a_run_beyond_the_step_limit_is_refused_up_front_and_max_steps_raises_it():
     args = ["simulate", "cyclotron", "--t-end", "2e5", "--dt", "1e-3", "--method", "boris"]
     out = mechviz(*args)
@@ -256,6 +266,7 @@ def test_a_run_beyond_the_step_limit_is_refused_up_front_and_max_steps_raises_it
     assert json.loads(out.stdout)["steps"] == 200_000_000
 
 
+@pytest.mark.slow
 def test_a_long_run_shows_progress_on_a_terminal_and_ctrl_c_ends_it_within_a_second():
     import pty
 
@@ -342,6 +353,7 @@ print("not interrupted")
 """
 
 
+@pytest.mark.slow
 def test_ctrl_c_inside_code_that_swallows_keyboard_interrupt_still_ends_the_run():
     proc = subprocess.Popen(
         [sys.executable, "-c", _SWALLOWING_CALLBACK],
@@ -355,6 +367,7 @@ def test_ctrl_c_inside_code_that_swallows_keyboard_interrupt_still_ends_the_run(
     assert err.strip() == "mechviz: interrupted" and "not interrupted" not in out
 
 
+@pytest.mark.slow
 def test_ctrl_c_ends_a_bench_run_while_it_compiles_on_every_core_and_writes_nothing(tmp_path):
     # From an empty compile cache the bench first compiles in worker processes; a terminal's
     # Ctrl-C goes to the whole process group, and numba's compiler swallows KeyboardInterrupt.

@@ -371,6 +371,7 @@ def test_demo_files_reject_unknown_keys():
 
 
 # --------------------------------------------------------------------------- play
+@pytest.mark.slow
 def test_play_serves_the_client_and_the_recording_then_stops_on_ctrl_c(tmp_path):
     res = rec.record(_short(), tmp_path)
     proc = subprocess.Popen(
