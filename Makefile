@@ -1,13 +1,14 @@
-# mechviz: `make run` serves the viewer, `make test` runs every test, `make bench` charts speed
-# against accuracy (into a temporary folder). `make screenshots`, `make bench-docs`,
-# `make readme-gif` and `make atlas-docs` refresh the pictures and tables committed under docs/
-# (`bench-docs` also the README's benchmark figures); nothing else writes there. Each target
-# creates .venv and installs the project (editable) on first use.
+# mechviz: `make run` serves the viewer, `make test` runs every test (`make test-fast`: those not
+# marked slow or browser, for the edit-test loop), `make bench` charts speed against accuracy
+# (into a temporary folder). `make screenshots`, `make bench-docs`, `make readme-gif` and
+# `make atlas-docs` refresh the pictures and tables committed under docs/ (`bench-docs` also the
+# README's benchmark figures); nothing else writes there. Each target creates .venv and installs
+# the project (editable) on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test bench bench-docs screenshots readme-gif atlas-docs lint clean
+.PHONY: run test test-fast bench bench-docs screenshots readme-gif atlas-docs lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +28,10 @@ run: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
+
+test-fast: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q -m "not slow and not browser"
 
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench

@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import copy
 import dataclasses
 import json
 import math
 import os
 import re
-import signal
 import sys
-import threading
 import time
 from typing import Any
 
@@ -32,6 +31,7 @@ import numpy as np
 from . import analysis
 from .files import json_safe
 from .integrators import METHODS, IntegrationError
+from .interrupt import ctrl_c_within_a_second
 from .params import TINY, SettingError, parse_number
 from .simulation import (
     MIN_COMPARED_TOL,
@@ -183,6 +183,32 @@ def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
     return setup
 
 
+def _start_flags(spec: SystemSpec) -> list[str]:
+    """Every flag's attribute that shapes the start: parameters, start settings, components."""
+    return [s.name for s in (*spec.params, *spec.start)] + list(_component_flags(spec))
+
+
+def _blame(spec: SystemSpec, args: argparse.Namespace, bad) -> str:
+    """The flags given (with their values) whose default alone makes ``bad(setup)`` false, else
+    every one given: what a refusal of a consequence of several flags names."""
+    given = [n for n in _start_flags(spec) if getattr(args, n, None) is not None]
+    blamed = []
+    for name in given:
+        trial = copy.copy(args)
+        setattr(trial, name, None)
+        with contextlib.suppress(CliError, ValueError, ArithmeticError), np.errstate(all="ignore"):
+            if not bad(_setup(spec, trial)):
+                blamed.append(name)
+    shown = [f"{flag_for(n)} {getattr(args, n):g}" if isinstance(getattr(args, n), float)
+             else flag_for(n) for n in (blamed or given)]
+    return ", ".join(shown)
+
+
+def _energy_overflows(setup: Setup) -> bool:
+    with np.errstate(all="ignore"):
+        return not math.isfinite(float(np.ravel(setup.system.energy(setup.state))[0]))
+
+
 def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     """Run ``system`` as the flags say and report its end (see ``mechviz simulate --help``)."""
     spec = SPECS[system]
@@ -193,11 +219,9 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     except SettingError as exc:
         raise setting_error(exc, args) from None
     sysm, state, method = setup.system, setup.state, setup.method
-    with np.errstate(all="ignore"):
-        e0 = float(np.ravel(sysm.energy(state))[0])
-    if not math.isfinite(e0):
-        flags = [f"--{n}" for n in _component_flags(spec) if getattr(args, n, None) is not None]
-        raise CliError(f"{', '.join(flags) or 'the start'}: its energy is beyond the largest double")
+    if _energy_overflows(setup):
+        shown = _blame(spec, args, _energy_overflows) or "the start"
+        raise CliError(f"{shown}: the initial energy is beyond the largest double")
     t_end = args.t_end
     if t_end <= 0:
         raise CliError(f"--t-end: must be positive, got {t_end}")
@@ -208,9 +232,11 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     period = sysm.time_scale(state)
     if math.ulp(t_end) > 1e-6 * period:
+        shown = _blame(spec, args, lambda s: math.ulp(t_end) > 1e-6 * s.system.time_scale(s.state))
+        by = f", set by {shown}" if shown else ""
         raise CliError(
             f"--t-end {t_end:g}: a double near it resolves time only to {math.ulp(t_end):.2g} s, "
-            f"too coarse for the motion's shortest period ({period:.3g} s)"
+            f"too coarse for the motion's shortest period ({period:.3g} s{by})"
         )
     step = setup.step
     if method.adaptive and args.dt is not None:
@@ -237,7 +263,12 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     steps = sim.estimated_steps(t_end)
     if not steps <= args.max_steps:
-        what = f"{method.name} at rtol {sim.rtol:g}" if method.adaptive else f"--dt {sim.dt:g}"
+        if not method.adaptive:
+            what = f"--dt {sim.dt:g}"
+        elif args.rtol is not None:
+            what = f"--rtol {sim.rtol:g} ({method.name})"
+        else:
+            what = f"{method.name} at rtol {sim.rtol:g}"
         ref = " and the DOP853 reference run" if sim.reference_kind == "reference" else ""
         raise CliError(
             f"--t-end {t_end:g}: about {steps:.2g} steps of {what}{ref} (the motion's shortest "
@@ -408,40 +439,3 @@ def _run_simulate(args: argparse.Namespace) -> int:
         result = simulate(args.system, args)
     _emit(result, args.json)
     return 0
-
-
-@contextlib.contextmanager
-def ctrl_c_within_a_second():
-    """Ctrl-C raises ``KeyboardInterrupt`` as usual, and if the process has not ended a second
-    later (numba's compiler, which runs Python callbacks from C, swallows the exception), prints
-    the usual line and exits with status 130. Only around work that writes no files (the
-    bench wraps its measurements, not its writing)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    done = threading.Event()
-
-    def hard_exit() -> None:
-        if not done.is_set():
-            sys.stderr.write("mechviz: interrupted\n")
-            sys.stderr.flush()
-            os._exit(130)
-
-    def on_sigint(signum, frame) -> None:
-        timer = threading.Timer(1.0, hard_exit)
-        timer.daemon = True
-        timer.start()
-        raise KeyboardInterrupt
-
-    def unraisable(info) -> None:  # the swallowed KeyboardInterrupt is not worth a traceback
-        if not issubclass(info.exc_type, KeyboardInterrupt):
-            previous_hook(info)
-
-    previous = signal.signal(signal.SIGINT, on_sigint)
-    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
-    try:
-        yield
-    finally:
-        done.set()
-        signal.signal(signal.SIGINT, previous)
-        sys.unraisablehook = previous_hook

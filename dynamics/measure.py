@@ -406,13 +406,20 @@ def wobble_growth_rate(
 
     from scipy.optimize import minimize_scalar  # deferred: importing dynamics should not pay
 
-    best = minimize_scalar(misfit, bounds=(0.2 * lam0, 5.0 * lam0), method="bounded",
-                           options={"xatol": 1e-12 * lam0})  # fmt: skip
-    lam = float(best.x)
-    # Its standard error from the misfit's curvature (Gauss-Newton: misfit'' = 2 J^T J), the
-    # residual variance over 2 K - 5 degrees of freedom (two components, five parameters).
-    h = 1e-3 * lam
-    curvature = (misfit(lam + h) - 2.0 * best.fun + misfit(lam - h)) / (h * h)
+    try:  # a wobble at the edge of the doubles (1e-300 rad/s) can defeat the linear algebra
+        with np.errstate(all="ignore"):
+            best = minimize_scalar(misfit, bounds=(0.2 * lam0, 5.0 * lam0), method="bounded",
+                                   options={"xatol": 1e-12 * lam0})
+            lam = float(best.x)
+            # Its standard error from the misfit's curvature (Gauss-Newton: misfit'' = 2 J^T J),
+            # the residual variance over 2 K - 5 degrees of freedom (two components, five
+            # parameters).
+            h = 1e-3 * lam
+            curvature = (misfit(lam + h) - 2.0 * best.fun + misfit(lam - h)) / (h * h)
+    except (np.linalg.LinAlgError, ValueError, FloatingPointError):
+        return unresolved("the fit of the growth did not converge")
+    if not (math.isfinite(lam) and math.isfinite(curvature) and math.isfinite(best.fun)):
+        return unresolved("the fit of the growth did not converge")
     dof = max(2 * len(t) - 5, 1)
     se = math.sqrt(2.0 * max(best.fun, 0.0) / dof / curvature) if curvature > 0.0 else math.inf
     if se > max_uncertainty * lam:

@@ -126,8 +126,10 @@ class Hoop(_Adapter):
         return hoop.energy_above_rest(self.params, states)
 
     def time_scale(self, states: np.ndarray) -> float:
-        """The period of the faster normal mode."""
-        return _period(hoop.normal_modes(self.params)[0][-1])
+        """The period of the faster normal mode, or the time the fastest angle takes to turn
+        once if that is shorter (a hoop set whirling)."""
+        rate = float(np.max(np.abs(np.atleast_2d(states)[:, 2:4]), initial=0.0))
+        return min(_period(hoop.normal_modes(self.params)[0][-1]), _period(rate))
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}

@@ -17,7 +17,8 @@ Stable API (the recording helper imports it too)::
     screenshot_array(page) -> np.ndarray         # (H, W, 3) uint8 of the canvas
 
 ``open_page`` starts playwright, launches a persistent context in a fresh temporary profile,
-loads ``url`` and waits until viser shows "Connected"; on exit it closes everything.
+loads ``url`` and waits until viser shows "Connected"; on exit it closes everything. Every time
+limit is scaled for the machine (:mod:`waiting`, ``MECHVIZ_TIMEOUT_FACTOR``).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
+from waiting import scaled
 
 from viz.chromium import CHROMIUM_ARGS, find_chromium, first_page, launch  # noqa: F401  (API above)
 
@@ -96,11 +98,14 @@ def open_page(
     try:
         with sync_playwright() as pw:
             context = launch(pw, profile, exe, width, height)
+            context.set_default_timeout(scaled(30) * 1000)  # every wait, screenshots included
             try:
                 page = first_page(context)
                 page.goto(url)
                 if wait_connected:
-                    page.get_by_text("Connected", exact=True).wait_for(timeout=timeout_s * 1000)
+                    page.get_by_text("Connected", exact=True).wait_for(
+                        timeout=scaled(timeout_s) * 1000
+                    )
                 yield page
             finally:
                 context.close()
@@ -117,7 +122,7 @@ def dismiss_webgl_alert(page, timeout_s: float = 5.0) -> bool:
     """Close the "Software WebGL rendering detected" alert if it shows; True if closed."""
     alert = page.get_by_role("alert").filter(has_text="Software WebGL")
     try:
-        alert.first.wait_for(timeout=timeout_s * 1000)
+        alert.first.wait_for(timeout=scaled(timeout_s) * 1000)
         alert.first.get_by_role("button").first.click()
         return True
     except Exception:
@@ -140,7 +145,7 @@ def wait_for_pixels(
 
     Raises ``TimeoutError`` (with the last image's distinct-colour count) otherwise.
     """
-    deadline = time.monotonic() + timeout_s
+    deadline = time.monotonic() + scaled(timeout_s)
     img = screenshot_array(page)
     while not predicate(img):
         if time.monotonic() > deadline:

@@ -34,6 +34,7 @@ def _lagrangian_accelerations():
     return sp.lambdify((*syms, M, m, a, g), exprs, "math"), (L, th1, th2, t, M, m, a, g)
 
 
+@pytest.mark.slow
 def test_equations_of_motion_equal_euler_lagrange_from_the_positions():
     f, _ = _lagrangian_accelerations()
     rng = np.random.default_rng(7)
@@ -47,6 +48,7 @@ def test_equations_of_motion_equal_euler_lagrange_from_the_positions():
             np.testing.assert_allclose(out[:2], s[2:])
 
 
+@pytest.mark.slow
 def test_seed_lagrangian_with_the_missing_a_restored():
     """The seed's L, with (M + m) g a cos th1 (the seed drops the a), equals T - V."""
     _, (L, th1, th2, t, M, m, a, g) = _lagrangian_accelerations()

@@ -273,6 +273,7 @@ def test_reference_solution_agrees_with_scipy_radau():
     assert np.linalg.norm(radau - ref) / np.linalg.norm(ref) < 1e-10
 
 
+@pytest.mark.slow
 def test_uncompiled_source_gives_bit_identical_results():
     """NUMBA_DISABLE_JIT=1 runs the same kernels as plain Python (for print and pdb): same bits."""
     script = (
@@ -313,6 +314,7 @@ print("ok")
 """
 
 
+@pytest.mark.slow
 def test_the_disk_cache_stops_growing_once_every_method_has_run(tmp_path):
     """numba keys a cache entry of a kernel that takes a compiled function on that function's
     dispatcher type, which is new in every process: with ``cache=True`` on such kernels each

@@ -28,6 +28,7 @@ def test_committed_notebook_has_no_outputs(path):
     assert path.stat().st_size < 20_000
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
 def test_notebook_runs_and_shows_its_demo(path, tmp_path):
     nbformat = pytest.importorskip("nbformat")

@@ -7,11 +7,11 @@ beside it, and saves it; ``make screenshots`` saves them as the README's stills
 from __future__ import annotations
 
 import io
-import time
 
 import browser
 import numpy as np
 import pytest
+from waiting import frames_later, wait_until
 
 pytestmark = pytest.mark.browser
 
@@ -43,18 +43,26 @@ def _plot(page, tab: str) -> np.ndarray:
     from PIL import Image
 
     page.get_by_role("tab", name=tab).click()
-    time.sleep(1.0)
-    for _attempt in range(10):
+    page.get_by_role("tab", name=tab, selected=True).wait_for()
+
+    def plot_image():
         images = [i for i in page.locator("img").all() if i.is_visible()]
         images = [i for i in images if (i.bounding_box() or {}).get("height", 0) > 150]
-        if images:
-            img = images[0]
-            img.evaluate("e => e.scrollIntoView({block: 'center'})")
-            time.sleep(0.6)
-            png = page.screenshot(clip=img.bounding_box())
-            return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
-        time.sleep(0.5)
-    raise AssertionError(f"no plot image in the {tab} tab")
+        return images[0] if images else None
+
+    img = wait_until(plot_image, 30, f"a plot image in the {tab} tab", poll_s=0.2)
+    img.evaluate(  # two animation frames: the scroll is painted
+        "e => new Promise(done => { e.scrollIntoView({block: 'center'}); "
+        "requestAnimationFrame(() => requestAnimationFrame(done)); })"
+    )
+    png = page.screenshot(clip=img.bounding_box())
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+
+def _drawn(img: np.ndarray) -> np.ndarray:
+    """Where ``img`` differs from its background (its median colour)."""
+    background = np.median(img.reshape(-1, 3), axis=0)
+    return np.abs(img.astype(int) - background).max(axis=-1) > 40
 
 
 def _pixels(img: np.ndarray, hex_colour: str, tol: int = 40) -> int:
@@ -97,11 +105,9 @@ def test_the_plot_shows_the_motion_and_its_exact_curve(viewer, tmp_path, tab, ke
     app, page = viewer
     for command in start:
         app.enqueue(key, command)
-    time.sleep(0.5)
+    frames_later(app, 2)  # the commands are applied at the start of a frame
     _choose(app, key, *pair)
-    deadline = time.monotonic() + 20
-    while len(app.exhibits[key].trace) < 200 and time.monotonic() < deadline:
-        time.sleep(0.5)  # let the path grow
+    wait_until(lambda: len(app.exhibits[key].trace) >= 200, 20, "the path to grow")
     img = _plot(page, tab)
     assert app.panels[key].plot_choice == pair
     _save(img, name, tmp_path)
@@ -116,11 +122,10 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
     app, page = viewer
     app.enqueue("app", {"op": "present", "value": "Disk"})
     try:
-        time.sleep(3.0)
-        img = browser.screenshot_array(page)
-        background = np.median(img.reshape(-1, 3), axis=0)
-        drawn = np.abs(img.astype(int) - background).max(axis=-1) > 40
-        assert drawn.mean() > 0.02  # the construction fills part of the page
+        wait_until(lambda: app.presenting is not None, 20, "presentation mode")
+        frames_later(app, 60)  # the camera's move to the disk is a second of frames
+        img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
+        drawn = _drawn(img)  # the construction fills part of the page
         rows, cols = np.nonzero(drawn[:, : img.shape[1] - 360])  # left of the panel's corner
         cy, cx = int(np.median(rows)), int(np.median(cols))
         half = 260  # the README's still: the body and its construction, not the floor

@@ -11,11 +11,11 @@ under load; locator clicks wait for animation frames, so the bar is driven with 
 from __future__ import annotations
 
 import os
-import time
 
 import browser
 import numpy as np
 import pytest
+from waiting import scaled, wait_until
 
 from viz import record as rec
 
@@ -63,8 +63,8 @@ def _drawn(img: np.ndarray) -> bool:
 @pytest.mark.parametrize("name", DEMOS)
 def test_demo_html_plays_from_file_url_with_its_playback_bar(recordings, page, name, tmp_path):
     page.goto((recordings / f"{name}.html").resolve().as_uri())
-    page.wait_for_function("() => window.__VISER_EMBED_DATA__ !== undefined", timeout=10_000)
-    browser.canvas(page).wait_for(timeout=60_000)
+    page.wait_for_function("() => window.__VISER_EMBED_DATA__ !== undefined")
+    browser.canvas(page).wait_for(timeout=scaled(60) * 1000)
     img = browser.wait_for_pixels(page, _drawn, timeout_s=120.0)
     assert _drawn(img)
     # The playback bar along the bottom: play/pause button, time box, scrubber, speed selector.
@@ -78,8 +78,12 @@ def test_demo_html_plays_from_file_url_with_its_playback_bar(recordings, page, n
         alert.first.get_by_role("button").first.click(force=True, timeout=10_000)
     time_box.fill(SEEK)
     time_box.press("Enter")
-    time.sleep(0.5)
-    assert float(time_box.input_value()) == pytest.approx(float(SEEK)), "seek or pause failed"
+    sought = float(SEEK)
+    wait_until(
+        lambda: float(time_box.input_value()) == pytest.approx(sought),
+        10,
+        "the seek to show in the time box (paused)",
+    )
     assert t0 >= 0.0
     browser.wait_for_pixels(page, _drawn, timeout_s=60.0)
     still = browser.picture_path(f"demos/{name}.png", tmp_path)

@@ -500,6 +500,7 @@ def test_measure_frame_cost_reports_milliseconds_per_frame():
     assert r["trail_segments"] > 0
 
 
+@pytest.mark.slow
 def test_view_command_prints_the_url_and_stops_cleanly_on_ctrl_c():
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
@@ -584,6 +585,7 @@ def test_the_first_view_and_each_preset_show_their_exhibits_whole_left_of_the_pa
         assert _on_screen_left_of_panel(app, view, key, centred=True), view
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["driven", "released"])
 def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
     app.exhibits["disk"].apply({"op": "set", "mode": mode})

@@ -16,6 +16,7 @@ import browser
 import numpy as np
 import pytest
 from playwright.sync_api import Error as PlaywrightError
+from waiting import frames_later, scaled, wait_until
 
 pytestmark = pytest.mark.browser
 
@@ -69,17 +70,16 @@ def test_page_draws_the_three_exhibits_side_by_side(viewer):
 def test_pause_button_stops_simulated_time_and_play_resumes(viewer):
     app, page, _ = viewer
     page.get_by_role("button", name="Pause").click()
-    page.get_by_role("button", name="Play").wait_for(timeout=10_000)
-    time.sleep(0.5)
+    page.get_by_role("button", name="Play").wait_for(timeout=scaled(10) * 1000)
+    wait_until(lambda: not app.playing, 10, "the app to pause")
+    frames_later(app, 1)  # a frame that began before the pause is over
     t0 = app.sim_time
-    time.sleep(1.0)
+    frames_later(app, 30)  # half a second of frames at 60 Hz, however long they take
     assert app.sim_time == t0
-    assert not app.playing
-    page.get_by_text("paused", exact=False).first.wait_for(timeout=10_000)
+    page.get_by_text("paused", exact=False).first.wait_for(timeout=scaled(10) * 1000)
     page.get_by_role("button", name="Play").click()
-    page.get_by_role("button", name="Pause").wait_for(timeout=10_000)
-    time.sleep(1.0)
-    assert app.sim_time > t0
+    page.get_by_role("button", name="Pause").wait_for(timeout=scaled(10) * 1000)
+    wait_until(lambda: app.sim_time > t0, 10, "simulated time to move on after Play")
 
 
 def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
@@ -91,10 +91,7 @@ def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
     page.get_by_role("combobox", name="Method").click()
     page.get_by_role("option", name="verlet", exact=True).click()
     page.get_by_text("Stormer-Verlet", exact=False).first.wait_for(timeout=15_000)
-    deadline = time.monotonic() + 15
-    while app.exhibits["hoop"].sim.method.name != "verlet" and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert app.exhibits["hoop"].sim.method.name == "verlet"
+    wait_until(lambda: app.exhibits["hoop"].sim.method.name == "verlet", 15, "verlet to run")
     page.locator("code", has_text="verlet").first.wait_for(timeout=10_000)
 
 
@@ -124,12 +121,9 @@ def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
         box.click()
         box.press("Control+A")
         page.keyboard.type("2.5e-2", delay=40)
-        deadline = time.monotonic() + 20
-        while app.exhibits["hoop"].config.dt != 0.025 and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_until(lambda: app.exhibits["hoop"].config.dt == 0.025, 20, "dt to reach the server")
     finally:
         del panel.TYPING_PAUSE  # back to the class's value for the other tests
-    assert app.exhibits["hoop"].config.dt == 0.025
 
 
 def test_readme_screenshot_with_environment_lighting(viewer, tmp_path):
@@ -141,11 +135,10 @@ def test_readme_screenshot_with_environment_lighting(viewer, tmp_path):
             alert.get_by_role("button").first.click(timeout=2_000)
         except PlaywrightError:
             pass  # it closed itself meanwhile (notifications auto-close)
-    time.sleep(1.0)
     browser.wait_for_pixels(page, _three_exhibits, timeout_s=120)
-    time.sleep(2.0)  # a couple more frames with the lighting settled
+    frames_later(app, 120)  # a couple more seconds of frames with the lighting settled
     screenshot = browser.picture_path("viewer.png", tmp_path)
-    page.screenshot(path=str(screenshot))
+    page.screenshot(path=str(screenshot), timeout=scaled(30) * 1000)
     assert screenshot.stat().st_size > 20_000
 
 
@@ -162,8 +155,10 @@ def _chart_lines(page) -> tuple[int, int]:
             chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
             # the readouts above it change height as they refresh, so playwright never sees the
             # chart "stable": scroll it into view from the page instead
-            chart.evaluate("e => e.scrollIntoView({block: 'center'})")
-            time.sleep(0.5)
+            chart.evaluate(  # two animation frames: the scroll is painted
+                "e => new Promise(done => { e.scrollIntoView({block: 'center'}); "
+                "requestAnimationFrame(() => requestAnimationFrame(done)); })"
+            )
             png = page.screenshot(clip=chart.bounding_box())
             break
         except (PlaywrightError, StopIteration, TypeError):
@@ -178,17 +173,15 @@ def test_a_chart_still_draws_its_lines_after_a_resize_and_three_tab_switches(vie
     app, page, _ = viewer
     page.get_by_role("tab", name="Hoop").click()
     hoop = app.exhibits["hoop"]
-    deadline = time.monotonic() + 30  # an earlier test restarted the hoop: let its chart fill
-    while np.ptp(hoop.history.t) < 6.0 and time.monotonic() < deadline:
-        time.sleep(0.5)
-    assert min(_chart_lines(page)) > 50
+    # an earlier test restarted the hoop: let its chart fill
+    wait_until(lambda: np.ptp(hoop.history.t) >= 6.0, 30, "the hoop's chart to fill")
+    wait_until(lambda: min(_chart_lines(page)) > 50, 30, "the chart's lines", poll_s=0.5)
     page.set_viewport_size({"width": 1440, "height": 900})  # as going full screen does
-    time.sleep(1.0)
     for tab in ("Cyclotron", "Disk", "Hoop"):
         page.get_by_role("tab", name=tab).click()
-        time.sleep(1.0)
-    time.sleep(2.0)
-    assert min(_chart_lines(page)) > 50
+        page.get_by_role("tab", name=tab, selected=True).wait_for(timeout=scaled(10) * 1000)
+    lines_drawn = lambda: min(_chart_lines(page)) > 50  # noqa: E731
+    wait_until(lines_drawn, 10, "the chart's lines after the switches", poll_s=0.5)
     page.set_viewport_size({"width": 1280, "height": 800})
 
 
@@ -199,6 +192,6 @@ def test_the_dark_theme_keeps_the_three_exhibits_visible(viewer, tmp_path):
         img = browser.wait_for_pixels(page, _three_exhibits, timeout_s=90)
         assert np.median(img[:40, :400]) < 60  # the page behind the scene is dark
         screenshot = browser.picture_path("viewer-dark.png", tmp_path)
-        page.screenshot(path=str(screenshot))
+        page.screenshot(path=str(screenshot), timeout=scaled(30) * 1000)
     finally:
         app.enqueue("app", {"op": "theme", "value": "light"})

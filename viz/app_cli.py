@@ -45,10 +45,15 @@ def _view(args: argparse.Namespace) -> int:
 
     from dynamics.cli import CliError
 
-    from .play import exposure_note, reachable_urls
+    from .hosts import HostError, check_host
+    from .play import reachable_urls
 
     if not 0 <= args.port <= 65535:
         raise CliError(f"--port must be in 0..65535, got {args.port}")
+    try:  # before anything compiles: a host that cannot be served on is one line, at once
+        host = check_host(args.host)
+    except HostError as exc:
+        raise CliError(f"--host: {exc}") from None
 
     # Ctrl-C only sets a flag: the loop and the compiler are never interrupted mid-call, so
     # the server always stops cleanly (a second Ctrl-C exits at once).
@@ -90,7 +95,7 @@ def _view(args: argparse.Namespace) -> int:
                 f"mechviz: viewer ready in {time.perf_counter() - t0:.1f} s at {', '.join(urls)}",
                 flush=True,
             )
-            note = exposure_note(args.host)
+            note = host.exposure_note()
             if note:
                 print(f"mechviz: {note}", flush=True)
             print("mechviz: press Ctrl-C to stop", flush=True)

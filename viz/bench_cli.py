@@ -23,6 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
+MAX_ENDURANCE_S = 86_400.0
+MAX_CLIENTS = 16  # each is a headless Chromium: a few hundred MB and a share of the cores
+
 
 def _viewer_measurements(quick: bool) -> dict:
     """Frame cost of the viewer and speed of the recorder, or why they are not available."""
@@ -53,10 +56,11 @@ def _endurance(args: argparse.Namespace) -> int:
 
     from .endurance import EnduranceUnavailable, format_summary, run_endurance
 
-    if not args.endurance > 0:
-        raise CliError(f"--endurance must be a positive number of seconds, got {args.endurance}")
-    if args.clients < 1:
-        raise CliError(f"--clients must be at least 1, got {args.clients}")
+    if not 1 <= args.endurance <= MAX_ENDURANCE_S:
+        raise CliError(
+            f"--endurance: must be a number of seconds from 1 to {MAX_ENDURANCE_S:g} "
+            f"(a day), got {args.endurance:g}"
+        )
     out = Path(args.out) / "endurance.json"
     try:
         result = run_endurance(
@@ -75,10 +79,16 @@ def _endurance(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from dynamics.cli import CliError
+
+    if not 1 <= args.clients <= MAX_CLIENTS:
+        raise CliError(
+            f"--clients: must be a whole number from 1 to {MAX_CLIENTS}, got {args.clients}"
+        )
     if args.endurance is not None:
         return _endurance(args)
     from dynamics.bench import peers, run_bench, summary
-    from dynamics.cli import ctrl_c_within_a_second
+    from dynamics.interrupt import ctrl_c_within_a_second
 
     from .warm import fill_cache_in_parallel
 
@@ -146,6 +156,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub) -> None:
+    from dynamics.cli import number
+
     p = sub.add_parser(
         "bench",
         help="benchmark speed against accuracy; write results.json and charts",
@@ -170,14 +182,15 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--endurance",
-        type=float,
+        type=number,
         metavar="SECONDS",
-        help="run only the viewer endurance benchmark for SECONDS (600 for the 10-minute endurance target) "
-        "with --clients headless Chromium pages; writes endurance.json; exit status 1 if a "
-        "target is missed",
+        help="run only the viewer endurance benchmark for SECONDS, up to a day (600 for the "
+        "10-minute endurance target) with --clients headless Chromium pages; writes "
+        "endurance.json; exit status 1 if a target is missed",
     )
     p.add_argument(
-        "--clients", type=int, default=3, help="browser clients for --endurance (default 3)"
+        "--clients", type=int, default=3,
+        help=f"browser clients for --endurance, 1 to {MAX_CLIENTS} (default 3)",
     )
     p.set_defaults(func=_run)
 

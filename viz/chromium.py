@@ -36,13 +36,19 @@ def find_chromium() -> str | None:
 
 def launch(pw, profile: str, executable: str, width: int, height: int):
     """A headless Chromium context (``executable``, its profile in the empty folder ``profile``,
-    a ``width`` x ``height`` viewport) from playwright's ``pw``, with :data:`CHROMIUM_ARGS`."""
+    a ``width`` x ``height`` viewport) from playwright's ``pw``, with :data:`CHROMIUM_ARGS`.
+
+    Chromium's own temporary files go inside the profile too (``TMPDIR``): a browser killed
+    with its parent leaves them behind, and removing the profile then removes everything."""
+    tmp = os.path.join(str(profile), ".tmp")
+    os.makedirs(tmp, exist_ok=True)
     return pw.chromium.launch_persistent_context(
         str(profile),
         executable_path=executable,
         headless=True,
         args=CHROMIUM_ARGS,
         viewport={"width": int(width), "height": int(height)},
+        env={**os.environ, "TMPDIR": tmp},
     )
 
 

@@ -49,24 +49,28 @@ def main(argv: list[str] | None = None) -> int:
     # Ctrl-C is held from the first instruction until the libraries are imported, so that none
     # of them can swallow it (viz.interrupts), and then delivered: status 130, nothing written.
     held = hold_sigint()
-    try:
-        try:
-            from dynamics.cli import CliError
+    from dynamics.interrupt import exit_status, signals_end_like_ctrl_c
 
-            parser = build_parser()
-            args = parser.parse_args(argv)
-            if args.command not in _LIGHT_COMMANDS:
-                importlib.import_module("trimesh")  # viser's and the exhibits' meshes
-        finally:
-            release_sigint(held)
+    # SIGTERM and SIGHUP end a command as Ctrl-C does: its children and temporary folders go too
+    with signals_end_like_ctrl_c():
         try:
-            return int(args.func(args) or 0)
-        except CliError as exc:
-            print(f"mechviz: error: {exc}", file=sys.stderr)
-            return 2
-    except KeyboardInterrupt:  # at any moment, start-up included: one line, status 130
-        print("mechviz: interrupted", file=sys.stderr)
-        return 130
+            try:
+                from dynamics.cli import CliError
+
+                parser = build_parser()
+                args = parser.parse_args(argv)
+                if args.command not in _LIGHT_COMMANDS:
+                    importlib.import_module("trimesh")  # viser's and the exhibits' meshes
+            finally:
+                release_sigint(held)
+            try:
+                return int(args.func(args) or 0)
+            except CliError as exc:
+                print(f"mechviz: error: {exc}", file=sys.stderr)
+                return 2
+        except KeyboardInterrupt as exc:  # at any moment, start-up included: one line
+            print("mechviz: interrupted", file=sys.stderr)
+            return exit_status(exc)
 
 
 if __name__ == "__main__":

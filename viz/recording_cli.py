@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from dynamics.cli import CliError, number
+from dynamics.interrupt import ctrl_c_within_a_second, exit_status
 
 from .play import add_command as _add_play
 from .printable import printable
@@ -60,7 +61,8 @@ def _option_error(exc: ValueError, args) -> CliError:
 def run_record(args: argparse.Namespace) -> int:
     from dynamics.fileset import check_room
 
-    from . import record as rec
+    with ctrl_c_within_a_second():  # a Ctrl-C that an import swallows (trimesh's) still counts
+        from . import record as rec
 
     if args.list:
         demos = rec.list_demos()
@@ -103,14 +105,20 @@ def run_record(args: argparse.Namespace) -> int:
     for demo in demos:
         try:
             res = rec.record(
-                demo, out, progress=ProgressBar(demo.name), theme=args.theme, on_wait=_say_waiting
+                demo,
+                out,
+                progress=ProgressBar(demo.name),
+                theme=args.theme,
+                on_wait=_say_waiting,
+                interruptible=ctrl_c_within_a_second,
             )
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():
                 sys.stderr.write("\n")
             print(f"mechviz: error: {exc}", file=sys.stderr)
-            if exc.interrupted:
-                return 130
+            if exc.interrupted:  # 130 for Ctrl-C, 128 + the signal for SIGTERM and SIGHUP
+                cause = exc.__cause__
+                return exit_status(cause) if isinstance(cause, KeyboardInterrupt) else 130
             return 2 if exc.bad_input else 1
         _report(res)
         if args.video and (status := film_record(res, args)):

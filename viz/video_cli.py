@@ -18,6 +18,7 @@ import threading
 from pathlib import Path
 
 from dynamics.cli import CliError
+from dynamics.interrupt import exit_status
 
 from . import video
 from .printable import printable
@@ -99,7 +100,7 @@ def _film(clip: video.Clip, path: Path, fmt: str, size, flags: dict[str, str]) -
         if interrupted.is_set() or isinstance(exc, KeyboardInterrupt):
             logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # the driver's closed pipe
             print(f"mechviz: interrupted; {path} was not written", file=sys.stderr)
-            return 130
+            return exit_status(exc) if isinstance(exc, KeyboardInterrupt) else 130
         print(f"mechviz: error: {exc}; {path} was not written", file=sys.stderr)
         return 1
     finally:

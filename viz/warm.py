@@ -7,6 +7,8 @@ callback's thread, so no frame of the simulation loop waits for the compiler.
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -60,24 +62,61 @@ def warm_all(
     return time.perf_counter() - t0
 
 
-def _end_on_ctrl_c() -> None:
-    """A worker's set-up: Ctrl-C (sent to the whole process group) ends it at once. numba's
-    compiler would swallow the ``KeyboardInterrupt``, and its cache files are written whole
-    (renamed into place), so nothing is left half-written."""
+_END_SIGNALS = {getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)}
+
+
+@contextlib.contextmanager
+def _quiet_start():
+    """While workers start: Ctrl-C ignored and SIGTERM / SIGHUP held (both kept across exec,
+    until a worker's set-up): a signal that comes then neither leaves a pool half made here
+    nor makes a worker still importing print a traceback. A held signal is handled as this
+    ends."""
+    masks = hasattr(signal, "pthread_sigmask")  # not on Windows
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _END_SIGNALS) if masks else None
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if masks:
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def _end_with_parent(parent: int) -> None:
+    """A worker's set-up: Ctrl-C (sent to the whole process group) ends it at once, and so does
+    the end of ``parent`` (the process that started it), however that ends: SIGKILL included.
+    numba's compiler would swallow the ``KeyboardInterrupt``, and its cache files are written
+    whole (renamed into place), so nothing is left half-written."""
     import os
-    import signal
 
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
+    signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
+    if hasattr(signal, "pthread_sigmask"):  # held while it started
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _END_SIGNALS)
+    with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
+
+    def watch() -> None:  # elsewhere (and if the parent ended before prctl): poll for it
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(143)
+
+    threading.Thread(target=watch, name="mechviz-parent-watch", daemon=True).start()
 
 
-def _warm_chunk(pairs: list[tuple[str, str]]) -> float:
-    """In a worker process: compile ``pairs``, Taylor's parallel ensemble loop included."""
+def _warm_chunk(pairs: list[tuple[str, str]], parent: int) -> None:
+    """A worker process: compile ``pairs``, Taylor's parallel ensemble loop included; it ends
+    with ``parent`` (:func:`_end_with_parent`)."""
+    _end_with_parent(parent)
     from dynamics.integrators import taylor
 
     # this process only: the single-state warm-up takes the serial loop, the two-member one
     # the parallel loop (which ensembles of ``PARALLEL_MIN`` members or more use)
     taylor.PARALLEL_MIN = 2
-    return warm_all(pairs)
+    warm_all(pairs)
 
 
 def fill_cache_in_parallel(
@@ -94,7 +133,6 @@ def fill_cache_in_parallel(
     ``meanwhile`` runs in this process while the workers compile (compilation this process
     needs and cannot cache, such as a peer's).
     """
-    import concurrent.futures
     import hashlib
     import multiprocessing
     import os
@@ -113,14 +151,34 @@ def fill_cache_in_parallel(
     n = max(1, min(workers or os.cpu_count() or 1, len(pairs)))
     # spawn, not fork: a forked child would share this process's numba and threading state
     context = multiprocessing.get_context("spawn")
-    with concurrent.futures.ProcessPoolExecutor(
-        n, mp_context=context, initializer=_end_on_ctrl_c
-    ) as pool:
-        jobs = [pool.submit(_warm_chunk, pairs[i::n]) for i in range(n)]
+    procs: list = []
+    try:
+        with _quiet_start():
+            for i in range(n):
+                proc = context.Process(
+                    target=_warm_chunk,
+                    args=(pairs[i::n], os.getpid()),
+                    name=f"mechviz-warm-{i}",
+                    daemon=True,
+                )
+                procs.append(proc)
+                proc.start()
         if meanwhile is not None:
             meanwhile()
-        for job in jobs:
-            job.result()
+        for p in procs:
+            p.join()
+        failed = [p.name for p in procs if p.exitcode != 0]
+        if failed:
+            raise RuntimeError(f"compiling ahead failed in {', '.join(failed)} (its error above)")
+    except BaseException:  # Ctrl-C, SIGTERM, a failure: the workers end now, not when done
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+        raise
+    finally:
+        for p in procs:
+            if p.pid is not None:
+                p.join()
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.touch()
     return time.perf_counter() - t0, n

@@ -187,9 +187,13 @@ def run_bench(
     from .report import markdown
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
+    try:  # the figures are measured: a table that cannot be made must not lose them
+        tables = markdown(result)
+    except Exception as exc:
+        tables = f"# Benchmark tables\n\nNot made ({exc.__class__.__name__}: {exc}); see results.json.\n"
     # one set, results.json last: an interrupted run leaves the folder as it was
     write_files_atomically(
-        out, {**pictures, "tables.md": markdown(result).encode(), "results.json": results.encode()}
+        out, {**pictures, "tables.md": tables.encode(), "results.json": results.encode()}
     )
     return result
 

@@ -31,6 +31,7 @@ from dynamics.assets import asset
 
 from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
 from ..printable import printable
+from .scales import CONFIG_KEYS, check_scales, in_demo_terms
 
 DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
@@ -302,7 +303,7 @@ def demo_key(d: Demo, field: str) -> str:
         return f"parameters.{field}"
     if field == "initial.motion":
         return "motion"
-    return field
+    return CONFIG_KEYS.get(field, field)
 
 
 def _finite_positive(key: str, value: float) -> None:
@@ -348,7 +349,7 @@ def check(d: Demo) -> None:
         if not 0.0 <= e.t <= d.simulated_time:
             raise ValueError(
                 f"events[{i}].t = {e.t!r} s lies outside the recording (0 to {d.simulated_time:g} s "
-                "of simulated time)"
+                f"of simulated time: speed = {d.speed:g} x duration = {d.duration:g} s)"
             )
         if not math.isfinite(e.dv):
             raise ValueError(f"events[{i}].dv must be finite, got {e.dv!r}")
@@ -366,12 +367,13 @@ def check(d: Demo) -> None:
         shown = message if message.startswith(key) else f"{key}: {message}"
         raise dynamics.SettingError(key, shown) from None
     except (ValueError, TypeError) as exc:
-        raise ValueError(str(exc)) from None
+        raise ValueError(in_demo_terms(str(exc), d)) from None
+    check_scales(d)  # what the values make together: every derived scale a double can hold
     check_scale(d)
 
 
 #: Limits that keep a recording's work in proportion to the demo; each is refused up front
-#: with the key that passes it. The step count is bounded separately (viz.record.run.MAX_STEPS).
+#: with the key that passes it. The step count is bounded separately (viz.record.scales.MAX_STEPS).
 MAX_EVENTS = 100  # scripted events per recording: each cuts the run and is drawn in the chart
 MIN_RTOL = 1e-15  # below it float64 rounding, not the tolerance, limits the step (and Taylor's
 #                  method raises its order, and its cost per step, without end)

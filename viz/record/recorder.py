@@ -18,6 +18,7 @@ import json
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -71,6 +72,7 @@ def record(
     progress: ProgressFn | None = None,
     theme: str = "light",
     on_wait: WaitFn | None = None,
+    interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
 ) -> RecordResult:
     """Record ``demo`` into ``out_dir`` (the five files of the module docstring).
 
@@ -79,22 +81,25 @@ def record(
     ``KeyboardInterrupt`` becomes ``RecordingFailed`` with ``interrupted`` set. Either way the
     folder holds nothing new. ``theme``: the page of the ``.html`` ("light" or "dark").
     ``on_wait(message)`` is called if another process is writing to ``out_dir`` (the recording
-    then waits for it before switching its files in)."""
+    then waits for it before switching its files in). ``interruptible``: a context manager
+    around everything but the writing (the command line's ends the run within a second of
+    Ctrl-C even where numba's compiler swallows it)."""
     d = load_demo(demo) if isinstance(demo, str) else demo
     out = Path(out_dir)
     t_start = time.perf_counter()
     try:
         check_room(out, d.name, [f"{d.name}{s}" for s in SUFFIXES])
-        rec = run_demo(d, progress, theme=theme)
-        tr = rec.traces
-        figs = figures(d, tr)
-        files = {
-            f"{d.name}.viser": rec.viser,
-            f"{d.name}.html": rec.html,
-            f"{d.name}.csv": traces_csv(d, tr),
-            f"{d.name}.png": chart_png(d, tr, figs),
-        }
-        man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
+        with interruptible():
+            rec = run_demo(d, progress, theme=theme)
+            tr = rec.traces
+            figs = figures(d, tr)
+            files = {
+                f"{d.name}.viser": rec.viser,
+                f"{d.name}.html": rec.html,
+                f"{d.name}.csv": traces_csv(d, tr),
+                f"{d.name}.png": chart_png(d, tr, figs),
+            }
+            man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
         man["files"] = {
             n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()
         }

@@ -26,9 +26,9 @@ from ..model import MODELS
 from ..model.base import ExhibitModel
 from ..model.traces import Traces
 from .demo import Demo
+from .scales import MAX_STEPS
 
 ProgressFn = Callable[[int, int], None]
-MAX_STEPS = 1e8  # integration steps a recording may take, all runs and members together
 
 
 @dataclass

@@ -1,0 +1,109 @@
+"""SIGTERM mid-run: `bench`, `record` and `video` end, and leave no process and no temporary
+folder behind (their compile workers, viser servers, Chromium and its profile included).
+
+Each command runs with a temporary directory of its own (``TMPDIR``); its processes are the
+descendants it has when the signal is sent, and each must be gone soon after. The signal is
+sent once the command is at work (a condition, never a fixed sleep).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from waiting import alive, descendants, scaled, wait_until
+
+pytestmark = pytest.mark.slow
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def start(args: list[str], tmp: Path, **env) -> subprocess.Popen:
+    tmp.mkdir(exist_ok=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env={**os.environ, "TMPDIR": str(tmp), **env},
+    )
+
+
+def terminate_and_check(proc: subprocess.Popen, tmp: Path) -> str:
+    children = descendants(proc.pid)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=scaled(60))
+    assert proc.returncode == 128 + signal.SIGTERM, err[-2000:]
+    assert "Traceback" not in err, err[-2000:]
+    wait_until(lambda: not alive(children), 20, f"the command's processes to end: {children}")
+    assert [p.name for p in tmp.iterdir()] == []
+    return err
+
+
+def test_sigterm_ends_bench_while_its_workers_compile(tmp_path):
+    cache = tmp_path / "cache"
+    proc = start(
+        ["bench", "--quick", "--out", str(tmp_path / "out")],
+        tmp_path / "tmp",
+        NUMBA_CACHE_DIR=str(cache),
+    )
+    wait_until(
+        lambda: len(descendants(proc.pid)) >= 2 and cache.exists(), 120, "the compile workers"
+    )
+    terminate_and_check(proc, tmp_path / "tmp")
+    assert not (tmp_path / "out").exists()
+
+
+def test_sigterm_ends_record_at_work(tmp_path):
+    out = tmp_path / "out"
+    proc = start(["record", "helix", "--out", str(out), "--duration", "20"], tmp_path / "tmp")
+    wait_until(lambda: cpu_seconds(proc.pid) > 2.0, 120, "the recording to be at work")
+    terminate_and_check(proc, tmp_path / "tmp")
+    assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_sigterm_ends_video_while_chromium_draws(tmp_path):
+    from viz.chromium import find_chromium
+
+    if find_chromium() is None:
+        pytest.skip("no Chromium (apt-get install chromium)")
+    rec = tmp_path / "rec"
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "viz.cli",
+            "record",
+            "helix",
+            "--out",
+            str(rec),
+            "--duration",
+            "10",
+            "--fps",
+            "10",
+        ],
+        check=True,
+        capture_output=True,
+        timeout=scaled(300),
+    )
+    tmp = tmp_path / "tmp"
+    video = tmp_path / "helix.mp4"
+    proc = start(["video", str(rec / "helix.viser"), "--out", str(video)], tmp)
+    wait_until(
+        lambda: (
+            any("chrom" in name.lower() for name in descendants(proc.pid).values())
+            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
+        ),
+        120,
+        "Chromium to start drawing",
+    )
+    terminate_and_check(proc, tmp)
+    assert not video.exists()

@@ -1,0 +1,272 @@
+"""A demo's derived scales, checked before anything runs: every one a double can hold.
+
+The schema and the exhibit's settings check each value on its own; these checks look at what
+the values make together, with the rule ``mechviz analyze`` applies to its flags
+(:func:`dynamics.analysis.unrepresentable`), so the command line and demo files refuse the same
+parameters:
+
+- every number in the file is 0 or a normal double (a subnormal such as ``5e-324`` keeps a few
+  bits at most);
+- every analytic result of the parameters (frequencies, periods, inertia, forces, energy) is
+  finite, and non-zero where it must be; the keys blamed are those whose default alone mends it;
+- the recording's simulated time (``speed`` x ``duration``) covers at least
+  :data:`MIN_PERIOD_FRACTION` of the motion's shortest period (else every frame is the same
+  picture), and a double near it still resolves a millionth of that period.
+
+Each refusal is a ``ValueError`` naming the key as the file writes it
+(``parameters.disk_mass = 1e-300: ...``).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+import dynamics
+from dynamics import analysis
+
+from ..model import MODELS
+
+if TYPE_CHECKING:
+    from .demo import Demo
+
+TINY = sys.float_info.min  # the smallest normal double
+MAX_STEPS = 1e8  # integration steps a recording may take, all runs and members together
+MIN_PERIOD_FRACTION = 1e-9
+
+
+def _numbers(value: Any, key: str):
+    """``(key, number)`` for every float inside ``value`` (structs, tuples, lists, dicts)."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return
+    if isinstance(value, float | int):
+        yield key, float(value)
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            yield from _numbers(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(value, tuple | list):
+        for i, v in enumerate(value):
+            yield from _numbers(v, f"{key}[{i}]")
+    elif hasattr(value, "__struct_fields__"):
+        for f in value.__struct_fields__:
+            yield from _numbers(getattr(value, f), f"{key}.{f}" if key else f)
+
+
+def check_normal_numbers(d: Demo) -> None:
+    """``ValueError`` naming the first key whose number is subnormal (0 < |x| < 2.2e-308)."""
+    for key, x in _numbers({f: getattr(d, f) for f in d.__struct_fields__}, ""):
+        if 0.0 < abs(x) < TINY:
+            raise ValueError(
+                f"{key} = {x:g} is below the smallest normal double ({TINY:.3g}); use 0 or a "
+                "larger value"
+            )
+
+
+def _analysis(system: str, params: dict[str, float], speed: float | None) -> dict:
+    """``mechviz analyze``'s results for these parameters."""
+    values = {**params, **({} if speed is None else {"speed": speed})}
+    with np.errstate(all="ignore"):
+        return dynamics.SPECS[system].analyze(values)
+
+
+def _problem(system: str, params: dict[str, float], speed: float | None) -> str | None:
+    try:
+        return analysis.unrepresentable(_analysis(system, params, speed))
+    except (ValueError, ArithmeticError) as exc:
+        return str(exc)
+
+
+def _blamed(d: Demo, params: dict, defaults: dict, bad) -> list[str]:
+    """The demo's parameter keys whose default alone makes ``bad(params)`` false."""
+    out = []
+    for key in d.parameters:
+        if key in defaults and params.get(key) != defaults[key]:
+            if not bad({**params, key: defaults[key]}):
+                out.append(f"parameters.{key} = {d.parameters[key]:g}")
+    return out
+
+
+def _shortest_period(d: Demo, result: dict, extra_spin: bool = True) -> float | None:
+    """The motion's shortest period [s] from the analytic results, None if nothing moves;
+    ``extra_spin``: count the disk's extra spin at release (else leave it out)."""
+    if d.exhibit == "cyclotron":
+        return result["period"]
+    if d.exhibit == "hoop":
+        return min(result["mode_periods"])
+    spin = abs(result["parameters"]["omega"])
+    if extra_spin and d.motion == "released" and d.initial.extra_spin is not None:
+        spin = max(spin, max(abs(x) for x in d.initial.extra_spin))
+    return 2 * math.pi / spin if spin else None
+
+
+def check_scales(d: Demo) -> None:
+    """Raise ``ValueError`` naming the key(s) if a derived scale of ``d`` is not representable
+    (see the module docstring). ``d`` has passed the other checks of :func:`.demo.check`."""
+    check_normal_numbers(d)
+    if d.frames < 2:
+        raise dynamics.SettingError(
+            "duration",
+            f"duration = {d.duration:g} s at fps = {d.fps} gives one frame; a recording needs "
+            f"two at least (duration >= {1 / d.fps:.3g} s)"
+        )
+    cfg = d.config()
+    defaults = MODELS[d.exhibit].Config().params
+    params = dict(cfg.params)
+    speed = d.initial.speed if d.exhibit == "cyclotron" else None
+    problem = _problem(d.exhibit, params, speed)
+    if problem is not None:
+        names = _blamed(d, params, defaults, lambda p: _problem(d.exhibit, p, speed) is not None)
+        if not names and speed is not None and _problem(d.exhibit, params, None) is None:
+            names = [f"initial.speed = {speed:g}"]
+        shown = (
+            ", ".join(names)
+            or ", ".join(f"parameters.{k} = {v:g}" for k, v in d.parameters.items())
+            or "the parameters"
+        )
+        raise ValueError(f"{shown}: {problem}")
+    span = d.simulated_time
+    _check_steps(d, span)
+    _check_start(d, cfg, span)
+    period = _shortest_period(d, _analysis(d.exhibit, params, speed))
+    if period is None:
+        return
+    when = f"speed = {d.speed:g} x duration = {d.duration:g} s gives {span:.3g} s of simulated time"
+
+    def period_of(p: dict, extra_spin: bool = True) -> float:
+        return _shortest_period(d, _analysis(d.exhibit, p, speed), extra_spin) or math.inf
+
+    def set_by(bad) -> str:
+        names = _blamed(d, params, defaults, lambda p: bad(period_of(p)))
+        if d.initial.extra_spin is not None and not bad(period_of(params, extra_spin=False)):
+            names.append(f"initial.extra_spin = {list(d.initial.extra_spin)}")
+        return f", set by {', '.join(names)}" if names else ""
+
+    if span < MIN_PERIOD_FRACTION * period:
+        by = set_by(lambda T: span < MIN_PERIOD_FRACTION * T)
+        raise ValueError(
+            f"{when}, under {MIN_PERIOD_FRACTION:g} of the motion's shortest period "
+            f"({period:.3g} s{by}): every frame would show the same picture"
+        )
+    if math.ulp(span) > 1e-6 * period:
+        by = set_by(lambda T: math.ulp(span) > 1e-6 * T)
+        raise ValueError(
+            f"{when}; a double near it resolves time only to {math.ulp(span):.2g} s, too coarse "
+            f"for the motion's shortest period ({period:.3g} s{by})"
+        )
+
+
+def _check_steps(d: Demo, span: float) -> None:
+    """A fixed step no longer than the recording (one step at least, else nothing moves), and
+    not so short that the recording's steps pass :data:`MAX_STEPS` (the exact count,
+    adaptive runs included, is checked again before the run)."""
+    for key, dt in (("dt", d.dt), ("compare.dt", d.compare.dt if d.compare else None)):
+        if dt is None:
+            continue
+        if dt > span:
+            raise dynamics.SettingError(
+                key,
+                f"{key} = {dt:g} s is longer than the recording's {span:.3g} s of simulated time "
+                f"(speed = {d.speed:g} x duration = {d.duration:g} s): no step would be taken"
+            )
+        if span / dt > MAX_STEPS:
+            raise dynamics.SettingError(
+                key,
+                f"{key} = {dt:g} s gives {span / dt:.3g} steps over the recording's {span:.3g} s "
+                f"of simulated time (speed x duration); the limit is {MAX_STEPS:.0e}"
+            )
+
+
+def _speeds(d: Demo, cfg) -> dict[str, float]:
+    """The cyclotron's speeds by the key that sets them [m/s]: each one adds to the fastest
+    charge's speed (an upper bound, kicks included)."""
+    out: dict[str, float] = {}
+    ini = d.initial
+    if ini.state is not None:
+        out["initial.state"] = math.hypot(*ini.state[3:6])
+    else:
+        out["initial.speed" if ini.speed is not None else "speed"] = abs(cfg.speed)
+        out["initial.vz" if ini.vz is not None else "vz"] = abs(cfg.vz)
+    if ini.speeds is not None:
+        out["initial.speeds"] = max(abs(v) for v in ini.speeds)
+    for i, e in enumerate(d.events):
+        out[f"events[{i}].dv"] = abs(e.dv)
+    return out
+
+
+def _check_start(d: Demo, cfg, span: float) -> None:
+    """The start and what the scripted kicks add: energy, orbit radius and distance covered in
+    the recording all finite (the cyclotron), the initial energy finite (the hoop)."""
+    p = cfg.physics()
+    if d.exhibit == "cyclotron":
+        speeds = _speeds(d, cfg)
+
+        def bad(v: dict[str, float]) -> str | None:
+            total = sum(v.values())
+            with np.errstate(all="ignore"):
+                checks = {
+                    "the kinetic energy": 0.5 * p.mass * total * total,
+                    "the orbit radius": p.mass * total / abs(p.charge * p.field),
+                    "the distance covered": total * span,
+                }
+            return next((name for name, x in checks.items() if not math.isfinite(x)), None)
+
+        what = bad(speeds)
+        if what is None:
+            return
+        keys = [k for k in speeds if "." in k or "[" in k]
+        blamed = [k for k in keys if bad({**speeds, k: 1.0}) is None] or keys
+        shown = ", ".join(f"{k} = {_value(d, k)}" for k in blamed) or "the start"
+        raise ValueError(f"{shown}: {what} would be beyond the largest double")
+    if d.exhibit == "hoop" and d.initial.modes is not None:
+        for i, a in enumerate(d.initial.modes):
+            if not abs(a) < 3.0:  # as the exhibit's own amplitude: the modes are small swings
+                raise ValueError(f"initial.modes[{i}] must be an angle below 3 rad, got {a!r}")
+    if d.exhibit == "hoop" and d.initial.state is not None:
+        with np.errstate(all="ignore"):
+            energy = float(np.ravel(dynamics.Hoop(p).energy(np.asarray(d.initial.state)))[0])
+        if not math.isfinite(energy):
+            raise ValueError(
+                f"initial.state = {list(d.initial.state)}: the initial energy would be beyond "
+                "the largest double"
+            )
+
+
+def _value(d: Demo, key: str) -> str:
+    if key.startswith("events["):
+        return f"{d.events[int(key[7 : key.index(']')])].dv:g}"
+    value = getattr(d.initial, key.split(".")[1])
+    return f"{value:g}" if isinstance(value, float) else str(list(value))
+
+
+# The exhibit settings a demo's keys become (:meth:`.demo.Demo.config`), by the settings' names.
+CONFIG_KEYS = {
+    "speed": "initial.speed",
+    "vz": "initial.vz",
+    "centre": "initial.centre",
+    "state": "initial.state",
+    "beam_size": "initial.beam",
+    "beam_speeds": "initial.speeds",
+    "extra_spin": "initial.extra_spin",
+    "amplitude": "initial.modes",
+    "compare_method": "compare.method",
+    "compare_dt": "compare.dt",
+    "compare_rtol": "compare.rtol",
+}
+
+
+def in_demo_terms(message: str, d: Demo) -> str:
+    """A refusal of the exhibit's settings (``beam_speeds must be ...``, ``charge must be
+    ...``) with the setting named by the demo key it came from (``initial.speeds``,
+    ``parameters.charge``)."""
+    word, sep, rest = message.partition(" ")
+    name = word.rstrip(":")
+    if name in MODELS[d.exhibit].Config().params:
+        key = f"parameters.{name}"
+    elif name in CONFIG_KEYS:
+        key = CONFIG_KEYS[name]
+    else:
+        return message
+    return f"{key}{word[len(name) :]}{sep}{rest}"
