@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dynamics.bench.problems import PROBLEMS, load_references, reference_state
-from dynamics.bench.sweeps import (
+from dynamics.simulation import Simulation
+from mechviz_bench.problems import PROBLEMS, load_references, reference_state
+from mechviz_bench.sweeps import (
     TARGETS,
     Point,
     Settings,
@@ -20,7 +21,6 @@ from dynamics.bench.sweeps import (
     retime_ratios,
     time_to_reach,
 )
-from dynamics.simulation import Simulation
 
 
 @pytest.mark.parametrize("key", ["hoop", "disk"])
@@ -112,7 +112,7 @@ def test_bench_command_is_registered_with_its_flags():
 
 
 def test_targets_name_each_miss_with_its_figure():
-    from dynamics.bench.run import _targets
+    from mechviz_bench.run import _targets
 
     ratios = {"hoop": {"1e-09": {"ratio": 80.0}, "1e-12": {"ratio": 30.0}}}
     peers = {"heyoka": {"hoop": {"1e-09": {"ratio": 1.4}, "1e-12": {"ratio": 0.8}}}}
@@ -145,7 +145,7 @@ def _committed_result() -> dict:
 def test_the_readme_and_tables_quote_the_committed_run():
     """Every figure of a run in the README and docs/bench/tables.md is rendered from
     docs/bench/results.json (`make bench-docs`): hand edits or a stale render fail here."""
-    from dynamics.bench import docs, report
+    from mechviz_bench import docs, report
 
     result = _committed_result()
     readme = (ROOT / "README.md").read_text()
@@ -156,7 +156,7 @@ def test_the_readme_and_tables_quote_the_committed_run():
 
 
 def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
-    from dynamics.bench import docs
+    from mechviz_bench import docs
 
     result = _committed_result()
     blocks = "".join(f"<!-- bench:{n} -->\nold {n}\n<!-- /bench:{n} -->\ntext between\n"
@@ -182,7 +182,7 @@ def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
 def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, capsys, damage):
     import shutil
 
-    from dynamics.bench import docs
+    from mechviz_bench import docs
 
     text = "".join(f"<!-- bench:{n} -->\n<!-- /bench:{n} -->\n" for n in docs.BLOCKS)
     readme = tmp_path / "README.md"
@@ -201,7 +201,7 @@ def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, cap
 def test_a_peer_that_cannot_be_imported_is_skipped_with_the_reason(monkeypatch):
     import builtins
 
-    from dynamics.bench import peers
+    from mechviz_bench import peers
 
     real = builtins.__import__
 
@@ -220,7 +220,7 @@ def test_a_peer_that_cannot_be_imported_is_skipped_with_the_reason(monkeypatch):
 def test_each_peer_solves_the_same_problem(peer, key):
     """A peer integrates the same equations from the same state: at 1e-10 it lands near the
     reference (skipped when the peer is not installed)."""
-    from dynamics.bench import peers
+    from mechviz_bench import peers
 
     why = peers.available()[peers.package_of(peer)]
     if why is not None:
@@ -232,7 +232,7 @@ def test_each_peer_solves_the_same_problem(peer, key):
 
 
 def test_an_adaptive_sweep_stops_where_the_error_stops_falling():
-    from dynamics.bench.sweeps import _stalled
+    from mechviz_bench.sweeps import _stalled
 
     def pt(tol, err):
         return Point("hoop", "odeint", True, None, tol, 10, 40, err, 0.0, 1.0, 1.0, 0.0, 5, 1, "ok")
@@ -248,7 +248,7 @@ def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
 
     from scipy.integrate import ODEintWarning, solve_ivp
 
-    from dynamics.bench.run import _quiet_scipy
+    from mechviz_bench.run import _quiet_scipy
 
     def sweep_point():
         solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], rtol=1e-16, atol=1e-16)
@@ -265,21 +265,23 @@ def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
     assert len(seen) == 3
 
 
-def test_no_cached_kernel_lives_in_the_benchmark_and_only_its_edits_keep_the_cache(tmp_path):
-    """The compiled-code cache is keyed on every dynamics source but the benchmark's
-    (``dynamics._jit.UNCACHED``): that holds only while no cached function is defined there."""
+def test_no_cached_kernel_lives_in_the_atlas_and_only_its_edits_keep_the_cache(tmp_path):
+    """The compiled-code cache is keyed on every dynamics source but the atlas's
+    (``dynamics._jit.UNCACHED``): that holds only while no cached function is defined there. The
+    benchmark lives outside the package (``mechviz_bench``) and defines none either."""
     import shutil
 
     from dynamics import _jit
 
-    for path in (ROOT / "dynamics" / "bench").rglob("*.py"):
-        assert "cache=True" not in path.read_text(), path
+    for folder in (ROOT / "dynamics" / "atlas", ROOT / "mechviz_bench"):
+        for path in folder.rglob("*.py"):
+            assert "cache=True" not in path.read_text(), path
     tree = tmp_path / "dynamics"
     shutil.copytree(ROOT / "dynamics", tree, ignore=shutil.ignore_patterns("__pycache__"))
     key = _jit._source_hash(tree)
     assert key == _jit._source_hash(ROOT / "dynamics")
-    with open(tree / "bench" / "report.py", "a") as f:
-        f.write("# an edit to the benchmark\n")
+    with open(tree / "atlas" / "maps.py", "a") as f:
+        f.write("# an edit to the atlas\n")
     assert _jit._source_hash(tree) == key
     with open(tree / "integrators" / "taylor.py", "a") as f:
         f.write("# an edit to an integrator\n")
@@ -287,8 +289,8 @@ def test_no_cached_kernel_lives_in_the_benchmark_and_only_its_edits_keep_the_cac
 
 
 def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_repeated():
-    from dynamics.bench.sweeps import Settings
-    from dynamics.bench.timing import time_calls
+    from mechviz_bench.sweeps import Settings
+    from mechviz_bench.timing import time_calls
 
     quick = Settings.for_mode(True)
     calls = []
@@ -334,8 +336,8 @@ def test_a_miss_with_no_scipy_answer_is_summarised_and_the_tables_are_made():
     is below the target the run counts a miss, and the summary says so instead of failing."""
     import copy
 
-    from dynamics.bench import report
-    from dynamics.bench.run import SCIPY_FACTOR
+    from mechviz_bench import report
+    from mechviz_bench.report import SCIPY_FACTOR
 
     result = copy.deepcopy(_committed_result())
     key = next(iter(result["ratios"]))

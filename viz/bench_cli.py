@@ -1,6 +1,6 @@
 """``mechviz bench``: speed against accuracy.
 
-Runs :func:`dynamics.bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
+Runs :func:`mechviz_bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
 ``--out`` (default a temporary folder, ``TMP/mechviz-bench``; ``make bench-docs`` writes the
@@ -10,7 +10,7 @@ least 50x faster than scipy's fastest and at least as fast as every peer, at eac
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
 ``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
-(:func:`viz.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
+(:func:`mechviz_bench.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
 for SECONDS, frame rate per 10 s window, memory trend) and writes ``endurance.json`` to ``--out``.
 """
 
@@ -31,7 +31,7 @@ def _viewer_measurements(quick: bool) -> dict:
     """Frame cost of the viewer and speed of the recorder, or why they are not available."""
     out: dict = {}
     try:
-        from viz.frame_cost import measure_frame_cost
+        from mechviz_bench.frame_cost import measure_frame_cost
 
         out["frame_cost"] = measure_frame_cost(100 if quick else 300)
     except (ImportError, AttributeError) as exc:
@@ -87,8 +87,8 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.endurance is not None:
         return _endurance(args)
-    from dynamics.bench import peers, run_bench, summary
     from dynamics.interrupt import ctrl_c_within_a_second
+    from mechviz_bench import PROBLEMS, peers, run_bench, summary
 
     from .warm import fill_cache_in_parallel
 
@@ -96,12 +96,12 @@ def _run(args: argparse.Namespace) -> int:
         # Compilation is never timed, but from an empty cache it was a third of a quick run:
         # compile ours on every core, and the peers' uncacheable code in this process meanwhile
         fill_s, processes = fill_cache_in_parallel(
-            meanwhile=peers.compile_ahead if args.peers else None
+            meanwhile=(lambda: peers.compile_ahead(PROBLEMS["charge"])) if args.peers else None
         )
         t0 = time.perf_counter()
         viewer = _viewer_measurements(args.quick)
         viewer_s = time.perf_counter() - t0
-    from viz.scene import bench_cases
+    from mechviz_bench.exhibits import bench_cases
 
     result = run_bench(
         quick=args.quick, out=args.out, extras={"viewer": viewer}, peers=args.peers,

@@ -68,7 +68,7 @@ def versions() -> dict[str, str]:
 def _heyoka_system(problem: Problem):
     import heyoka as hy
 
-    from ..integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+    from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
 
     p = problem.system.kernel_params()
     kind = problem.system.sys_id
@@ -133,8 +133,8 @@ def _cyrk_rhs(kind: int):
     """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
     import numba as nb
 
-    from .. import cyclotron, disk, hoop
-    from ..integrators.kernels import CYCLOTRON, HOOP
+    from dynamics import cyclotron, disk, hoop
+    from dynamics.integrators.kernels import CYCLOTRON, HOOP
 
     if kind in _CFUNCS:
         return _CFUNCS[kind]
@@ -206,7 +206,7 @@ def cyrk_py_run(problem: Problem, tol: float) -> PeerRun:
     """CyRK's ``pysolve_ivp`` (DOP853) with a jitted right-hand side called from C++ via Python."""
     from CyRK import pysolve_ivp
 
-    from ..integrators.kernels import RHS
+    from dynamics.integrators.kernels import RHS
 
     rhs = RHS[problem.system.sys_id]
     p = np.ascontiguousarray(problem.system.kernel_params(), dtype=np.float64)
@@ -237,13 +237,11 @@ def prepare(peer: str, problem: Problem, tol: float) -> PeerRun:
     return cyrk_run(problem, tol, method)
 
 
-def compile_ahead() -> None:
+def compile_ahead(problem: Problem) -> None:
     """Compile what the installed peers compile in every process (CyRK's ``nbsolve2_ivp`` is a
-    numba function without an on-disk cache: about 13 s here), before anything is timed."""
-    from .problems import PROBLEMS
-
+    numba function without an on-disk cache), on ``problem``, before anything is timed."""
     if available()["cyrk"] is None:
-        cyrk_run(PROBLEMS["charge"], 1e-3).run()
+        cyrk_run(problem, 1e-3).run()
 
 
 def tolerances(peer: str, settings_tolerances: tuple[float, ...]) -> tuple[float, ...]:

@@ -20,8 +20,9 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-from ..integrators.base import get_method
-from ..simulation import Simulation
+from dynamics.integrators.base import get_method
+from dynamics.simulation import Simulation
+
 from . import exhibits, experiments
 from .problems import (
     ADAPTIVE_OURS,
@@ -32,6 +33,7 @@ from .problems import (
     variant_reference,
     versions,
 )
+from .report import SCIPY_FACTOR, markdown
 from .sweeps import (
     TARGETS,
     Settings,
@@ -183,8 +185,8 @@ def run_bench(
         result, pictures = _measure(
             quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases
         )
-    from ..files import write_files_atomically
-    from .report import markdown
+    from dynamics.files import write_files_atomically
+
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
     try:  # the figures are measured: a table that cannot be made must not lose them
@@ -384,7 +386,6 @@ def _json_default(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
-SCIPY_FACTOR = 50.0  # our fastest must be at least this many times faster than scipy's fastest
 
 
 def _targets(

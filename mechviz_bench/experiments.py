@@ -22,11 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import hoop, stability
-from ..integrators import kernels
-from ..integrators.base import IntegrationError
-from ..simulation import Simulation
-from ..systems import Cyclotron, Hoop
+from dynamics import hoop, stability
+from dynamics.integrators import kernels
+from dynamics.integrators.base import IntegrationError
+from dynamics.simulation import Simulation
+from dynamics.systems import Cyclotron, Hoop
+
 from .problems import PROBLEMS
 
 # ----------------------------------------------------------------------------- long runs
@@ -231,7 +232,7 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
             row["within_2x_of_c"] = row["ratio_to_c"] <= 2.0
     return {
         "rows": rows,
-        "c": "gcc -O2, same arithmetic, state in locals (dynamics/bench/c_steps.c)"
+        "c": "gcc -O2, same arithmetic, state in locals (mechviz_bench/c_steps.c)"
         if isinstance(c, dict)
         else c,
         "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "
@@ -255,7 +256,7 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
 
     import numba
 
-    from ..integrators import taylor
+    from dynamics.integrators import taylor
 
     rounds = 2 if quick else 5
     member_steps = ENSEMBLE_MEMBER_STEPS // (2 if quick else 1)

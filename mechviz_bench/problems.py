@@ -35,13 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..assets import asset
-from ..cyclotron import CyclotronParams
-from ..disk import DiskParams
-from ..files import write_json_atomically
-from ..hoop import HoopParams
-from ..simulation import Simulation
-from ..systems import Cyclotron, Hoop, ReleasedDisk
+from dynamics.assets import asset
+from dynamics.cyclotron import CyclotronParams
+from dynamics.disk import DiskParams
+from dynamics.files import write_json_atomically
+from dynamics.hoop import HoopParams
+from dynamics.simulation import Simulation
+from dynamics.systems import Cyclotron, Hoop, ReleasedDisk
 
 REFERENCE_PATH = asset("bench", "references.json")
 REFERENCE_TOL = 1e-13  # the DOP853 cross-check
@@ -198,7 +198,7 @@ def _mpmath_final(problem: Problem, digits: int = MPMATH_DIGITS) -> tuple[np.nda
     """mpmath's ``odefun`` (a Taylor series method in arbitrary precision) to ``T``."""
     import mpmath
 
-    from ..integrators.kernels import FREE_BODY, HOOP
+    from dynamics.integrators.kernels import FREE_BODY, HOOP
 
     p = [mpmath.mpf(float(v)) for v in problem.system.kernel_params()]
     if problem.system.sys_id == HOOP:
@@ -247,7 +247,7 @@ def compute_references(
             f"{LONG_DOUBLE_TOL:g} (mpmath odefun at {MPMATH_DIGITS} digits without heyoka), "
             f"cross-checked against mpmath odefun ({MPMATH_DIGITS} digits), compiled DOP853 at "
             f"rtol = atol = {REFERENCE_TOL:g} and scipy Radau at {CROSS_CHECK_TOL:g}. "
-            "Written by `python -m dynamics.bench.problems`."
+            "Written by `python -m mechviz_bench.problems`."
         ),
         "versions": versions(),
         "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),

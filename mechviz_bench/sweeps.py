@@ -22,8 +22,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..integrators.base import IntegrationError, get_method
-from ..simulation import Simulation
+from dynamics.integrators.base import IntegrationError, get_method
+from dynamics.simulation import Simulation
+
 from .peers import PEERS
 from .peers import prepare as prepare_peer
 from .problems import ADAPTIVE_SCIPY, Problem, reference_state
@@ -385,7 +386,7 @@ def finite_or_none(x: float | None) -> float | None:
 # --------------------------------------------------------------------------- peers
 def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) -> Point:
     """One peer at one tolerance: built and run once untimed (heyoka compiles when built, a
-    CyRK callback at its first call), then timed as ours (:func:`dynamics.bench.timing.time_calls`),
+    CyRK callback at its first call), then timed as ours (:func:`mechviz_bench.timing.time_calls`),
     its error against the same reference."""
     ref = reference_state(problem)
     try:

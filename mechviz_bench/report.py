@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+#: Our fastest must be at least this many times faster than scipy's fastest.
+SCIPY_FACTOR = 50.0
+
 
 def _ms(x: float | None) -> str:
     if x is None:
@@ -97,7 +100,6 @@ def targets_summary(result: dict) -> str:
     """The targets in three lines (peers, scipy, first answer): how many measured cases met each,
     every miss with its figure, and the range of the cases met. Met or missed is the run's own
     verdict (``result["targets"]``, :func:`.run._targets`); only the figures are looked up here."""
-    from .run import SCIPY_FACTOR
 
     t = result["targets"]
     lines = []

@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
-from .app import MechvizApp, warm_up
-from .model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
+from viz.app import MechvizApp, warm_up
+from viz.model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
 
 
 def measure_frame_cost(

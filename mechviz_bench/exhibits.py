@@ -24,9 +24,9 @@ import time
 
 import numpy as np
 
-from .. import cyclotron, disk, hoop, stability
-from ..integrators.base import IntegrationError
-from ..simulation import Simulation
+from dynamics import cyclotron, disk, hoop, stability
+from dynamics.integrators.base import IntegrationError
+from dynamics.simulation import Simulation
 
 SPAN = 600.0  # 10 minutes of simulated time [s]
 SAMPLE = 1.0  # error sampled every second [s]
@@ -153,3 +153,31 @@ def choose_defaults(cases: dict, quick: bool = False, progress=None) -> dict:
             "chosen": best,
         }
     return out
+
+
+def bench_cases() -> dict[str, dict]:
+    """The viewer's default exhibits as the bench's exhibit-defaults sweep takes them
+    (:func:`choose_defaults`): system, initial state and a note."""
+    import dynamics
+    from viz.model import CyclotronConfig, DiskConfig, HoopConfig
+
+    cyc, hoop, disk = CyclotronConfig(), HoopConfig(), DiskConfig()
+    released = dynamics.ReleasedDisk(disk.physics(), tuple(disk.extra_spin))
+    return {
+        "cyclotron": {
+            "system": dynamics.Cyclotron(cyc.physics()),
+            "state": cyc.initial_state(),
+            "state_note": f"speed {cyc.speed:g} m/s, vz {cyc.vz:g} m/s (the viewer's default)",
+        },
+        "hoop": {
+            "system": dynamics.Hoop(hoop.physics()),
+            "state": hoop.initial_state(),
+            "state_note": f"mode {hoop.mode!r}, amplitude {hoop.amplitude:g} rad (the viewer's default)",
+        },
+        "disk-released": {
+            "system": released,
+            "state": released.default_state(),
+            "state_note": f"omega {disk.physics().omega:g} rad/s, extra spin {disk.extra_spin} "
+            "rad/s (the viewer's default)",
+        },
+    }
