@@ -335,7 +335,7 @@ def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
 
 _SWALLOWING_CALLBACK = """
 import ctypes, ctypes.util, sys, time
-from dynamics.cli import ctrl_c_within_a_second
+from viz.interrupts import ctrl_c_within_a_second
 
 libc = ctypes.CDLL(ctypes.util.find_library("c"))
 CMP = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)

@@ -36,8 +36,7 @@ import stat
 import urllib.parse
 from pathlib import Path
 
-from dynamics.cli import CliError
-
+from .cli.errors import CliError
 from .play_server import GuardedHandler, GuardedServer
 from .printable import printable
 

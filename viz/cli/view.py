@@ -43,10 +43,9 @@ def _view(args: argparse.Namespace) -> int:
     import threading
     import time
 
-    from dynamics.cli import CliError
-
-    from .hosts import HostError, check_host
-    from .play import reachable_urls
+    from ..hosts import HostError, check_host
+    from ..play import reachable_urls
+    from .errors import CliError
 
     if not 0 <= args.port <= 65535:
         raise CliError(f"--port must be in 0..65535, got {args.port}")
@@ -66,7 +65,7 @@ def _view(args: argparse.Namespace) -> int:
 
     previous = signal.signal(signal.SIGINT, on_sigint)
     try:
-        from .app import MechvizApp, warm_up
+        from ..app import MechvizApp, warm_up
 
         t0 = time.perf_counter()
         print(f"mechviz: compiling integrators ({args.warm}) ...", flush=True)

@@ -17,12 +17,11 @@ import sys
 import threading
 from pathlib import Path
 
-from dynamics.cli import CliError
-from dynamics.interrupt import exit_status
-
-from . import video
-from .printable import printable
-from .video_input import read_clip
+from .. import video
+from ..interrupts import exit_status
+from ..printable import printable
+from ..video_input import read_clip
+from .errors import CliError
 
 
 def size_type(text: str) -> tuple[int, int]:
@@ -71,7 +70,7 @@ def _flag_error(exc: ValueError, flags: dict[str, str]) -> CliError:
 
 
 def _progress(label: str):
-    from .progress import ProgressBar
+    from ..progress import ProgressBar
 
     return ProgressBar(label)
 

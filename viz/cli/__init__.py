@@ -1,6 +1,6 @@
 """The ``mechviz`` command: one entry point, a subcommand per use.
 
-``analyze`` and ``simulate`` come from :mod:`dynamics.cli` and need no viewer; ``view``,
+``analyze`` and ``simulate`` come from :mod:`viz.cli.analysis` and need no viewer; ``view``,
 ``record``, ``play``, ``bench``, ``video`` and ``atlas`` import what they need only when run.
 """
 
@@ -10,16 +10,16 @@ import argparse
 import importlib
 import sys
 
-from .interrupts import hold_sigint, release_sigint
+from ..interrupts import hold_sigint, release_sigint
 
-# view (viz.app_cli), record and play (viz.recording_cli), bench (viz.bench_cli),
-# video (viz.video_cli), atlas (viz.atlas_cli).
+# One module per command (analyze and simulate in viz.cli.analysis): view, record and play,
+# bench, video, atlas.
 _COMMAND_MODULES = (
-    "viz.app_cli",
-    "viz.recording_cli",
-    "viz.bench_cli",
-    "viz.video_cli",
-    "viz.atlas_cli",
+    "viz.cli.view",
+    "viz.cli.record",
+    "viz.cli.bench",
+    "viz.cli.video",
+    "viz.cli.atlas",
 )
 _LIGHT_COMMANDS = ("analyze", "simulate")  # no viewer, no meshes
 
@@ -35,7 +35,7 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mechviz", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    from dynamics.cli import add_commands  # numpy and numba: inside main's Ctrl-C handling
+    from .analysis import add_commands  # numpy and numba: inside main's Ctrl-C handling
 
     add_commands(sub)
     # Each of these modules registers its own subcommands and imports viser (or matplotlib)
@@ -49,13 +49,13 @@ def main(argv: list[str] | None = None) -> int:
     # Ctrl-C is held from the first instruction until the libraries are imported, so that none
     # of them can swallow it (viz.interrupts), and then delivered: status 130, nothing written.
     held = hold_sigint()
-    from dynamics.interrupt import exit_status, signals_end_like_ctrl_c
+    from ..interrupts import exit_status, signals_end_like_ctrl_c
 
     # SIGTERM and SIGHUP end a command as Ctrl-C does: its children and temporary folders go too
     with signals_end_like_ctrl_c():
         try:
             try:
-                from dynamics.cli import CliError
+                from .errors import CliError
 
                 parser = build_parser()
                 args = parser.parse_args(argv)

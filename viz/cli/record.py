@@ -11,12 +11,11 @@ import os
 import sys
 from pathlib import Path
 
-from dynamics.cli import CliError, number
-from dynamics.interrupt import ctrl_c_within_a_second, exit_status
-
-from .play import add_command as _add_play
-from .printable import printable
-from .progress import ProgressBar
+from ..interrupts import ctrl_c_within_a_second, exit_status
+from ..play import add_command as _add_play
+from ..printable import printable
+from ..progress import ProgressBar
+from .errors import CliError, number
 
 
 def add_commands(sub) -> None:
@@ -41,7 +40,7 @@ def add_commands(sub) -> None:
         "--theme", choices=("light", "dark"), default="light",
         help="page of the .html (default light); the scene's colours read on both",
     )  # fmt: skip
-    from .video_cli import add_record_options
+    from .video import add_record_options
 
     add_record_options(p)  # --video, --size
     p.set_defaults(func=run_record)
@@ -62,7 +61,7 @@ def run_record(args: argparse.Namespace) -> int:
     from dynamics.fileset import check_room
 
     with ctrl_c_within_a_second():  # a Ctrl-C that an import swallows (trimesh's) still counts
-        from . import record as rec
+        from .. import record as rec
 
     if args.list:
         demos = rec.list_demos()
@@ -99,7 +98,7 @@ def run_record(args: argparse.Namespace) -> int:
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
     if args.video or args.size:
-        from .video_cli import check_record_options, film_record
+        from .video import check_record_options, film_record
 
         check_record_options(args, demos)
     for demo in demos:

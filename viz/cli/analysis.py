@@ -28,21 +28,23 @@ from typing import Any
 
 import numpy as np
 
-from . import analysis
-from .files import json_safe
-from .integrators import METHODS, IntegrationError
-from .interrupt import ctrl_c_within_a_second
-from .params import TINY, SettingError, parse_number
-from .simulation import (
+from dynamics import analysis
+from dynamics.files import json_safe
+from dynamics.integrators import METHODS, IntegrationError
+from dynamics.params import TINY, SettingError
+from dynamics.simulation import (
     MIN_COMPARED_TOL,
     REFERENCE_ACCURACY,
     REFERENCE_ATOL,
     REFERENCE_TOL,
     Simulation,
 )
-from .spec import Setup, SystemSpec, checked_state
-from .steps import Fixed
-from .systems import SPECS
+from dynamics.spec import Setup, SystemSpec, checked_state
+from dynamics.steps import Fixed
+from dynamics.systems import SPECS
+from viz.interrupts import ctrl_c_within_a_second
+
+from .errors import CliError, number
 
 #: The most samples ``simulate --samples`` keeps.
 MAX_SAMPLES = 100_000
@@ -51,19 +53,6 @@ MAX_SAMPLES = 100_000
 DEFAULT_MAX_STEPS = 1e8
 #: Runs estimated above this many steps show a progress line on a terminal.
 PROGRESS_STEPS = 2e6
-
-
-class CliError(Exception):
-    """A bad flag or value: reported as one line, exit status 2."""
-
-
-def number(text: str) -> float:
-    """argparse type: a number by the one rule for typed numbers
-    (:func:`dynamics.params.parse_number`)."""
-    try:
-        return parse_number("value", text)
-    except SettingError as exc:
-        raise argparse.ArgumentTypeError(str(exc).removeprefix("value ")) from None
 
 
 def flag_for(field: str) -> str:

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -52,9 +51,9 @@ def _viewer_measurements(quick: bool) -> dict:
 def _endurance(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from dynamics.cli import CliError
+    from mechviz_bench.endurance import EnduranceUnavailable, format_summary, run_endurance
 
-    from .endurance import EnduranceUnavailable, format_summary, run_endurance
+    from .errors import CliError
 
     if not 1 <= args.endurance <= MAX_ENDURANCE_S:
         raise CliError(
@@ -79,7 +78,7 @@ def _endurance(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from dynamics.cli import CliError
+    from .errors import CliError
 
     if not 1 <= args.clients <= MAX_CLIENTS:
         raise CliError(
@@ -87,10 +86,10 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.endurance is not None:
         return _endurance(args)
-    from dynamics.interrupt import ctrl_c_within_a_second
     from mechviz_bench import PROBLEMS, peers, run_bench, summary
 
-    from .warm import fill_cache_in_parallel
+    from ..interrupts import ctrl_c_within_a_second
+    from ..warm import fill_cache_in_parallel
 
     with ctrl_c_within_a_second():  # nothing is written before run_bench's last step
         # Compilation is never timed, but from an empty cache it was a third of a quick run:
@@ -156,7 +155,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub) -> None:
-    from dynamics.cli import number
+    from .errors import number
 
     p = sub.add_parser(
         "bench",
@@ -194,6 +193,3 @@ def add_commands(sub) -> None:
     )
     p.set_defaults(func=_run)
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(0)

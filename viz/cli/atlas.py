@@ -148,7 +148,7 @@ def build_spec(args: argparse.Namespace):
 
 
 def _run(args: argparse.Namespace) -> int:
-    from dynamics.cli import CliError
+    from .errors import CliError
 
     try:
         import dask  # noqa: F401
@@ -182,7 +182,8 @@ def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
     from dynamics.atlas import store
     from dynamics.atlas.driver import AtlasInterrupted, run_atlas
     from dynamics.atlas.maps import save_maps
-    from dynamics.cli import CliError
+
+    from .errors import CliError
 
     path = out / "atlas.zarr"
     if not args.resume and out.exists() and not out.is_dir():

@@ -1,0 +1,7 @@
+"""``python -m viz.cli``: the ``mechviz`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())
