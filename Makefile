@@ -25,13 +25,17 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 run: $(VENV)/.installed
 	$(BIN)/mechviz view
 
-test: $(VENV)/.installed-test
-	$(BIN)/ruff check .
+test: lint
 	$(BIN)/python -m pytest
 
-test-fast: $(VENV)/.installed-test
-	$(BIN)/ruff check .
+test-fast: lint
 	$(BIN)/python -m pytest -q -m "not slow and not browser"
+
+# The code as the formatter writes it, and the linter's rules (pyproject.toml): `ruff format .`
+# rewrites what this refuses.
+lint: $(VENV)/.installed-test
+	$(BIN)/ruff format --check .
+	$(BIN)/ruff check .
 
 bench: $(VENV)/.installed-test
 	$(BIN)/mechviz bench

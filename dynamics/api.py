@@ -110,8 +110,11 @@ class Run:
         magnitude, ``error_vs_exact`` or ``error_vs_reference`` at the end."""
         end = np.atleast_1d(self.energy_error[-1])
         out: dict[str, Any] = {
-            "system": self.system, "method": self.method, "step": self.step,
-            "t_end": float(self.t[-1]), "steps": self.steps,
+            "system": self.system,
+            "method": self.method,
+            "step": self.step,
+            "t_end": float(self.t[-1]),
+            "steps": self.steps,
             "rhs_evaluations": self.rhs_evaluations,
             "energy_drift": float(end[np.argmax(np.abs(end))]),
             "max_energy_error": float(np.max(np.abs(self.energy_error))),
@@ -179,12 +182,15 @@ def simulate(
     start = {k: v for k, v in settings.items() if k in start_names}
     params = {k: v for k, v in settings.items() if k not in start_names}
     if state is not None and start:
-        raise SettingError(next(iter(start)), "state gives the whole start; leave out "
-                           + ", ".join(start))
+        raise SettingError(
+            next(iter(start)), "state gives the whole start; leave out " + ", ".join(start)
+        )
     setup = spec.setup(params, start, method=method, dt=dt, rtol=rtol, atol=atol, state=state)
     t_end = _v.positive("t_end", t_end)
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
-        raise SettingError("samples", f"samples must be a whole number of at least 2, got {samples!r}")
+        raise SettingError(
+            "samples", f"samples must be a whole number of at least 2, got {samples!r}"
+        )
     step = setup.step
     if isinstance(step, Fixed):
         # Samples at exactly the times asked: the largest step <= dt that divides the interval
@@ -199,15 +205,22 @@ def simulate(
         return a[:, 0] if single else a
 
     return Run(
-        system=spec.name, method=sim.method.name, step=sim.step_label(),
-        params=dataclasses.asdict(setup.params), columns=tuple(setup.system.state_names),
-        t=traj.t, states=member(traj.states), energy=member(traj.energy),
+        system=spec.name,
+        method=sim.method.name,
+        step=sim.step_label(),
+        params=dataclasses.asdict(setup.params),
+        columns=tuple(setup.system.state_names),
+        t=traj.t,
+        states=member(traj.states),
+        energy=member(traj.energy),
         energy_error=member(traj.energy_error),
         error=None if traj.error is None else member(traj.error),
-        reference=sim.reference_kind, steps=sim.steps, rhs_evaluations=sim.nfev,
+        reference=sim.reference_kind,
+        steps=sim.steps,
+        rhs_evaluations=sim.nfev,
         invariants={n: member(v) for n, v in traj.invariants.items()},
         start=dict(setup.start),
-    )  # fmt: skip
+    )
 
 
 def _spec(system: str):

@@ -62,14 +62,17 @@ class DiskParams:
             bead = 1.25 * _v.positive("disk_mass", self.disk_mass)
             if not math.isfinite(bead):
                 raise _v.SettingError(
-                    "disk_mass", f"disk_mass {self.disk_mass:g}: the default bead mass 5/4 of it "
+                    "disk_mass",
+                    f"disk_mass {self.disk_mass:g}: the default bead mass 5/4 of it "
                     "is beyond the largest double",
                 )
             object.__setattr__(self, "bead_mass", bead)
         _v.coerce(
             self,
             {
-                "disk_mass": _v.positive, "radius": _v.positive, "bead_mass": _v.positive,
+                "disk_mass": _v.positive,
+                "radius": _v.positive,
+                "bead_mass": _v.positive,
                 "omega": _v.nonzero,  # without a spin nothing moves and nothing is measured
             },
         )
@@ -530,7 +533,9 @@ def analysis(p: DiskParams) -> dict:
     moments_cm, axes_cm = g(lambda: principal_axes_cm(p), nan3)
     return {
         "parameters": {
-            "disk_mass": p.disk_mass, "radius": p.radius, "bead_mass": p.bead_mass,
+            "disk_mass": p.disk_mass,
+            "radius": p.radius,
+            "bead_mass": p.bead_mass,
             "omega": p.omega,
         },
         "inertia_tensor": g(lambda: inertia_tensor(p).tolist()),

@@ -325,7 +325,9 @@ def analysis(p: HoopParams) -> dict:
     freqs, shapes = g(lambda: normal_modes(p), (np.full(2, np.nan), np.full((2, 2), np.nan)))
     return {
         "parameters": {
-            "hoop_mass": p.hoop_mass, "bead_mass": p.bead_mass, "radius": p.radius,
+            "hoop_mass": p.hoop_mass,
+            "bead_mass": p.bead_mass,
+            "radius": p.radius,
             "gravity": p.gravity,
         },
         "mode_frequencies": freqs.tolist(),

@@ -121,8 +121,13 @@ def gyrofrequency(
     if v.ndim == 3:
         rates = []
         for j in range(v.shape[1]):
-            e = gyrofrequency(t, v[:, j], xy=None if xy is None else np.asarray(xy)[:, j],
-                              min_turn=min_turn, max_uncertainty=max_uncertainty)  # fmt: skip
+            e = gyrofrequency(
+                t,
+                v[:, j],
+                xy=None if xy is None else np.asarray(xy)[:, j],
+                min_turn=min_turn,
+                max_uncertainty=max_uncertainty,
+            )
             if not e:
                 return unresolved(f"member {j}: {e.reason}")
             rates.append(e.value)
@@ -153,9 +158,7 @@ def gyrofrequency(
     return Estimate(abs(s))
 
 
-def fit_circle(
-    xy: np.ndarray, *, min_arc: float = 0.5, max_uncertainty: float = 3e-4
-) -> Estimate:
+def fit_circle(xy: np.ndarray, *, min_arc: float = 0.5, max_uncertainty: float = 3e-4) -> Estimate:
     """Circle through points (K, 2): value ``(centre (2,), radius)`` [m].
 
     The points are centred and scaled first (a circle far from the origin loses no digits),
@@ -190,8 +193,9 @@ def fit_circle(
         d = np.where(d > 0.0, d, 1.0)
         return np.column_stack([(q[0] - p[:, 0]) / d, (q[1] - p[:, 1]) / d, -np.ones(len(p))])
 
-    fit = least_squares(residuals, [cx, cy, r0], jac=jacobian, method="lm", xtol=1e-15,
-                        ftol=1e-15, gtol=1e-15)  # fmt: skip
+    fit = least_squares(
+        residuals, [cx, cy, r0], jac=jacobian, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
     (cx, cy, r) = fit.x
     r = abs(r)
     angle = np.arctan2(p[:, 1] - cy, p[:, 0] - cx)
@@ -345,7 +349,9 @@ def bearing_force(p: disk.DiskParams, t: np.ndarray, angle: np.ndarray, omega) -
     return -np.cross(disk.AXLE, N) / (2.0 * p.radius)
 
 
-def bearing_force_amplitude(p: disk.DiskParams, t: np.ndarray, angle: np.ndarray, omega) -> Estimate:
+def bearing_force_amplitude(
+    p: disk.DiskParams, t: np.ndarray, angle: np.ndarray, omega
+) -> Estimate:
     """Median magnitude [N] of :func:`bearing_force` over the inner samples (uniform rotation: a
     constant magnitude that turns with the disk). Not resolved below three samples or when the
     disk turns more than a quarter turn between samples (aliased)."""
@@ -408,8 +414,12 @@ def wobble_growth_rate(
 
     try:  # a wobble at the edge of the doubles (1e-300 rad/s) can defeat the linear algebra
         with np.errstate(all="ignore"):
-            best = minimize_scalar(misfit, bounds=(0.2 * lam0, 5.0 * lam0), method="bounded",
-                                   options={"xatol": 1e-12 * lam0})
+            best = minimize_scalar(
+                misfit,
+                bounds=(0.2 * lam0, 5.0 * lam0),
+                method="bounded",
+                options={"xatol": 1e-12 * lam0},
+            )
             lam = float(best.x)
             # Its standard error from the misfit's curvature (Gauss-Newton: misfit'' = 2 J^T J),
             # the residual variance over 2 K - 5 degrees of freedom (two components, five

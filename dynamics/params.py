@@ -56,7 +56,8 @@ def parse_number(field: str, text: Any) -> float:
         raise SettingError(field, f"{field} must be finite, got {text!r}")
     if 0.0 < abs(x) < TINY:
         raise SettingError(
-            field, f"{field} {x:.3g} is below the smallest normal double ({TINY:.3g}); "
+            field,
+            f"{field} {x:.3g} is below the smallest normal double ({TINY:.3g}); "
             "use 0 or a larger value",
         )
     return x

@@ -347,7 +347,9 @@ class Simulation:
             span = self._chunk_steps * h
             t_next = t_target if not span < t_target - self.t else self.t + span
             land = final and t_next == t_target
-            self._timed_chunk(lambda _k, t1=t_next, c=land: self._dop853_to(t1, c), self._chunk_steps)
+            self._timed_chunk(
+                lambda _k, t1=t_next, c=land: self._dop853_to(t1, c), self._chunk_steps
+            )
             self.t = t_next
 
     def _dop853_to(self, t1: float, land: bool = False) -> None:
@@ -356,9 +358,20 @@ class Simulation:
         if self._carry is None:
             self._carry = Dop853Carry(*self.state.shape)
         run_dop853(
-            self.system.sys_id, self.state, self.p, self.t, t1,
-            self.rtol, self.atol, self._H, self._F, self._stats, self._status, self._carry, land,
-        )  # fmt: skip
+            self.system.sys_id,
+            self.state,
+            self.p,
+            self.t,
+            t1,
+            self.rtol,
+            self.atol,
+            self._H,
+            self._F,
+            self._stats,
+            self._status,
+            self._carry,
+            land,
+        )
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
             raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
@@ -379,13 +392,25 @@ class Simulation:
             span = self._chunk_steps * h
             t1 = t_target if not span < t_target - self.t else self.t + span
             start = time.perf_counter()
-            steps = run_taylor(self.system.sys_id, self.state, self.p, self.t, t1,
-                               self.rtol, self.atol, self._stats, self._status, self._carry)  # fmt: skip
+            steps = run_taylor(
+                self.system.sys_id,
+                self.state,
+                self.p,
+                self.t,
+                t1,
+                self.rtol,
+                self.atol,
+                self._stats,
+                self._status,
+                self._carry,
+            )
             elapsed = time.perf_counter() - start
             self.steps += steps
             self.nfev += steps
             if self._status[0] != kernels.OK:
-                raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
+                raise integration_error(
+                    self.method.name, self.step_label(), self.t, self._status[0]
+                )
             if steps:
                 self._taylor_h = (t1 - self.t) * members / steps
             self.t = t1
@@ -523,8 +548,9 @@ class Simulation:
 
 def reference_run(system: System, state: np.ndarray) -> Simulation:
     """The tight DOP853 run the error is measured against where there is no exact solution."""
-    return Simulation(system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL, state=state,
-                      reference=None)  # fmt: skip
+    return Simulation(
+        system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL, state=state, reference=None
+    )
 
 
 def _steps_per_period(method: Method, rtol: float) -> float:
@@ -532,4 +558,3 @@ def _steps_per_period(method: Method, rtol: float) -> float:
     (Taylor's method: p the order it chooses for ``rtol``)."""
     order = order_for(rtol, rtol)[0] if method.kernel == "taylor" else method.order
     return 2.0 * rtol ** (-1.0 / max(order, 1))
-

@@ -129,8 +129,8 @@ class SystemSpec:
         for name in values:
             if name not in known:
                 raise _v.SettingError(
-                    name, f"{name} is not a parameter of the {self.name}; choose from "
-                    f"{', '.join(known)}",
+                    name,
+                    f"{name} is not a parameter of the {self.name}; choose from {', '.join(known)}",
                 )
         return self.Params(**values)
 
@@ -143,7 +143,8 @@ class SystemSpec:
         for name in values:
             if name not in known:
                 raise _v.SettingError(
-                    f"initial.{name}", f"{name} is not a start setting of the {self.name}; "
+                    f"initial.{name}",
+                    f"{name} is not a start setting of the {self.name}; "
                     f"choose from {', '.join(known)}",
                 )
         for s in self.start:
@@ -192,8 +193,8 @@ class SystemSpec:
         if not m.applies_to(system.name):
             names = ", ".join(x.name for x in methods_for(system.name))
             raise _v.SettingError(
-                "method", f"method {m.name!r} does not apply to the {self.name} here; "
-                f"choose one of {names}",
+                "method",
+                f"method {m.name!r} does not apply to the {self.name} here; choose one of {names}",
             )
         if m.backend == "exact":
             step = step_control(m, dt, None, None)
@@ -214,7 +215,8 @@ def checked_state(system: Any, state: Any) -> np.ndarray:
         raise _v.SettingError("state", f"state must be numbers, got {state!r}") from None
     if s.shape[-1:] != (d,) or s.ndim not in (1, 2):
         raise _v.SettingError(
-            "state", f"state must have shape (d,) or (N, d) with d = {d} "
+            "state",
+            f"state must have shape (d,) or (N, d) with d = {d} "
             f"({', '.join(system.state_names)}); got {s.shape}",
         )
     if not np.all(np.isfinite(s)):

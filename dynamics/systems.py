@@ -272,7 +272,9 @@ def _angle_pair(name: str, value) -> tuple[float, float]:
 def _choice(*options: str):
     def rule(name: str, value) -> str:
         if value not in options:
-            raise _v.SettingError(name, f"{name} must be one of {', '.join(options)}; got {value!r}")
+            raise _v.SettingError(
+                name, f"{name} must be one of {', '.join(options)}; got {value!r}"
+            )
         return value
 
     return rule
@@ -297,17 +299,30 @@ CYCLOTRON = SystemSpec(
     title="Charge in a uniform magnetic field",
     Params=cyclotron.CyclotronParams,
     params=(
-        param(cyclotron.CyclotronParams, "charge", "Charge q", "C", "charge q [C] (signed, nonzero)"),
+        param(
+            cyclotron.CyclotronParams, "charge", "Charge q", "C", "charge q [C] (signed, nonzero)"
+        ),
         param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]"),
         param(cyclotron.CyclotronParams, "field", "Field B", "T", "field B [T] along +z (nonzero)"),
     ),
     start=(
-        Setting("speed", "Speed v⊥", "m/s", CYCLOTRON_START[0], _v.positive,
-                "speed in the plane normal to B [m/s]"),
-        Setting("centre", "Centre (x, y)", "m", CYCLOTRON_START[1],
-                lambda n, v: _v.numbers(n, v, 2), "centre of the circle (x, y) [m]"),
-        Setting("vz", "Speed along B", "m/s", CYCLOTRON_START[2], _v.finite,
-                "speed along B [m/s]"),
+        Setting(
+            "speed",
+            "Speed v⊥",
+            "m/s",
+            CYCLOTRON_START[0],
+            _v.positive,
+            "speed in the plane normal to B [m/s]",
+        ),
+        Setting(
+            "centre",
+            "Centre (x, y)",
+            "m",
+            CYCLOTRON_START[1],
+            lambda n, v: _v.numbers(n, v, 2),
+            "centre of the circle (x, y) [m]",
+        ),
+        Setting("vz", "Speed along B", "m/s", CYCLOTRON_START[2], _v.finite, "speed along B [m/s]"),
     ),
     build=_build_cyclotron,
     default_method=lambda start: "exact",
@@ -328,8 +343,14 @@ HOOP = SystemSpec(
         param(hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]"),
     ),
     start=(
-        Setting("modes", "Mode amplitudes (1, 2)", "rad", HOOP_MODES, _angle_pair,
-                "amplitudes of mode 1 and mode 2 [rad], at rest"),
+        Setting(
+            "modes",
+            "Mode amplitudes (1, 2)",
+            "rad",
+            HOOP_MODES,
+            _angle_pair,
+            "amplitudes of mode 1 and mode 2 [rad], at rest",
+        ),
     ),
     build=_build_hoop,
     default_method=lambda start: "rk4",
@@ -349,13 +370,25 @@ DISK = SystemSpec(
         param(disk.DiskParams, "omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]"),
     ),
     start=(
-        Setting("motion", "Motion", "", "driven", _choice("driven", "released"),
-                "driven: uniform rotation about the axle (exact); released: the axle removed "
-                "at t = 0 (a free rigid body)", choices=("driven", "released")),
-        Setting("extra_spin", "Extra spin at release", "rad/s", DISK_EXTRA_SPIN,
-                lambda n, v: _v.numbers(n, v, 3),
-                "spin added at release (disk-frame components) [rad/s]",
-                components=("wx", "wy", "wz")),
+        Setting(
+            "motion",
+            "Motion",
+            "",
+            "driven",
+            _choice("driven", "released"),
+            "driven: uniform rotation about the axle (exact); released: the axle removed "
+            "at t = 0 (a free rigid body)",
+            choices=("driven", "released"),
+        ),
+        Setting(
+            "extra_spin",
+            "Extra spin at release",
+            "rad/s",
+            DISK_EXTRA_SPIN,
+            lambda n, v: _v.numbers(n, v, 3),
+            "spin added at release (disk-frame components) [rad/s]",
+            components=("wx", "wy", "wz"),
+        ),
     ),
     build=_build_disk,
     default_method=lambda start: "exact" if start["motion"] == "driven" else "rk4",

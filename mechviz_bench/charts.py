@@ -9,14 +9,27 @@ from .sweeps import TARGETS
 OURS_STYLE = {"linestyle": "-", "marker": "o"}
 # One colour per method across every chart (11 methods: more than one default cycle).
 COLORS = {
-    "rk4": "tab:blue", "dop853": "tab:orange", "boris": "tab:green", "verlet": "tab:green",
-    "splitting": "tab:green", "yoshida4": "tab:olive", "midpoint": "tab:purple",
-    "euler": "tab:brown", "exact": "tab:gray", "scipy-rk45": "tab:pink",
-    "scipy-dop853": "tab:red", "scipy-radau": "black", "scipy-lsoda": "tab:cyan",
-    "odeint": "darkgoldenrod", "taylor": "magenta",
-    "heyoka": "black", "cyrk-dop853": "0.45", "cyrk-vern8": "0.6", "cyrk-vern7": "0.7",
+    "rk4": "tab:blue",
+    "dop853": "tab:orange",
+    "boris": "tab:green",
+    "verlet": "tab:green",
+    "splitting": "tab:green",
+    "yoshida4": "tab:olive",
+    "midpoint": "tab:purple",
+    "euler": "tab:brown",
+    "exact": "tab:gray",
+    "scipy-rk45": "tab:pink",
+    "scipy-dop853": "tab:red",
+    "scipy-radau": "black",
+    "scipy-lsoda": "tab:cyan",
+    "odeint": "darkgoldenrod",
+    "taylor": "magenta",
+    "heyoka": "black",
+    "cyrk-dop853": "0.45",
+    "cyrk-vern8": "0.6",
+    "cyrk-vern7": "0.7",
     "cyrk-py-dop853": "0.8",
-}  # fmt: skip
+}
 SCIPY_STYLE = {"linestyle": "--", "marker": "s"}
 PEER_STYLE = {"linestyle": ":", "marker": "D", "linewidth": 1.6}
 ERROR_CEILING = 1.0  # a relative error above 1 is a failed run: the error axis stops there
@@ -76,14 +89,24 @@ def work_precision(result: dict) -> dict[str, bytes]:
             if not m.startswith(("heyoka", "cyrk")) and m != "taylor":
                 axes[1].loglog([max(p["nfev"], 1) for p in pts], err, **kw)
         for m, pts in outliers.items():
-            axes[0].loglog([p["seconds"] for p in pts], [p["error"] for p in pts], "x",
-                           color=COLORS.get(m), markersize=7,
-                           label=f"{m}: timing outlier (flagged, not in the curve)")  # fmt: skip
+            axes[0].loglog(
+                [p["seconds"] for p in pts],
+                [p["error"] for p in pts],
+                "x",
+                color=COLORS.get(m),
+                markersize=7,
+                label=f"{m}: timing outlier (flagged, not in the curve)",
+            )
         single = result["settings"].get("one_sample_from_s")
         timing = "median" + (f"; one call from {1e3 * single:g} ms" if single else "")
-        for ax, xl in zip(axes, (f"wall time per run [s] ({timing})",
-                                 "right-hand-side evaluations (Runge-Kutta and fixed-step)"),
-                          strict=True):  # fmt: skip
+        for ax, xl in zip(
+            axes,
+            (
+                f"wall time per run [s] ({timing})",
+                "right-hand-side evaluations (Runge-Kutta and fixed-step)",
+            ),
+            strict=True,
+        ):
             for t in TARGETS:
                 ax.axhline(t, color="0.6", linewidth=0.8, linestyle=":")
             ax.axhline(pb["floor"], color="tab:red", linewidth=0.8, linestyle=":")
@@ -95,9 +118,12 @@ def work_precision(result: dict) -> dict[str, bytes]:
         # tightest errors, the corner a reader looks at first.
         handles, labels = axes[0].get_legend_handles_labels()
         fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, frameon=False)
-        fig.suptitle(f"{pb['title']}: final error against wall time and evaluations (solid: ours, "
-                     f"dashed: scipy, dotted: CyRK and heyoka); {result['date']}, "
-                     f"{result['mode']} run", fontsize=10)  # fmt: skip
+        fig.suptitle(
+            f"{pb['title']}: final error against wall time and evaluations (solid: ours, "
+            f"dashed: scipy, dotted: CyRK and heyoka); {result['date']}, "
+            f"{result['mode']} run",
+            fontsize=10,
+        )
         rows = -(-len(labels) // 5)
         fig.tight_layout(rect=(0, 0.02 + 0.027 * rows, 1, 1))
         files[f"work_precision_{key}.png"] = _png(plt, fig)
@@ -114,18 +140,25 @@ def long_run(result: dict) -> dict[str, bytes]:
             ax.semilogy(r["t"][1:], err, label=f"{m} (max {r['max_abs']:.1e})", linewidth=1)
         bounded = [m for m, r in res["methods"].items() if r.get("bounded")]
         grows = [m for m in res["methods"] if m not in bounded]
-        what = "; ".join(s for s in (
-            f"bounded: {', '.join(bounded)}" if bounded else "",
-            f"growing: {', '.join(grows)}" if grows else "",
-        ) if s)  # fmt: skip
-        ax.set_title(f"{key}: dt = {res['dt']:g} s, {res['periods']:.0e} periods\n{what}",
-                     fontsize=9)  # fmt: skip
+        what = "; ".join(
+            s
+            for s in (
+                f"bounded: {', '.join(bounded)}" if bounded else "",
+                f"growing: {', '.join(grows)}" if grows else "",
+            )
+            if s
+        )
+        ax.set_title(
+            f"{key}: dt = {res['dt']:g} s, {res['periods']:.0e} periods\n{what}", fontsize=9
+        )
         ax.set_xlabel("t [s]")
         ax.set_ylabel("|E - E0| / |E0|")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle("Relative energy error over 10^4 periods at one loose step (bounded: the mean "
-                 "of the last 10 % of samples within 2x of the first 10 %)")  # fmt: skip
+    fig.suptitle(
+        "Relative energy error over 10^4 periods at one loose step (bounded: the mean "
+        "of the last 10 % of samples within 2x of the first 10 %)"
+    )
     fig.tight_layout()
     return {"energy_long_run.png": _png(plt, fig)}
 
@@ -138,23 +171,36 @@ def stability(result: dict) -> dict[str, bytes]:
     for i, ((m, r), c) in enumerate(zip(data["methods"].items(), colors, strict=False)):
         ax.plot(data["x"], r["theory"], color=c, linewidth=1.2, label=f"{m} ({r['on']})")
         ok = [p for p in r["points"] if p["measured"] is not None]
-        ax.plot([p["x"] for p in ok], [p["measured"] for p in ok], "o", color=c, markersize=5,
-                markerfacecolor="none")  # fmt: skip
+        ax.plot(
+            [p["x"] for p in ok],
+            [p["measured"] for p in ok],
+            "o",
+            color=c,
+            markersize=5,
+            markerfacecolor="none",
+        )
         bad = [p for p in r["points"] if p["measured"] is None]
         if bad:
             ax.plot([p["x"] for p in bad], [1.0] * len(bad), "x", color=c, markersize=6)
         if r["limit"]:
             ax.axvline(r["limit"], color=c, linestyle="--", linewidth=0.9)
-            ax.text(r["limit"], 12.0 / 1.35 ** (i % 3), f" {m} {r['limit']:.3f}", color=c,
-                    fontsize=7, va="top")  # fmt: skip
+            ax.text(
+                r["limit"],
+                12.0 / 1.35 ** (i % 3),
+                f" {m} {r['limit']:.3f}",
+                color=c,
+                fontsize=7,
+                va="top",
+            )
     ax.axhline(1.0, color="k", linewidth=0.6)
     ax.set_yscale("log")
     ax.set_ylim(0.4, 15)
     ax.set_xlim(0, 4)
     ax.set_xlabel("omega dt")
     ax.set_ylabel("amplification factor per step (spectral radius)")
-    ax.set_title("Stability: theory (lines), measured (circles; x: implicit solve failed), "
-                 "limits (dashed)")  # fmt: skip
+    ax.set_title(
+        "Stability: theory (lines), measured (circles; x: implicit solve failed), limits (dashed)"
+    )
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
@@ -168,8 +214,12 @@ def per_step(result: dict) -> dict[str, bytes]:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     xs = range(len(names))
     ax.bar([x - 0.2 for x in xs], [rows[n]["numba_ns"] for n in names], 0.4, label="numba")
-    ax.bar([x + 0.2 for x in xs], [rows[n].get("c_ns") or 0 for n in names], 0.4,
-           label="C -O2 (same run)")  # fmt: skip
+    ax.bar(
+        [x + 0.2 for x in xs],
+        [rows[n].get("c_ns") or 0 for n in names],
+        0.4,
+        label="C -O2 (same run)",
+    )
     ax.set_xticks(list(xs), names, rotation=20)
     ax.set_yscale("log")
     ax.set_ylabel("ns per step")

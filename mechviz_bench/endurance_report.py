@@ -63,10 +63,26 @@ def _r(x: float, digits: int = 3) -> float:
     return round(float(x), digits)
 
 
-
-def _summarize(data: dict, *, t0: float, t1: float, frames, seconds, clients, clients_seen,
-               page_checks, window_s, rss_every_s, settle_s, viewport, environment_map,
-               client_limits, load, wall_s, started) -> dict:  # fmt: skip
+def _summarize(
+    data: dict,
+    *,
+    t0: float,
+    t1: float,
+    frames,
+    seconds,
+    clients,
+    clients_seen,
+    page_checks,
+    window_s,
+    rss_every_s,
+    settle_s,
+    viewport,
+    environment_map,
+    client_limits,
+    load,
+    wall_s,
+    started,
+) -> dict:
     import viser
 
     fps = float(data["fps"])

@@ -46,9 +46,11 @@ def _exhibits(cases: dict) -> dict:
             return float(np.linalg.norm(y[:3] - ref[:3]))
 
         out["cyclotron"] = {
-            **c, "size": 2.0 * cyclotron.larmor_radius(c["system"].params, s0), "error": charge_err,
+            **c,
+            "size": 2.0 * cyclotron.larmor_radius(c["system"].params, s0),
+            "error": charge_err,
             "methods": ("exact", "boris", "rk4", "yoshida4"),
-        }  # fmt: skip
+        }
     if "hoop" in cases:
         c = cases["hoop"]
         hp = c["system"].params
@@ -59,8 +61,11 @@ def _exhibits(cases: dict) -> dict:
             return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
 
         out["hoop"] = {
-            **c, "size": 2.0 * hp.radius, "error": hoop_err, "methods": ("verlet", "rk4", "yoshida4"),
-        }  # fmt: skip
+            **c,
+            "size": 2.0 * hp.radius,
+            "error": hoop_err,
+            "methods": ("verlet", "rk4", "yoshida4"),
+        }
     if "disk-released" in cases:
         c = cases["disk-released"]
         dp = c["system"].params
@@ -74,9 +79,11 @@ def _exhibits(cases: dict) -> dict:
             return float(np.linalg.norm(r1 - r2, 2) * reach)
 
         out["disk-released"] = {
-            **c, "size": 2.0 * dp.radius, "error": disk_err,
+            **c,
+            "size": 2.0 * dp.radius,
+            "error": disk_err,
             "methods": ("splitting", "rk4", "yoshida4"),
-        }  # fmt: skip
+        }
     return out
 
 
@@ -131,13 +138,19 @@ def choose_defaults(cases: dict, quick: bool = False, progress=None) -> dict:
                 dt = FRAME / k
                 # Sample times on whole steps: 60 k steps per second.
                 err, secs, steps = _max_error(ex, method, dt, times, ref)
-                rows.append({
-                    "method": method, "dt": dt, "steps_per_frame": k, "max_error": err,
-                    "relative_error": None if err is None else err / ex["size"],
-                    "seconds_per_simulated_second": secs / SPAN, "steps": steps,
-                    "stability_limit_dt": limit,
-                    "passes": err is not None and err <= budget,
-                })  # fmt: skip
+                rows.append(
+                    {
+                        "method": method,
+                        "dt": dt,
+                        "steps_per_frame": k,
+                        "max_error": err,
+                        "relative_error": None if err is None else err / ex["size"],
+                        "seconds_per_simulated_second": secs / SPAN,
+                        "steps": steps,
+                        "stability_limit_dt": limit,
+                        "passes": err is not None and err <= budget,
+                    }
+                )
                 if progress:
                     progress()
                 if err is not None and err <= budget:

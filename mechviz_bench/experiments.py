@@ -70,8 +70,9 @@ def long_run_energy(periods: float = 1e4, samples: int = 400, progress=None) -> 
                 "mean_first_10pc": float(np.mean(e[:tenth])),
                 "mean_last_10pc": float(np.mean(e[-tenth:])),
                 # bounded: the error at the end is no larger (within 2x) than at the start
-                "bounded": bool(np.max(np.abs(e[-tenth:])) <= 2.0 * max(np.max(np.abs(e[:tenth])),
-                                                                         1e-15)),
+                "bounded": bool(
+                    np.max(np.abs(e[-tenth:])) <= 2.0 * max(np.max(np.abs(e[:tenth])), 1e-15)
+                ),
                 "seconds": secs,
                 "steps": sim.steps,
             }
@@ -87,8 +88,9 @@ X_POINTS = (0.25, 0.5, 1.0, 1.5, 1.9, 2.1, 2.5, 2.75, 2.9, 3.25, 3.75)
 
 def _charge_factor(method: str, x: float, n: int = 64) -> tuple[float | None, str]:
     """Measured ``(|v_perp(n)| / |v_perp(0)|)^(1/n)`` on the charge at ``omega dt = x``."""
-    sim = Simulation(Cyclotron(), method, dt=x, state=np.array([1.0, 0, 0, 0, 1.0, 0]),
-                     reference=None)  # fmt: skip
+    sim = Simulation(
+        Cyclotron(), method, dt=x, state=np.array([1.0, 0, 0, 0, 1.0, 0]), reference=None
+    )
     try:
         sim.advance_to(n * x)
     except IntegrationError as exc:
@@ -150,10 +152,16 @@ def stability_points(progress=None) -> dict:
         pts = []
         for x in X_POINTS:
             g, status = fn(m, x)
-            pts.append({"x": x, "measured": g, "theory": stability.amplification(m, x),
-                        "status": status})  # fmt: skip
-        out["methods"][m] = {"on": where, "theory": theory, "limit": limit, "points": pts,
-                             "reason": stability.REASONS[m]}  # fmt: skip
+            pts.append(
+                {"x": x, "measured": g, "theory": stability.amplification(m, x), "status": status}
+            )
+        out["methods"][m] = {
+            "on": where,
+            "theory": theory,
+            "limit": limit,
+            "points": pts,
+            "reason": stability.REASONS[m],
+        }
         if progress:
             progress()
     return out
@@ -171,8 +179,13 @@ STEP_CASES = (
     ("splitting", "disk", kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
 )
 # C -O2 per-step costs measured earlier on this machine (other load): reference figures.
-NOTES_C_NS = {"rk4-charge": 10.7, "boris": 4.0, "rk4-hoop": 168.0, "rk4-free-body": 16.0,
-              "splitting": 77.0}  # fmt: skip
+NOTES_C_NS = {
+    "rk4-charge": 10.7,
+    "boris": 4.0,
+    "rk4-hoop": 168.0,
+    "rk4-free-body": 16.0,
+    "splitting": 77.0,
+}
 
 
 def _numba_cost(table, sys_id, key, h, n, repeats) -> tuple[float, float]:
@@ -204,10 +217,19 @@ def _c_costs(n: int, repeats: int) -> dict[str, float] | str:
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(tmp) / "c_steps"
         try:
-            subprocess.run([cc, "-O2", str(C_SOURCE), "-lm", "-o", str(exe)], check=True,
-                           capture_output=True, timeout=60)  # fmt: skip
-            out = subprocess.run([str(exe), str(n), str(repeats)], check=True,
-                                 capture_output=True, text=True, timeout=120).stdout  # fmt: skip
+            subprocess.run(
+                [cc, "-O2", str(C_SOURCE), "-lm", "-o", str(exe)],
+                check=True,
+                capture_output=True,
+                timeout=60,
+            )
+            out = subprocess.run(
+                [str(exe), str(n), str(repeats)],
+                check=True,
+                capture_output=True,
+                text=True,
+                timeout=120,
+            ).stdout
         except (subprocess.SubprocessError, OSError) as exc:
             return f"C build or run failed: {exc}"
     return {line.split()[0]: float(line.split()[1]) for line in out.splitlines() if line.strip()}
@@ -269,8 +291,14 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
             states = pb.y0 + 1e-3 * rng.standard_normal((n, pb.y0.size))
             per_member = member_steps / n
             t_end = min(pb.t_end, max(0.2, per_member / 9.0))  # the hoop: ~9 steps/s at 1e-9
-            sim = Simulation(pb.system, "taylor", rtol=ENSEMBLE_TOL, atol=ENSEMBLE_TOL,
-                             state=states, reference=None)  # fmt: skip
+            sim = Simulation(
+                pb.system,
+                "taylor",
+                rtol=ENSEMBLE_TOL,
+                atol=ENSEMBLE_TOL,
+                state=states,
+                reference=None,
+            )
             best = {"serial": math.inf, "parallel": math.inf}
             finals = {}
             for r in range(rounds + 1):  # round 0 compiles (or loads) both loops, untimed
@@ -305,8 +333,11 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
         "threading_layer": _threading_layer(),
         "parallel_min": saved if saved < 1 << 62 else None,
         "note": f"hoop, taylor at rtol = atol = {ENSEMBLE_TOL:g}, restart() + advance_to(T); "
-        + (f"the driver runs ensembles of {saved} or more members in parallel"
-           if saved < 1 << 62 else "the driver never runs ensembles in parallel (turned off)"),
+        + (
+            f"the driver runs ensembles of {saved} or more members in parallel"
+            if saved < 1 << 62
+            else "the driver never runs ensembles in parallel (turned off)"
+        ),
     }
 
 

@@ -84,7 +84,12 @@ def _heyoka_system(problem: Problem):
         r2 = s * w1 * w1 - ga * hy.sin(th2)
         m11 = 2.0 * M + m
         det = m11 - m * c * c
-        return [(th1, w1), (th2, w2), (w1, (r1 - m * c * r2) / det), (w2, (m11 * r2 - c * r1) / det)]
+        return [
+            (th1, w1),
+            (th2, w2),
+            (w1, (r1 - m * c * r2) / det),
+            (w2, (m11 * r2 - c * r1) / det),
+        ]
     if kind == FREE_BODY:
         w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
         i1, i2, i3 = (float(v) for v in p)
@@ -248,6 +253,7 @@ def tolerances(peer: str, settings_tolerances: tuple[float, ...]) -> tuple[float
     """The tolerance sweep (the same grid as ours; heyoka's error stays near its tolerance, so
     its sweep stops one decade past the tightest target)."""
     return tuple(t for t in settings_tolerances if t >= 1e-16 and math.isfinite(t))
+
 
 # Left out of ``--quick`` runs: in full runs neither was the fastest peer at any target.
 QUICK_SKIP = ("cyrk-vern7", "cyrk-py-dop853")

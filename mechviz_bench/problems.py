@@ -285,7 +285,8 @@ def compute_references(
             if have_heyoka:
                 ym, secs_m = _mpmath_final(pb)
                 entry[f"mpmath_{MPMATH_DIGITS}_digits"] = {
-                    "error": pb.error(ym, ref), "seconds": round(secs_m, 1)
+                    "error": pb.error(ym, ref),
+                    "seconds": round(secs_m, 1),
                 }
             yr, nfev_r, secs_r = _final_state(pb, "scipy-radau", CROSS_CHECK_TOL)
             entry["radau_1e-12"] = {

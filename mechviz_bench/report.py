@@ -30,8 +30,10 @@ def ratio_table(result: dict) -> str:
             )
             sw = e.get("sweep_ratio")
             sws = "-" if sw is None else f"{sw:.0f}x"
-            lines.append(f"| {key} | {target} | {ours.get('method', '-')} {_ms(ours.get('seconds'))} "
-                         f"| {sci_s} | {rs} | {sws} |")  # fmt: skip
+            lines.append(
+                f"| {key} | {target} | {ours.get('method', '-')} {_ms(ours.get('seconds'))} "
+                f"| {sci_s} | {rs} | {sws} |"
+            )
     return "\n".join(lines)
 
 
@@ -114,17 +116,26 @@ def targets_summary(result: dict) -> str:
             figures.append(f"{peer} on {key} at {acc} ({shown})")
         spans = []
         for peer, rows in h2h.items():
-            ratios = [r for row in rows.values() for e in row.values()
-                      if (r := (e or {}).get("ratio")) is not None and r >= 1.0]  # fmt: skip
+            ratios = [
+                r
+                for row in rows.values()
+                for e in row.values()
+                if (r := (e or {}).get("ratio")) is not None and r >= 1.0
+            ]
             if ratios:
                 spans.append(f"{peer} {_span(ratios)}")
         lines.append(
             f"- **Peers: met in {met} of {met + len(missed)} measured cases"
             + (f", missed in {len(missed)}**: " + "; ".join(figures) + "." if missed else ".**")
-            + (f" {_more(unmeasured)} no figure (a sweep did not reach that accuracy)."
-               if unmeasured else "")
-            + " Where met, the peer takes this many times our time: " + "; ".join(spans) + "."
-        )  # fmt: skip
+            + (
+                f" {_more(unmeasured)} no figure (a sweep did not reach that accuracy)."
+                if unmeasured
+                else ""
+            )
+            + " Where met, the peer takes this many times our time: "
+            + "; ".join(spans)
+            + "."
+        )
     met, missed, unmeasured = _tally(t[f"ours_{SCIPY_FACTOR:g}x_faster_than_scipy"])
     figures = []
     for name in missed:  # a figure left out of the run (no scipy answer) is said, not looked up
@@ -144,9 +155,12 @@ def targets_summary(result: dict) -> str:
     lines.append(
         f"- **scipy: {SCIPY_FACTOR:g}x met in {met} of {met + len(missed)} measured cases"
         + (f", missed in {len(missed)}**: {missed_s}." if missed else ".**")
-        + (f" {_more(unmeasured)} no figure (no method of ours reached that accuracy)."
-           if unmeasured else "")
-    )  # fmt: skip
+        + (
+            f" {_more(unmeasured)} no figure (no method of ours reached that accuracy)."
+            if unmeasured
+            else ""
+        )
+    )
     fa = result.get("first_answer")
     first = t.get("first_answer_at_least_as_fast_as_odeint")
     measured = fa and all("median_s" in fa.get(k, {}) for k in ("taylor", "dop853", "scipy-odeint"))
@@ -168,8 +182,11 @@ def method_table(result: dict) -> str:
     lines = []
     for key, row in result["ratios"].items():
         methods = sorted({m for e in row.values() for m in e["per_method"]})
-        lines += [f"\n**{key}**\n", "| method | " + " | ".join(row) + " |",
-                  "|---|" + "---|" * len(row)]  # fmt: skip
+        lines += [
+            f"\n**{key}**\n",
+            "| method | " + " | ".join(row) + " |",
+            "|---|" + "---|" * len(row),
+        ]
         for m in methods:
             cells = []
             for e in row.values():
@@ -205,9 +222,11 @@ def step_table(result: dict) -> str:
     for name, r in result["per_step"]["rows"].items():
         c = r.get("c_ns")
         ratio = r.get("ratio_to_c")
-        lines.append(f"| {name} | {r['numba_ns']:.1f} | {'-' if c is None else f'{c:.1f}'} | "
-                     f"{'-' if ratio is None else f'{ratio:.2f}'} | "
-                     f"{r.get('c_notes_ns') or '-'} |")  # fmt: skip
+        lines.append(
+            f"| {name} | {r['numba_ns']:.1f} | {'-' if c is None else f'{c:.1f}'} | "
+            f"{'-' if ratio is None else f'{ratio:.2f}'} | "
+            f"{r.get('c_notes_ns') or '-'} |"
+        )
     return "\n".join(lines)
 
 
@@ -222,11 +241,16 @@ def exhibit_table(result: dict) -> str:
             rel = "failed" if r["relative_error"] is None else f"{r['relative_error']:.2e}"
             lim = r["stability_limit_dt"]
             lim_s = "none" if lim is None else f"{lim:.3g}"
-            mark = "**yes (chosen)**" if ex["chosen"] is r or ex["chosen"] == r else (
-                "yes" if r["passes"] else "no")  # fmt: skip
-            lines.append(f"| {name} | {r['method']} | {r['dt']:.5g} | {r['steps_per_frame']} | "
-                         f"{rel} | {1e6 * r['seconds_per_simulated_second']:.3g} us | {lim_s} | "
-                         f"{mark} |")  # fmt: skip
+            mark = (
+                "**yes (chosen)**"
+                if ex["chosen"] is r or ex["chosen"] == r
+                else ("yes" if r["passes"] else "no")
+            )
+            lines.append(
+                f"| {name} | {r['method']} | {r['dt']:.5g} | {r['steps_per_frame']} | "
+                f"{rel} | {1e6 * r['seconds_per_simulated_second']:.3g} us | {lim_s} | "
+                f"{mark} |"
+            )
     return "\n".join(lines)
 
 
@@ -237,8 +261,10 @@ def long_run_table(result: dict) -> str:
     ]
     for key, res in result["long_run"].items():
         for m, r in res["methods"].items():
-            lines.append(f"| {key} | {res['dt']:g} | {m} | {r['max_abs']:.2e} | "
-                         f"{r['mean_first_10pc']:.2e} | {r['mean_last_10pc']:.2e} |")  # fmt: skip
+            lines.append(
+                f"| {key} | {res['dt']:g} | {m} | {r['max_abs']:.2e} | "
+                f"{r['mean_first_10pc']:.2e} | {r['mean_last_10pc']:.2e} |"
+            )
     return "\n".join(lines)
 
 
@@ -253,19 +279,26 @@ def ensemble_table(result: dict) -> str:
         "|---|---|---|---|---|---|",
     ]
     for r in e["rows"].values():
-        lines.append(f"| {r['members']} | {r['member_steps']} | {r['serial_ns']:.0f} | "
-                     f"{r['parallel_ns']:.0f} | {r['speedup']:.2f} | "
-                     f"{'yes' if r['bitwise_equal'] else '**no**'} |")  # fmt: skip
+        lines.append(
+            f"| {r['members']} | {r['member_steps']} | {r['serial_ns']:.0f} | "
+            f"{r['parallel_ns']:.0f} | {r['speedup']:.2f} | "
+            f"{'yes' if r['bitwise_equal'] else '**no**'} |"
+        )
     return "\n".join(lines)
 
 
 def markdown(result: dict) -> str:
-    head = (f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
-            f"load average {result['load_average']}; {result['machine'].get('cpu', '')}, "
-            f"{result['machine']['cpus']} CPUs; versions {result['versions']}.")  # fmt: skip
+    head = (
+        f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
+        f"load average {result['load_average']}; {result['machine'].get('cpu', '')}, "
+        f"{result['machine']['cpus']} CPUs; versions {result['versions']}."
+    )
     parts = [
-        "# Benchmark tables", head,
-        "## Targets", targets_summary(result), targets_list(result),
+        "# Benchmark tables",
+        head,
+        "## Targets",
+        targets_summary(result),
+        targets_list(result),
         "## Time to reach each accuracy: fastest scipy over fastest of ours",
         "Each side's contenders (within 1.5x of its fastest sweep time) re-timed head to head in "
         "interleaved rounds; *sweep ratio* is the figure from the sweeps alone. Problems ending "
@@ -275,9 +308,11 @@ def markdown(result: dict) -> str:
         "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
         "interleaved rounds.",
         peer_table(result),
-        "## First answer and construction", first_answer_table(result),
-        "## Time per method to reach each accuracy", method_table(result),
-    ]  # fmt: skip
+        "## First answer and construction",
+        first_answer_table(result),
+        "## Time per method to reach each accuracy",
+        method_table(result),
+    ]
     if result.get("per_step"):
         parts += ["## Cost of one compiled step", step_table(result)]
     if result.get("ensembles"):

@@ -87,8 +87,10 @@ class Progress:
         width = 30
         fill = int(width * self.done / self.total)
         secs = time.perf_counter() - self.t0
-        sys.stderr.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} "
-                         f"{secs:5.0f} s  {self.label[:40]:<40}")  # fmt: skip
+        sys.stderr.write(
+            f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} "
+            f"{secs:5.0f} s  {self.label[:40]:<40}"
+        )
         sys.stderr.flush()
 
     def close(self) -> None:
@@ -163,11 +165,18 @@ def _quiet_scipy(run):
 
 
 def run_bench(
-    *, quick: bool = False, out: str | Path = "docs/bench", extras: dict | None = None,
-    show_progress: bool | None = None, charts: bool = True, peers: bool = False,
-    extra: bool = True, exhibit_cases: dict | None = None, phases: dict | None = None,
+    *,
+    quick: bool = False,
+    out: str | Path = "docs/bench",
+    extras: dict | None = None,
+    show_progress: bool | None = None,
+    charts: bool = True,
+    peers: bool = False,
+    extra: bool = True,
+    exhibit_cases: dict | None = None,
+    phases: dict | None = None,
     interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
-) -> dict:  # fmt: skip
+) -> dict:
     """Run everything; write ``out/results.json``, ``tables.md`` and the charts as one set;
     return the result dict.
 
@@ -187,12 +196,13 @@ def run_bench(
         )
     from dynamics.files import write_files_atomically
 
-
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
     try:  # the figures are measured: a table that cannot be made must not lose them
         tables = markdown(result)
     except Exception as exc:
-        tables = f"# Benchmark tables\n\nNot made ({exc.__class__.__name__}: {exc}); see results.json.\n"
+        tables = (
+            f"# Benchmark tables\n\nNot made ({exc.__class__.__name__}: {exc}); see results.json.\n"
+        )
     # one set, results.json last: an interrupted run leaves the folder as it was
     write_files_atomically(
         out, {**pictures, "tables.md": tables.encode(), "results.json": results.encode()}
@@ -202,9 +212,16 @@ def run_bench(
 
 @_quiet_scipy
 def _measure(
-    quick: bool, out: Path, extras: dict | None, show_progress: bool | None, charts: bool,
-    peers: bool, extra: bool, exhibit_cases: dict | None, phases: dict | None,
-) -> tuple[dict, dict[str, bytes]]:  # fmt: skip
+    quick: bool,
+    out: Path,
+    extras: dict | None,
+    show_progress: bool | None,
+    charts: bool,
+    peers: bool,
+    extra: bool,
+    exhibit_cases: dict | None,
+    phases: dict | None,
+) -> tuple[dict, dict[str, bytes]]:
     """``run_bench`` but the writing: (the result dict, chart name -> PNG bytes)."""
     from . import peers as _peers
 
@@ -222,11 +239,19 @@ def _measure(
             else:
                 peer_skipped[name] = why[_peers.package_of(name)]
     every = {**PROBLEMS, **VARIANTS}
-    n_sweeps = sum(len(_fixed(pb, settings)) + len(ADAPTIVE_OURS) + len(settings.scipy_methods)
-                   + len(peer_names) for pb in every.values())  # fmt: skip
-    total = len(PROBLEMS) + n_sweeps + 2 + (
-        10 + 7 + len(experiments.STEP_CASES) + len(experiments.ENSEMBLE_SIZES) + 3
-    ) * extra
+    n_sweeps = sum(
+        len(_fixed(pb, settings))
+        + len(ADAPTIVE_OURS)
+        + len(settings.scipy_methods)
+        + len(peer_names)
+        for pb in every.values()
+    )
+    total = (
+        len(PROBLEMS)
+        + n_sweeps
+        + 2
+        + (10 + 7 + len(experiments.STEP_CASES) + len(experiments.ENSEMBLE_SIZES) + 3) * extra
+    )
     progress = Progress(total, show_progress)
     started = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     t_start = time.perf_counter()
@@ -313,7 +338,9 @@ def _measure(
             "fixed_step_factor": math.sqrt(2) if settings.half_steps else 2,
             "tolerances": list(settings.tolerances),
             "head_to_head_rounds": settings.head_to_head_rounds,
-            "one_sample_from_s": None if math.isinf(settings.one_sample_from) else settings.one_sample_from,
+            "one_sample_from_s": None
+            if math.isinf(settings.one_sample_from)
+            else settings.one_sample_from,
             "scipy_methods": list(settings.scipy_methods),
             "skipped_fixed_methods": list(settings.skip_fixed),
             "targets": [f"{t:.0e}" for t in TARGETS],
@@ -352,8 +379,10 @@ def _measure(
         "points": [p.to_json() for p in points],
         "ratios": ratios,
         "peer_ratios": {
-            peer: {k: {t: (None if e is None else e["ratio"]) for t, e in row.items()}
-                   for k, row in rows.items()}
+            peer: {
+                k: {t: (None if e is None else e["ratio"]) for t, e in row.items()}
+                for k, row in rows.items()
+            }
             for peer, rows in peer_ratios.items()
         },
         "peer_head_to_head": peer_ratios,
@@ -386,8 +415,6 @@ def _json_default(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
-
-
 def _targets(
     ratios: dict, per_step: dict | None, peer_ratios: dict, first_answer: dict | None = None
 ) -> dict:
@@ -416,8 +443,9 @@ def _targets(
         theirs = first_answer["scipy-odeint"]["median_s"]
         first = ours <= theirs
         if not first:
-            missed.append(f"first answer: ours / odeint = {ours} s / {theirs} s = "
-                          f"{ours / theirs:.2f} > 1")  # fmt: skip
+            missed.append(
+                f"first answer: ours / odeint = {ours} s / {theirs} s = {ours / theirs:.2f} > 1"
+            )
     cost = (
         {}
         if per_step is None
@@ -501,8 +529,10 @@ def _first_answer(repeats: int = 3) -> dict:
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
             walls.append(time.perf_counter() - t0)
-        out[name] = {"median_s": round(statistics.median(walls), 3),
-                     "runs_s": [round(w, 3) for w in walls]}  # fmt: skip
+        out[name] = {
+            "median_s": round(statistics.median(walls), 3),
+            "runs_s": [round(w, 3) for w in walls],
+        }
     ours = min(out["taylor"]["median_s"], out["dop853"]["median_s"])
     out["ours_first_at_least_as_fast_as_scipy"] = ours <= out["scipy-odeint"]["median_s"]
     return out
@@ -511,12 +541,9 @@ def _first_answer(repeats: int = 3) -> dict:
 def summary(result: dict) -> dict:
     """The short form ``mechviz bench --json`` prints."""
     ratios = {
-        key: {
-            t: (None if e.get("ratio") is None else round(e["ratio"], 1))
-            for t, e in row.items()
-        }
+        key: {t: (None if e.get("ratio") is None else round(e["ratio"], 1)) for t, e in row.items()}
         for key, row in result["ratios"].items()
-    }  # fmt: skip
+    }
     fastest = {
         key: {
             t: {
@@ -527,7 +554,7 @@ def summary(result: dict) -> dict:
             for t, e in row.items()
         }
         for key, row in result["ratios"].items()
-    }  # fmt: skip
+    }
     return {
         "mode": result["mode"],
         "date": result["date"],
@@ -535,8 +562,10 @@ def summary(result: dict) -> dict:
         "load_average": result["load_average"],
         "ratios": ratios,
         "peer_ratios": {
-            peer: {k: {t: (None if r is None else round(r, 2)) for t, r in row.items()}
-                   for k, row in rows.items()}
+            peer: {
+                k: {t: (None if r is None else round(r, 2)) for t, r in row.items()}
+                for k, row in rows.items()
+            }
             for peer, rows in result["peer_ratios"].items()
         },
         "peers_skipped": result["settings"]["peers_skipped"],
@@ -544,15 +573,21 @@ def summary(result: dict) -> dict:
         "targets": result["targets"],
         "construction_us": result["construction_us"],
         "first_answer": result["first_answer"],
-        "per_step_ns": None if result["per_step"] is None else {
+        "per_step_ns": None
+        if result["per_step"] is None
+        else {
             k: {"numba": round(v["numba_ns"], 1), "c": v.get("c_ns")}
             for k, v in result["per_step"]["rows"].items()
         },
-        "ensemble_ns_per_member_step": None if result.get("ensembles") is None else {
+        "ensemble_ns_per_member_step": None
+        if result.get("ensembles") is None
+        else {
             k: {"serial": round(v["serial_ns"], 1), "parallel": round(v["parallel_ns"], 1)}
             for k, v in result["ensembles"]["rows"].items()
         },
-        "exhibit_defaults": None if result["exhibits"] is None else {
+        "exhibit_defaults": None
+        if result["exhibits"] is None
+        else {
             k: None
             if v["chosen"] is None
             else {"method": v["chosen"]["method"], "dt": v["chosen"]["dt"]}

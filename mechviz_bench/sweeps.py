@@ -142,12 +142,42 @@ def run_point(
         elif adaptive:
             energy_max = abs(_energy(problem, y) - E0) / abs(E0)
     except IntegrationError as exc:
-        return Point(problem.key, method, adaptive, dt, tol, 0, 0, None, None, None, None, None,
-                     0, 0, f"failed: {exc.reason}")  # fmt: skip
+        return Point(
+            problem.key,
+            method,
+            adaptive,
+            dt,
+            tol,
+            0,
+            0,
+            None,
+            None,
+            None,
+            None,
+            None,
+            0,
+            0,
+            f"failed: {exc.reason}",
+        )
     err = problem.error(y, ref)
     if not math.isfinite(err):
-        return Point(problem.key, method, adaptive, dt, tol, steps, nfev, None, None, None, None,
-                     first, 0, 0, "failed: non-finite final state")  # fmt: skip
+        return Point(
+            problem.key,
+            method,
+            adaptive,
+            dt,
+            tol,
+            steps,
+            nfev,
+            None,
+            None,
+            None,
+            None,
+            first,
+            0,
+            0,
+            "failed: non-finite final state",
+        )
 
     timed = _simulation(problem, method, dt, tol)
 
@@ -240,8 +270,11 @@ TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
 
 def time_to_reach(points: list[Point], target: float) -> Point | None:
     """The fastest point whose error is at or below ``target``."""
-    ok = [p for p in points
-          if p.error is not None and p.error <= target and p.seconds and p.status == "ok"]  # fmt: skip
+    ok = [
+        p
+        for p in points
+        if p.error is not None and p.error <= target and p.seconds and p.status == "ok"
+    ]
     return min(ok, key=lambda p: p.seconds) if ok else None
 
 
@@ -259,10 +292,17 @@ def ratio_table(points: list[Point], ours: set[str], theirs: set[str]) -> dict:
             per_method = {}
             for m in sorted({p.method for p in pts}):
                 best = time_to_reach([p for p in pts if p.method == m], target)
-                per_method[m] = None if best is None else {
-                    "seconds": best.seconds, "nfev": best.nfev, "dt": best.dt, "tol": best.tol,
-                    "error": best.error,
-                }  # fmt: skip
+                per_method[m] = (
+                    None
+                    if best is None
+                    else {
+                        "seconds": best.seconds,
+                        "nfev": best.nfev,
+                        "dt": best.dt,
+                        "tol": best.tol,
+                        "error": best.error,
+                    }
+                )
             our = [(v["seconds"], m) for m, v in per_method.items() if m in ours and v]
             sci = [(v["seconds"], m) for m, v in per_method.items() if m in theirs and v]
             entry = {
@@ -333,9 +373,12 @@ def head_to_head(problem: Problem, pts: list[Point], rounds: int, min_sample: fl
 
 
 def retime_ratios(
-    table: dict, points: list[Point], problems: dict[str, Problem], settings: Settings,
+    table: dict,
+    points: list[Point],
+    problems: dict[str, Problem],
+    settings: Settings,
     close: float = 1.5,
-) -> None:  # fmt: skip
+) -> None:
     """Replace each sweep ratio by a head-to-head one, in place.
 
     Contenders on each side are the points that reached the target within ``close`` times the
@@ -352,15 +395,25 @@ def retime_ratios(
                 fastest = entry[side]["seconds"]
                 names = entry["ours_methods" if side == "ours" else "scipy_methods"]
                 sides[side] = [
-                    m for m in names
-                    if entry["per_method"][m] and entry["per_method"][m]["seconds"] <= close * fastest
-                ]  # fmt: skip
+                    m
+                    for m in names
+                    if entry["per_method"][m]
+                    and entry["per_method"][m]["seconds"] <= close * fastest
+                ]
             contenders = [(side, m) for side in ("ours", "scipy") for m in sides[side]]
             pts = []
             for _, m in contenders:
                 v = entry["per_method"][m]
-                pts.append(next(p for p in points if p.problem == key and p.method == m
-                                and p.dt == v["dt"] and p.tol == v["tol"]))  # fmt: skip
+                pts.append(
+                    next(
+                        p
+                        for p in points
+                        if p.problem == key
+                        and p.method == m
+                        and p.dt == v["dt"]
+                        and p.tol == v["tol"]
+                    )
+                )
             secs = head_to_head(problem, pts, settings.head_to_head_rounds, settings.min_sample)
             best = {}
             for (side, m), t in zip(contenders, secs, strict=True):
@@ -396,18 +449,67 @@ def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) 
         y = prepared.run()
         first = time.perf_counter() - t0
     except Exception as exc:  # a peer failing at one tolerance is a result, not a crash
-        return Point(problem.key, peer, True, None, tol, 0, 0, None, None, None, None, None, 0, 0,
-                     f"failed: {exc.__class__.__name__}: {exc}")  # fmt: skip
+        return Point(
+            problem.key,
+            peer,
+            True,
+            None,
+            tol,
+            0,
+            0,
+            None,
+            None,
+            None,
+            None,
+            None,
+            0,
+            0,
+            f"failed: {exc.__class__.__name__}: {exc}",
+        )
     _PREPARED[(problem.key, peer, None, tol)] = prepared.run
     err = problem.error(y, ref)
     if not math.isfinite(err):
-        return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, None, None, None,
-                     None, first, 0, 0, "failed: non-finite final state")  # fmt: skip
-    timing = time_calls(lambda: prepared.run, repeats=settings.repeats,
-                        min_sample=settings.min_sample, first_call=first,
-                        one_sample_from=settings.one_sample_from)  # fmt: skip
-    return Point(problem.key, peer, True, None, tol, prepared.nfev(), 0, err, None, timing.median,
-                 timing.best, timing.first_call, timing.samples, timing.calls_per_sample, "ok")  # fmt: skip
+        return Point(
+            problem.key,
+            peer,
+            True,
+            None,
+            tol,
+            prepared.nfev(),
+            0,
+            None,
+            None,
+            None,
+            None,
+            first,
+            0,
+            0,
+            "failed: non-finite final state",
+        )
+    timing = time_calls(
+        lambda: prepared.run,
+        repeats=settings.repeats,
+        min_sample=settings.min_sample,
+        first_call=first,
+        one_sample_from=settings.one_sample_from,
+    )
+    return Point(
+        problem.key,
+        peer,
+        True,
+        None,
+        tol,
+        prepared.nfev(),
+        0,
+        err,
+        None,
+        timing.median,
+        timing.best,
+        timing.first_call,
+        timing.samples,
+        timing.calls_per_sample,
+        "ok",
+    )
 
 
 def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
@@ -423,9 +525,12 @@ def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
 
 
 def peer_table(
-    points: list[Point], table: dict, peers: list[str], problems: dict[str, Problem],
+    points: list[Point],
+    table: dict,
+    peers: list[str],
+    problems: dict[str, Problem],
     settings: Settings,
-) -> dict:  # fmt: skip
+) -> dict:
     """Per peer, problem and target: the peer's time over our fastest, timed head to head.
 
     Our contenders are those of the ratio table (within 1.5x of our fastest, after its own
@@ -450,11 +555,18 @@ def peer_table(
                 for m in entry["ours_methods"]:
                     v = entry["per_method"].get(m)
                     if v and v["seconds"] <= 1.5 * (entry.get("sweep", entry)["ours"]["seconds"]):
-                        ours.append(next(p for p in points if p.problem == key and p.method == m
-                                         and p.dt == v["dt"] and p.tol == v["tol"]))  # fmt: skip
+                        ours.append(
+                            next(
+                                p
+                                for p in points
+                                if p.problem == key
+                                and p.method == m
+                                and p.dt == v["dt"]
+                                and p.tol == v["tol"]
+                            )
+                        )
                 pts = [*ours, best]
-                secs = head_to_head(problem, pts, settings.head_to_head_rounds,
-                                    settings.min_sample)  # fmt: skip
+                secs = head_to_head(problem, pts, settings.head_to_head_rounds, settings.min_sample)
                 i_best = min(range(len(ours)), key=lambda i: secs[i])
                 out[peer][key][target] = {
                     "ratio": secs[-1] / secs[i_best],
@@ -471,8 +583,9 @@ def peer_table(
     return out
 
 
-def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
-                  slack: float = 1.3) -> None:  # fmt: skip
+def flag_outliers(
+    points: list[Point], problem: Problem, settings: Settings, slack: float = 1.3
+) -> None:
     """Mark points slower than a point of the same method that does more work, re-timed once.
 
     Along one method's sweep more steps (or a tighter tolerance) never cost less time; a point
@@ -481,6 +594,7 @@ def flag_outliers(points: list[Point], problem: Problem, settings: Settings,
     if it still breaks the order it is flagged (``status = "outlier"``) and left off the charts
     and the tables.
     """
+
     def later(a: Point, b: Point) -> bool:  # b does more work than a
         if a.adaptive:
             return (b.tol or 0) < (a.tol or 0)

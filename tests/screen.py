@@ -36,7 +36,9 @@ class Box:
     y1: float
 
     def overlaps(self, other: Box) -> bool:
-        return self.x0 < other.x1 and other.x0 < self.x1 and self.y0 < other.y1 and other.y0 < self.y1
+        return (
+            self.x0 < other.x1 and other.x0 < self.x1 and self.y0 < other.y1 and other.y0 < self.y1
+        )
 
 
 def world_point(handles: dict, name: str) -> tuple[np.ndarray, bool]:

@@ -13,9 +13,16 @@ from dynamics import api, measure
 def test_cyclotron_run_goes_round_at_the_gyrofrequency_of_the_analysis():
     info = api.analyze("cyclotron", charge=2.0, mass=1.0, field=0.5, speed=1.5)
     run = api.simulate(
-        "cyclotron", method="boris", dt=0.001, t_end=2 * info["period"], samples=400,
-        charge=2.0, mass=1.0, field=0.5, speed=1.5,
-    )  # fmt: skip
+        "cyclotron",
+        method="boris",
+        dt=0.001,
+        t_end=2 * info["period"],
+        samples=400,
+        charge=2.0,
+        mass=1.0,
+        field=0.5,
+        speed=1.5,
+    )
     assert run.states.shape == (400, 6) and run.columns[:2] == ("x", "y")
     w = measure.gyrofrequency(run.t, run.states[:, 3:5], xy=run.states[:, :2]).value
     assert w == pytest.approx(info["gyrofrequency"], rel=1e-5)
@@ -57,9 +64,12 @@ def test_dataframe_has_one_row_per_sample_and_member():
     assert list(df.columns) == ["t", *one.columns, "energy", "energy_error", "error"]
     assert len(df) == 11 and df["t"].iloc[-1] == pytest.approx(1.0)
     beam = api.simulate(
-        "cyclotron", method="exact", t_end=1.0, samples=5,
+        "cyclotron",
+        method="exact",
+        t_end=1.0,
+        samples=5,
         state=[[1, 0, 0, 0, 1, 0], [2, 0, 0, 0, 2, 0], [3, 0, 0, 0, 3, 0]],
-    )  # fmt: skip
+    )
     assert beam.states.shape == (5, 3, 6)
     df = beam.to_dataframe()
     assert len(df) == 15 and sorted(set(df["member"])) == [0, 1, 2]

@@ -51,13 +51,15 @@ def test_charge_reference_is_the_exact_helix():
     pb = PROBLEMS["charge"]
     ref = reference_state(pb)
     t = pb.t_end
-    assert np.allclose(ref, [2 - np.cos(t), np.sin(t), 0.1 * t, np.sin(t), np.cos(t), 0.1],
-                       atol=1e-12)  # fmt: skip
+    assert np.allclose(
+        ref, [2 - np.cos(t), np.sin(t), 0.1 * t, np.sin(t), np.cos(t), 0.1], atol=1e-12
+    )
 
 
 def _pt(method, error, seconds, problem="hoop"):
-    return Point(problem, method, False, 0.1, None, 10, 40, error, 0.0, seconds, seconds, 0.0,
-                 5, 1, "ok")  # fmt: skip
+    return Point(
+        problem, method, False, 0.1, None, 10, 40, error, 0.0, seconds, seconds, 0.0, 5, 1, "ok"
+    )
 
 
 def test_time_to_reach_is_the_fastest_point_at_or_below_the_target():
@@ -69,10 +71,13 @@ def test_time_to_reach_is_the_fastest_point_at_or_below_the_target():
 
 def test_ratio_is_fastest_scipy_over_fastest_ours_and_flags_a_lower_bound():
     pts = [
-        _pt("rk4", 1e-4, 0.001), _pt("dop853", 1e-4, 0.002),
-        _pt("odeint", 1e-4, 0.05), _pt("scipy-dop853", 1e-4, 0.2),
-        _pt("rk4", 1e-7, 0.01), _pt("odeint", 1e-5, 0.5),
-    ]  # fmt: skip
+        _pt("rk4", 1e-4, 0.001),
+        _pt("dop853", 1e-4, 0.002),
+        _pt("odeint", 1e-4, 0.05),
+        _pt("scipy-dop853", 1e-4, 0.2),
+        _pt("rk4", 1e-7, 0.01),
+        _pt("odeint", 1e-5, 0.5),
+    ]
     table = ratio_table(pts, {"rk4", "dop853"}, {"odeint", "scipy-dop853"})["hoop"]
     assert table["1e-03"]["ratio"] == pytest.approx(50.0)
     assert table["1e-03"]["scipy"]["method"] == "odeint"
@@ -86,8 +91,23 @@ def test_head_to_head_retiming_runs_the_chosen_points_and_keeps_the_sweep_figure
     # Real runs of the hoop (short: rk4 at 640 steps, odeint at 1e-4); the assertions are about
     # bookkeeping, not about which is faster.
     pb = PROBLEMS["hoop"]
-    ours = Point("hoop", "rk4", False, pb.t_end / 640, None, 640, 2560, 1e-4, 0.0, 1e-3, 1e-3,
-                 0.0, 5, 1, "ok")  # fmt: skip
+    ours = Point(
+        "hoop",
+        "rk4",
+        False,
+        pb.t_end / 640,
+        None,
+        640,
+        2560,
+        1e-4,
+        0.0,
+        1e-3,
+        1e-3,
+        0.0,
+        5,
+        1,
+        "ok",
+    )
     theirs = Point("hoop", "odeint", True, None, 1e-4, 0, 0, 1e-4, 0.0, 2e-2, 2e-2, 0.0, 5, 1, "ok")
     table = ratio_table([ours, theirs], {"rk4"}, {"odeint"})
     assert table["hoop"]["1e-03"]["ratio"] == pytest.approx(20.0)
@@ -124,8 +144,11 @@ def test_targets_name_each_miss_with_its_figure():
         "heyoka hoop 1e-12: heyoka / ours = 0.80 < 1",
     ]
     # the first answer: the faster of ours against odeint
-    first = {"taylor": {"median_s": 0.6}, "dop853": {"median_s": 0.9},
-             "scipy-odeint": {"median_s": 0.4}}  # fmt: skip
+    first = {
+        "taylor": {"median_s": 0.6},
+        "dop853": {"median_s": 0.9},
+        "scipy-odeint": {"median_s": 0.4},
+    }
     t = _targets(ratios, None, peers, first)
     assert t["first_answer_at_least_as_fast_as_odeint"] is False
     assert t["missed"][-1] == "first answer: ours / odeint = 0.6 s / 0.4 s = 1.50 > 1"
@@ -159,8 +182,9 @@ def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
     from mechviz_bench import docs
 
     result = _committed_result()
-    blocks = "".join(f"<!-- bench:{n} -->\nold {n}\n<!-- /bench:{n} -->\ntext between\n"
-                     for n in docs.BLOCKS)  # fmt: skip
+    blocks = "".join(
+        f"<!-- bench:{n} -->\nold {n}\n<!-- /bench:{n} -->\ntext between\n" for n in docs.BLOCKS
+    )
     text = "# Title\n\nprose before\n" + blocks + "prose after\n"
     once = docs.splice(text, result)
     assert docs.splice(once, result) == once
@@ -302,14 +326,22 @@ def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_rep
         return make
 
     long_call = 1.5 * quick.one_sample_from
-    t = time_calls(timed(long_call), repeats=quick.repeats, min_sample=quick.min_sample,
-                   one_sample_from=quick.one_sample_from)  # fmt: skip
+    t = time_calls(
+        timed(long_call),
+        repeats=quick.repeats,
+        min_sample=quick.min_sample,
+        one_sample_from=quick.one_sample_from,
+    )
     assert calls == [long_call] and t.samples == 1 and t.calls_per_sample == 1
     assert t.median == t.first_call >= long_call
     calls.clear()
     short = quick.min_sample  # one call per sample, first call + repeats samples
-    t = time_calls(timed(short), repeats=quick.repeats, min_sample=quick.min_sample,
-                   one_sample_from=quick.one_sample_from)  # fmt: skip
+    t = time_calls(
+        timed(short),
+        repeats=quick.repeats,
+        min_sample=quick.min_sample,
+        one_sample_from=quick.one_sample_from,
+    )
     assert t.samples == quick.repeats and len(calls) == 1 + quick.repeats * t.calls_per_sample
     # a full run repeats every call
     assert Settings.for_mode(False).one_sample_from == float("inf")
@@ -322,7 +354,9 @@ def test_the_compile_cache_is_filled_by_worker_processes_once_per_checkout(tmp_p
     from viz import warm
 
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))  # where the stamp goes
-    monkeypatch.setattr(warm, "every_method", lambda systems: [("hoop", "verlet"), ("hoop", "taylor")])
+    monkeypatch.setattr(
+        warm, "every_method", lambda systems: [("hoop", "verlet"), ("hoop", "taylor")]
+    )
     meanwhile = []
     _, processes = warm.fill_cache_in_parallel(2, meanwhile=lambda: meanwhile.append(1))
     assert processes == 2 and meanwhile == [1] and len(list(tmp_path.glob("filled-*"))) == 1

@@ -273,10 +273,27 @@ def test_a_long_run_shows_progress_on_a_terminal_and_ctrl_c_ends_it_within_a_sec
 
     main, child = pty.openpty()  # stderr on a terminal: the progress line is shown
     proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "simulate", "hoop", "--theta1", "0.3", "--t-end", "1e6",
-         "--dt", "0.01", "--method", "midpoint", "--max-steps", "1e9"],
-        stdout=subprocess.PIPE, stderr=child, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "viz.cli",
+            "simulate",
+            "hoop",
+            "--theta1",
+            "0.3",
+            "--t-end",
+            "1e6",
+            "--dt",
+            "0.01",
+            "--method",
+            "midpoint",
+            "--max-steps",
+            "1e9",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=child,
+        text=True,
+    )
     os.close(child)
     seen = b""
     deadline = time.monotonic() + scaled(120)
@@ -306,9 +323,20 @@ def test_json_is_valid_even_when_a_result_is_not_finite():
 
 def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
     out = mechviz(
-        "simulate", "hoop", "--theta1", "0.5", "--theta2", "-0.3", "--t-end", "10",
-        "--method", "dop853", "--rtol", "1e-12", "--json",
-    )  # fmt: skip
+        "simulate",
+        "hoop",
+        "--theta1",
+        "0.5",
+        "--theta2",
+        "-0.3",
+        "--t-end",
+        "10",
+        "--method",
+        "dop853",
+        "--rtol",
+        "1e-12",
+        "--json",
+    )
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout)
     assert 0.0 < r["error_vs_reference"] < 1e-9
@@ -321,15 +349,37 @@ def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
     # potential's zero at the pivot, that read as -2e-9. From 90 degrees (E0 = 0 up to round-off)
     # it read as -5e10.
     out = mechviz(
-        "simulate", "hoop", "--theta1", "0.0033333333333333335", "--theta2", "-0.01",
-        "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
-    )  # fmt: skip
+        "simulate",
+        "hoop",
+        "--theta1",
+        "0.0033333333333333335",
+        "--theta2",
+        "-0.01",
+        "--t-end",
+        "10",
+        "--method",
+        "rk4",
+        "--dt",
+        "0.05",
+        "--json",
+    )
     r = json.loads(out.stdout)
     assert -3e-4 < r["energy_drift"] < -5e-5
     out = mechviz(
-        "simulate", "hoop", "--theta1", "1.5707963267948966", "--theta2", "1.5707963267948966",
-        "--t-end", "10", "--method", "rk4", "--dt", "0.05", "--json",
-    )  # fmt: skip
+        "simulate",
+        "hoop",
+        "--theta1",
+        "1.5707963267948966",
+        "--theta2",
+        "1.5707963267948966",
+        "--t-end",
+        "10",
+        "--method",
+        "rk4",
+        "--dt",
+        "0.05",
+        "--json",
+    )
     assert abs(json.loads(out.stdout)["max_energy_error"]) < 1e-2
 
 
@@ -358,8 +408,10 @@ print("not interrupted")
 def test_ctrl_c_inside_code_that_swallows_keyboard_interrupt_still_ends_the_run():
     proc = subprocess.Popen(
         [sys.executable, "-c", _SWALLOWING_CALLBACK],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     assert proc.stdout.readline().strip() == "inside"
     proc.send_signal(signal.SIGINT)
     # the script sleeps 60 s if the interrupt is lost: ending well before that is the check
@@ -376,9 +428,12 @@ def test_ctrl_c_ends_a_bench_run_while_it_compiles_on_every_core_and_writes_noth
     out = tmp_path / "out"
     proc = subprocess.Popen(
         [sys.executable, "-m", "viz.cli", "bench", "--quick", "--out", str(out)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
         start_new_session=True,
-    )  # fmt: skip
+    )
     wait_until(  # the workers have begun to compile
         lambda: (tmp_path / "cache").exists() and len(descendants(proc.pid)) >= 2,
         60,

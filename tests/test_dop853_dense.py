@@ -109,8 +109,19 @@ def test_a_run_sampled_every_frame_is_the_dense_output_of_one_unsampled_run(tol)
     # 4e-11 at the end at 1e-6), far below the tolerance
     np.testing.assert_allclose(states, same, rtol=0, atol=1e-10)
 
-    whole = solve_ivp(_scipy_rhs(system), (0.0, 10.0), HOOP_STATE, method="DOP853", rtol=tol,
-                      atol=tol, dense_output=True).sol(times).T  # fmt: skip
+    whole = (
+        solve_ivp(
+            _scipy_rhs(system),
+            (0.0, 10.0),
+            HOOP_STATE,
+            method="DOP853",
+            rtol=tol,
+            atol=tol,
+            dense_output=True,
+        )
+        .sol(times)
+        .T
+    )
     assert np.all(np.abs(states - whole) < 30 * tol * (1.0 + np.abs(whole)))
 
 
@@ -236,8 +247,9 @@ def test_a_final_time_is_the_end_point_of_a_step_cut_there(tol):
     T = 30.0
     run = Simulation(system, "dop853", rtol=tol, atol=tol, state=CHARGE_STATE, reference=None)
     end = run.run(T, n_samples=2).states[-1, 0]
-    scipy_end = solve_ivp(_scipy_rhs(system), (0.0, T), CHARGE_STATE, method="DOP853", rtol=tol,
-                          atol=tol).y[:, -1]  # fmt: skip
+    scipy_end = solve_ivp(
+        _scipy_rhs(system), (0.0, T), CHARGE_STATE, method="DOP853", rtol=tol, atol=tol
+    ).y[:, -1]
     np.testing.assert_allclose(end, scipy_end, rtol=1e-13, atol=1e-13)
     dense = Simulation(system, "dop853", rtol=tol, atol=tol, state=CHARGE_STATE, reference=None)
     dense.advance_to(T)

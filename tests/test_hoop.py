@@ -185,8 +185,9 @@ def test_energy_above_rest_is_the_energy_plus_the_hanging_floor():
     rng = np.random.default_rng(3)
     states = rng.uniform(-2.0, 2.0, (50, 4))
     floor = (p.hoop_mass + 2 * p.bead_mass) * p.gravity * p.radius
-    np.testing.assert_allclose(hoop.energy_above_rest(p, states), hoop.energy(p, states) + floor,
-                               rtol=1e-13)  # fmt: skip
+    np.testing.assert_allclose(
+        hoop.energy_above_rest(p, states), hoop.energy(p, states) + floor, rtol=1e-13
+    )
     assert hoop.energy_above_rest(p, np.zeros(4)) == 0.0
 
 

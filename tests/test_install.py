@@ -23,8 +23,11 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     # the working tree's files as git sees them, copied: the build leaves nothing in the checkout
     files = subprocess.run(
-        ["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, capture_output=True,
-        text=True, check=True,
+        ["git", "ls-files", "-co", "--exclude-standard"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
     ).stdout.split()
     src = tmp_path / "src"
     for name in files:
@@ -33,14 +36,31 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(tmp_path):
             shutil.copy2(ROOT / name, src / name)
     pip = subprocess.run(
         [str(py), "-m", "pip", "install", "-q", str(src)],
-        capture_output=True, text=True, timeout=1800, env=env, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+        env=env,
+        cwd=tmp_path,
     )
     assert pip.returncode == 0, pip.stderr[-2000:]
     out = tmp_path / "out"
     run = subprocess.run(
-        [str(venv / "bin" / "mechviz"), "record", "helix", "--out", str(out),
-         "--duration", "1", "--fps", "5"],
-        capture_output=True, text=True, timeout=900, env=env, cwd=tmp_path,
+        [
+            str(venv / "bin" / "mechviz"),
+            "record",
+            "helix",
+            "--out",
+            str(out),
+            "--duration",
+            "1",
+            "--fps",
+            "5",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
+        cwd=tmp_path,
     )
     assert run.returncode == 0, run.stderr
     manifest = json.loads((out / "helix.json").read_text())
@@ -49,6 +69,10 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(tmp_path):
     # the code that ran is the installed copy, not the checkout
     where = subprocess.run(
         [str(py), "-c", "import viz, dynamics.assets as a; print(viz.__file__, a.asset('demos'))"],
-        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        cwd=tmp_path,
     )
     assert str(ROOT) not in where.stdout and "share/mechviz/demos" in where.stdout, where.stdout

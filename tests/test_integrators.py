@@ -326,9 +326,12 @@ def test_the_disk_cache_stops_growing_once_every_method_has_run(tmp_path):
     sizes = []
     for _ in range(3):
         run = subprocess.run(
-            [sys.executable, "-c", _EVERY_METHOD], env=env, capture_output=True, text=True,
+            [sys.executable, "-c", _EVERY_METHOD],
+            env=env,
+            capture_output=True,
+            text=True,
             timeout=600,
-        )  # fmt: skip
+        )
         assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr[-2000:]
         sizes.append(sorted(str(f.relative_to(cache)) for f in cache.rglob("*.nbc")))
     assert sizes[0] and sizes[1] == sizes[0] and sizes[2] == sizes[0]

@@ -153,7 +153,9 @@ def test_wobble_about_the_intermediate_axis_grows_at_the_linear_rate():
     of log |w_perp| read 2.6 % off with an extra spin of 0.02; the fit of both exponentials
     does not depend on when the growing one dominates."""
     t, w, theory = _wobble(60, 0.02)
-    assert measure.wobble_growth_rate(t, w).value == pytest.approx(theory, rel=ACCURACY["wobble"][0])
+    assert measure.wobble_growth_rate(t, w).value == pytest.approx(
+        theory, rel=ACCURACY["wobble"][0]
+    )
     few = measure.wobble_growth_rate(t[:3], w[:3])
     assert not few and "samples" in few.reason
     flat = measure.wobble_growth_rate(t[:20], w[:20])
@@ -202,6 +204,7 @@ def _measure(name, fps, noise, rng):
     """``(estimate, truth)`` of one estimator on its test motion; ``noise``: Gaussian with that
     fraction of the size of each sampled quantity (radius, speed, amplitude, spin; 1e-3 rad on
     the disk's angle; the wobble's components each of their own size)."""
+
     def n(shape, size):
         return noise * size * rng.standard_normal(shape)
 
@@ -252,8 +255,11 @@ def test_the_readme_states_the_accuracies_the_tests_measure():
     from pathlib import Path
 
     readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
-    rows = {line.split("|")[1].strip().strip("`"): line for line in readme.splitlines()
-            if line.startswith("| `") and line.count("|") >= 6}  # fmt: skip
+    rows = {
+        line.split("|")[1].strip().strip("`"): line
+        for line in readme.splitlines()
+        if line.startswith("| `") and line.count("|") >= 6
+    }
     for name, (exact, noisy) in ACCURACY.items():
         key = "wobble_growth_rate" if name == "wobble" else name
         cells = [c.strip() for c in rows[key].split("|")]
@@ -264,7 +270,9 @@ def test_the_readme_states_the_accuracies_the_tests_measure():
 # --------------------------------------------------------------------------- jumps
 def test_a_kick_keeps_time_and_counts_and_the_run_follows_the_kicked_orbit():
     p = cy.CyclotronParams()
-    sim = dynamics.Simulation(dynamics.Cyclotron(p), "boris", dt=0.01, state=cy.circular_orbit_state(p, 1.0))
+    sim = dynamics.Simulation(
+        dynamics.Cyclotron(p), "boris", dt=0.01, state=cy.circular_orbit_state(p, 1.0)
+    )
     sim.advance_to(5.0)
     t, steps, nfev = sim.t, sim.steps, sim.nfev
     kicked, centre, radius = cy.radial_kick(p, sim.state[0], 0.5)

@@ -89,7 +89,8 @@ def _imports(name: str, path: Path, known: set[str]) -> set[str]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     typing_only = {
-        id(n) for node in ast.walk(tree)
+        id(n)
+        for node in ast.walk(tree)
         if isinstance(node, ast.If) and ast.unparse(node.test).endswith("TYPE_CHECKING")
         for n in ast.walk(node)
     }
@@ -119,8 +120,9 @@ def _imports(name: str, path: Path, known: set[str]) -> set[str]:
 def test_the_packages_have_no_import_cycle_counting_imports_inside_functions():
     mods = _modules()
     known = set(mods)
-    graph = {n: {m for m in _imports(n, p, known) if not n.startswith(m + ".")}
-             for n, p in mods.items()}
+    graph = {
+        n: {m for m in _imports(n, p, known) if not n.startswith(m + ".")} for n, p in mods.items()
+    }
     # an import of a package runs its __init__, which a submodule of it may not import back
     cycles = []
     state: dict[str, int] = {}
@@ -129,7 +131,7 @@ def test_the_packages_have_no_import_cycle_counting_imports_inside_functions():
         state[n] = 1
         for m in sorted(graph[n]):
             if state.get(m) == 1:
-                cycles.append(stack[stack.index(m):] + [m] if m in stack else [n, m])
+                cycles.append(stack[stack.index(m) :] + [m] if m in stack else [n, m])
             elif m not in state:
                 visit(m, [*stack, m])
         state[n] = 2
@@ -141,6 +143,9 @@ def test_the_packages_have_no_import_cycle_counting_imports_inside_functions():
 
 
 def test_no_module_is_over_six_hundred_lines():
-    long = {str(p.relative_to(ROOT)): n for p in _modules().values()
-            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 600}
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in _modules().values()
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > 600
+    }
     assert not long, long

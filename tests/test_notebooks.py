@@ -42,11 +42,11 @@ def test_notebook_runs_and_shows_its_demo(path, tmp_path):
     shows = [c for c in nb.cells if c.cell_type == "code" and "notebook.show(" in c.source]
     assert shows, "each example embeds a recorded demo"
     for cell in shows:
-        html = "".join(
-            o.get("data", {}).get("text/html", "") for o in cell.outputs if "data" in o
-        )
+        html = "".join(o.get("data", {}).get("text/html", "") for o in cell.outputs if "data" in o)
         assert "mechviz-embed" in html and "__VISER_EMBED_DATA__" in html, cell.source
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"]
+    errors = [
+        o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"
+    ]
     assert not errors
 
 

@@ -99,7 +99,9 @@ MODE_1 = {"op": "set", "mode": "mode 1", "amplitude": 1.5}
         ("Disk", "disk", ("w2", "w3"), "polhode", ("reset",)),
     ],
 )
-def test_the_plot_shows_the_motion_and_its_exact_curve(viewer, tmp_path, tab, key, pair, name, start):
+def test_the_plot_shows_the_motion_and_its_exact_curve(
+    viewer, tmp_path, tab, key, pair, name, start
+):
     from viz.model.plot import CURVE_COLOURS, PATH_COLOUR
 
     app, page = viewer
@@ -129,6 +131,8 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
         rows, cols = np.nonzero(drawn[:, : img.shape[1] - 360])  # left of the panel's corner
         cy, cx = int(np.median(rows)), int(np.median(cols))
         half = 260  # the README's still: the body and its construction, not the floor
-        _save(img[max(0, cy - half) : cy + half, max(0, cx - half) : cx + half], "poinsot", tmp_path)
+        _save(
+            img[max(0, cy - half) : cy + half, max(0, cx - half) : cx + half], "poinsot", tmp_path
+        )
     finally:
         app.enqueue("app", {"op": "present", "value": "Off"})

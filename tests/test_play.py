@@ -88,8 +88,10 @@ def test_a_client_that_goes_away_is_not_an_error(tmp_path):
     (tmp_path / "big.viser").write_bytes(os.urandom(8 << 20))
     proc = subprocess.Popen(
         [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         line = proc.stdout.readline()
         port = int(line.split("http://127.0.0.1:", 1)[1].split("/", 1)[0])
@@ -112,8 +114,10 @@ def test_a_port_out_of_range_is_refused_with_status_2(tmp_path):
     (tmp_path / "a.viser").write_bytes(RECORDING)
     out = subprocess.run(
         [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "70000"],
-        capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
         "mechviz: error: --port: must be from 0 to 65535, got 70000"

@@ -78,7 +78,9 @@ def test_the_charge_sits_in_its_well_at_the_level_of_its_transverse_energy():
     v = CyclotronExhibit.plot_variables(cfg)
     e_perp = 0.5 * p.mass * (smp.states[:, 3] ** 2 + smp.states[:, 4] ** 2)
     gap = e_perp - v["V_eff"].values(smp)
-    np.testing.assert_allclose(gap, v["p_r"].values(smp) ** 2 / (2 * p.mass), atol=1e-12 * e_perp.max())
+    np.testing.assert_allclose(
+        gap, v["p_r"].values(smp) ** 2 / (2 * p.mass), atol=1e-12 * e_perp.max()
+    )
     assert np.ptp(v["r"].values(smp)) > 0.1  # r swings: the point moves in the well
     well, level, bottom = CyclotronExhibit.plot_curves(cfg, "r", "V_eff", smp)
     assert level.y[0] == pytest.approx(e_perp[-1], rel=1e-12)
@@ -91,7 +93,9 @@ def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendul
     at the bottom with theta' = 2.05 w1 stays outside (over the top)."""
     cfg = HoopConfig()
     w1 = float(hp.normal_modes(cfg.physics())[0][0])
-    sep = HoopExhibit.plot_curves(cfg, "theta1", "omega1", samples_of(HoopExhibit, cfg, 0.1, n=2))[0]
+    sep = HoopExhibit.plot_curves(cfg, "theta1", "omega1", samples_of(HoopExhibit, cfg, 0.1, n=2))[
+        0
+    ]
     np.testing.assert_allclose(0.5 * sep.y**2 - w1**2 * np.cos(sep.x), w1**2, atol=1e-12)
 
     period = hp.mode1_period(cfg.physics(), 3.0)
@@ -104,8 +108,9 @@ def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendul
     np.testing.assert_allclose(e_path, e_path[0], atol=1e-9 * w1**2)
     ok = np.isfinite(orbit.y)
     assert ok.sum() > 100  # the swing's orbit, not the whole circle
-    np.testing.assert_allclose(0.5 * orbit.y[ok] ** 2 - w1**2 * np.cos(orbit.x[ok]), e_path[-1],
-                               atol=1e-12 * w1**2)  # fmt: skip
+    np.testing.assert_allclose(
+        0.5 * orbit.y[ok] ** 2 - w1**2 * np.cos(orbit.x[ok]), e_path[-1], atol=1e-12 * w1**2
+    )
 
     over = samples_of(HoopExhibit, cfg, 3.0, state=np.array([0.0, 0.0, 2.05 * w1, 2.05 * w1]))
     th, rate = over.states[:, 0], over.states[:, 2]
@@ -140,7 +145,9 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
         a, b = moments[i] * (moments[k] - moments[i]), moments[j] * (moments[k] - moments[j])
         c = two_e * moments[k] - l2
         w = smp.states[:, :3]
-        np.testing.assert_allclose(a * w[:, i] ** 2 + b * w[:, j] ** 2, c, atol=1e-9 * two_e * moments[k])
+        np.testing.assert_allclose(
+            a * w[:, i] ** 2 + b * w[:, j] ** 2, c, atol=1e-9 * two_e * moments[k]
+        )
         (curve,) = DiskExhibit.plot_curves(cfg, x, y, smp)
         ok = np.isfinite(curve.x)
         on_curve = a * curve.x[ok] ** 2 + b * curve.y[ok] ** 2
@@ -172,7 +179,11 @@ def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_oth
         app.exhibits["disk"].apply({"op": "set", "mode": "released"})
         disk.refresh_plot(force=True)
         released = DiskExhibit.plot_variables(app.exhibits["disk"].config)
-        assert disk.plot_choice == DiskExhibit.default_plot(app.exhibits["disk"].config) == ("w2", "w3")
+        assert (
+            disk.plot_choice
+            == DiskExhibit.default_plot(app.exhibits["disk"].config)
+            == ("w2", "w3")
+        )
         assert tuple(app.w["disk.plot_x"].options) == tuple(v.label for v in released.values())
     finally:
         app.stop()

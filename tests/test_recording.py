@@ -162,7 +162,9 @@ def _files(folder: Path) -> dict[str, bytes | str]:
     out: dict[str, bytes | str] = {}
     for p in sorted(folder.rglob("*")) if folder.exists() else []:
         key = str(p.relative_to(folder))
-        out[key] = f"-> {os.readlink(p)}" if p.is_symlink() else p.read_bytes() if p.is_file() else "dir"
+        out[key] = (
+            f"-> {os.readlink(p)}" if p.is_symlink() else p.read_bytes() if p.is_file() else "dir"
+        )
     return out
 
 
@@ -249,10 +251,17 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     out, results = recorded
     demo = results["beam"].demo
     live = CyclotronExhibit(server)
-    live.apply({
-        "op": "set", "method": demo.method, "dt": demo.dt, "vz": demo.initial.vz,
-        "beam": True, "beam_size": demo.initial.beam, "beam_speeds": demo.initial.speeds,
-    })  # fmt: skip
+    live.apply(
+        {
+            "op": "set",
+            "method": demo.method,
+            "dt": demo.dt,
+            "vz": demo.initial.vz,
+            "beam": True,
+            "beam_size": demo.initial.beam,
+            "beam_speeds": demo.initial.speeds,
+        }
+    )
     rows = list(csv.DictReader(io.StringIO((out / "beam.csv").read_text())))
     names = dynamics.SYSTEMS["cyclotron"].state_names
     first = np.array([[float(r[n]) for n in names] for r in rows if float(r["t"]) == 0.0])
@@ -264,7 +273,11 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     ("name", "figure", "readout"),
     [
         ("helix", "gyrofrequency", lambda m: m["gyrofrequency"].value),
-        ("hoop-mode2", "mode 2 frequency (linear theory)", lambda m: m["mode_frequencies"][1].value),
+        (
+            "hoop-mode2",
+            "mode 2 frequency (linear theory)",
+            lambda m: m["mode_frequencies"][1].value,
+        ),
         ("driven-disk", "bearing force amplitude at B", lambda m: m["bearing_force"].value),
         ("tumbling-disk", "wobble growth rate", lambda m: m["growth_rate"].value),
     ],
@@ -338,7 +351,8 @@ def test_bad_arguments_give_a_one_line_error_and_exit_status_2(argv, message, ca
 
 
 @pytest.mark.parametrize(
-    ("extra", "named"), [("dt = 1e-9\n", "dt = 1e-09"), ("dt = 0.01\nspeed = 1e9\n", "speed x duration")]
+    ("extra", "named"),
+    [("dt = 1e-9\n", "dt = 1e-09"), ("dt = 0.01\nspeed = 1e9\n", "speed x duration")],
 )
 def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys, extra, named):
     demo_file = tmp_path / "huge.toml"
@@ -369,10 +383,17 @@ def test_demo_files_reject_unknown_keys():
         rec.parse_demo({"colour": 1}, name="x")
     with pytest.raises(ValueError, match=r"x.toml: charg is not a parameter of the cyclotron"):
         rec.parse_demo(
-            {"title": "t", "description": "d", "exhibit": "cyclotron", "method": "boris",
-             "dt": 0.1, "duration": 1.0, "parameters": {"charg": 1.0}},
+            {
+                "title": "t",
+                "description": "d",
+                "exhibit": "cyclotron",
+                "method": "boris",
+                "dt": 0.1,
+                "duration": 1.0,
+                "parameters": {"charg": 1.0},
+            },
             name="x",
-        )  # fmt: skip
+        )
 
 
 # --------------------------------------------------------------------------- play
@@ -470,11 +491,21 @@ def test_the_csv_holds_the_quantities_of_the_pictures_and_they_obey_their_physic
 @pytest.mark.parametrize(
     ("name", "nodes"),
     [
-        ("tumbling-disk", ("/disk/poinsot/ellipsoid", "/disk/invariable_plane/plane",
-                           "/disk/poinsot/polhode/c000001", "/disk/invariable_plane/herpolhode/c000001")),
-        ("hoop-mode1", ("/hoop/configuration_space/modes", "/hoop/configuration_space/path/c000001")),
+        (
+            "tumbling-disk",
+            (
+                "/disk/poinsot/ellipsoid",
+                "/disk/invariable_plane/plane",
+                "/disk/poinsot/polhode/c000001",
+                "/disk/invariable_plane/herpolhode/c000001",
+            ),
+        ),
+        (
+            "hoop-mode1",
+            ("/hoop/configuration_space/modes", "/hoop/configuration_space/path/c000001"),
+        ),
     ],
-)  # fmt: skip
+)
 def test_the_3d_pictures_are_in_the_scene_recording(recorded, name, nodes):
     """Poinsot's construction with its polhode and herpolhode traced, and configuration space
     with the path drawn: their scene nodes are in the .viser."""

@@ -75,7 +75,10 @@ def test_every_front_end_starts_a_system_from_the_same_default(system, app, serv
     from_demo = _start(EXHIBITS[system](server, demo.config()))
 
     for name, (state, params, method) in {
-        "cli": from_cli, "api": from_api, "viewer": from_viewer, "demo": from_demo,
+        "cli": from_cli,
+        "api": from_api,
+        "viewer": from_viewer,
+        "demo": from_demo,
     }.items():
         np.testing.assert_allclose(state, want.state, rtol=0, atol=1e-15, err_msg=name)
         assert params == pytest.approx(want.params.__dict__), name
@@ -172,8 +175,12 @@ def test_the_step_control_is_one_value_checked_once():
     assert dynamics.step_control(rk4, dt=0.1) == dynamics.Fixed(0.1)
     assert dynamics.step_control(dop, rtol=1e-6) == dynamics.Tolerance(1e-6, 1e-6)
     assert dynamics.step_control(exact) == dynamics.Exact()
-    for method, kw, field in [(rk4, {}, "dt"), (rk4, {"dt": -1}, "dt"), (dop, {"rtol": 1}, "rtol"),
-                              (dop, {"rtol": 1e-6, "atol": 0}, "atol")]:
+    for method, kw, field in [
+        (rk4, {}, "dt"),
+        (rk4, {"dt": -1}, "dt"),
+        (dop, {"rtol": 1}, "rtol"),
+        (dop, {"rtol": 1e-6, "atol": 0}, "atol"),
+    ]:
         with pytest.raises(dynamics.SettingError) as err:
             dynamics.step_control(method, **kw)
         assert err.value.field == field

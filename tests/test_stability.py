@@ -209,7 +209,9 @@ LONG = {
     # system, step, 10^4 periods of the slowest motion
     "hoop": (Hoop(), 0.02, 1e4 * HOOP_PERIOD),
     "free-body": (
-        ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)), 0.2, 1e4 * 2.0 * math.pi
+        ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
+        0.2,
+        1e4 * 2.0 * math.pi,
     ),
     "cyclotron": (Cyclotron(), 0.1, 1e4 * 2.0 * math.pi),
 }
@@ -221,9 +223,13 @@ STATES = {"cyclotron": GYRATION}
 
 @pytest.mark.parametrize(
     "name, method",
-    [("hoop", "verlet"), ("hoop", "yoshida4"), ("free-body", "splitting"),
-     ("free-body", "yoshida4")],
-)  # fmt: skip
+    [
+        ("hoop", "verlet"),
+        ("hoop", "yoshida4"),
+        ("free-body", "splitting"),
+        ("free-body", "yoshida4"),
+    ],
+)
 def test_symplectic_methods_keep_the_energy_error_bounded_over_ten_thousand_periods(name, method):
     system, dt, t_end = LONG[name]
     err = energy_history(system, method, dt, t_end, state=STATES.get(name))

@@ -101,8 +101,9 @@ def test_a_state_changed_between_calls_starts_a_fresh_step():
     sim.advance_to(0.01)  # inside the first step
     sim.state[0] = [0.1, 0.2, 0.0, 0.0]
     sim.advance_to(1.0)
-    fresh = Simulation(system, "taylor", rtol=1e-10, atol=1e-10, state=[0.1, 0.2, 0.0, 0.0],
-                       reference=None)  # fmt: skip
+    fresh = Simulation(
+        system, "taylor", rtol=1e-10, atol=1e-10, state=[0.1, 0.2, 0.0, 0.0], reference=None
+    )
     fresh.advance_to(0.99)
     np.testing.assert_allclose(sim.state, fresh.state, rtol=1e-9, atol=1e-9)
 
@@ -151,8 +152,24 @@ def _ensemble_run(run, sys_id, Y0):
     stats = np.zeros((n, 3), dtype=np.int64)
     status = np.zeros(3, dtype=np.int64)
     order, a = taylor.order_for(1e-9, 1e-9, sys_id)
-    total = run(sys_id, Y, system.kernel_params(), 0.0, 3.0, 1e-9, 1e-9, order, a, stats, status,
-                carry.kept, carry.base, carry.comp, carry.span, carry.last)  # fmt: skip
+    total = run(
+        sys_id,
+        Y,
+        system.kernel_params(),
+        0.0,
+        3.0,
+        1e-9,
+        1e-9,
+        order,
+        a,
+        stats,
+        status,
+        carry.kept,
+        carry.base,
+        carry.comp,
+        carry.span,
+        carry.last,
+    )
     return Y, stats, status, total
 
 
@@ -188,8 +205,9 @@ def test_a_large_ensemble_runs_in_parallel_with_the_serial_result(monkeypatch):
     runs = []
     for threshold in (1 << 62, 2):
         monkeypatch.setattr(taylor, "PARALLEL_MIN", threshold)
-        sim = Simulation(SYSTEMS[HOOP], "taylor", rtol=1e-9, atol=1e-9, state=states,
-                         reference=None)  # fmt: skip
+        sim = Simulation(
+            SYSTEMS[HOOP], "taylor", rtol=1e-9, atol=1e-9, state=states, reference=None
+        )
         sim.run(2.0, n_samples=5)
         runs.append((sim.state.copy(), sim.steps))
     assert np.array_equal(runs[0][0], runs[1][0]) and runs[0][1] == runs[1][1]

@@ -125,9 +125,20 @@ def _has_words(frame: np.ndarray) -> bool:
 def test_record_video_has_the_requested_frames_fps_and_duration_and_moves(capsys, tmp_path, fmt):
     browser.require_browser()
     status, out, err = _mechviz(
-        capsys, "record", "helix", "--out", str(tmp_path), "--duration", "2", "--fps", "10",
-        "--video", fmt, "--size", f"{SIZE[0]}x{SIZE[1]}",
-    )  # fmt: skip
+        capsys,
+        "record",
+        "helix",
+        "--out",
+        str(tmp_path),
+        "--duration",
+        "2",
+        "--fps",
+        "10",
+        "--video",
+        fmt,
+        "--size",
+        f"{SIZE[0]}x{SIZE[1]}",
+    )
     assert status == 0, err
     path = tmp_path / f"helix.{fmt}"
     assert path.is_file() and str(path) in out
@@ -159,9 +170,14 @@ def test_video_converts_a_viser_file_and_a_bare_html_page(capsys, recording, tmp
     # Beside its manifest: the demo's duration and fps.
     target = tmp_path / "clip.mp4"
     status, _, err = _mechviz(
-        capsys, "video", str(recording / "helix.viser"), "--out", str(target),
-        "--size", f"{SIZE[0]}x{SIZE[1]}",
-    )  # fmt: skip
+        capsys,
+        "video",
+        str(recording / "helix.viser"),
+        "--out",
+        str(target),
+        "--size",
+        f"{SIZE[0]}x{SIZE[1]}",
+    )
     assert status == 0, err
     meta, frames = _mp4_frames(target)
     assert (len(frames), meta["fps"]) == (10, 10)
@@ -170,7 +186,15 @@ def test_video_converts_a_viser_file_and_a_bare_html_page(capsys, recording, tmp
     page = tmp_path / "session.html"
     shutil.copy(recording / "helix.html", page)
     status, _, err = _mechviz(
-        capsys, "video", str(page), "--format", "gif", "--fps", "5", "--size", f"{SIZE[0]}x{SIZE[1]}"
+        capsys,
+        "video",
+        str(page),
+        "--format",
+        "gif",
+        "--fps",
+        "5",
+        "--size",
+        f"{SIZE[0]}x{SIZE[1]}",
     )
     assert status == 0, err
     delays, frames = _gif_frames(tmp_path / "session.gif")

@@ -134,7 +134,9 @@ def test_driven_disk_pose_and_bearing_forces_equal_dynamics(app):
             arrows[k, 1] - arrows[k, 0], P @ force * ex.force_scale, atol=1e-5
         )
     # the measured amplitude (dL/dt of the sampled motion) agrees with m R omega^2 / 2
-    assert ex.measured()["bearing_force"].value == pytest.approx(dk.axle_force_amplitude(p), rel=1e-3)
+    assert ex.measured()["bearing_force"].value == pytest.approx(
+        dk.axle_force_amplitude(p), rel=1e-3
+    )
 
 
 def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
@@ -449,8 +451,10 @@ def test_the_released_disk_shows_its_principal_axes_about_the_centre_of_mass(ser
     ex.apply({"op": "set", "mode": "released"})
     moments, axes = dk.principal_axes_cm(p)
     assert "about the centre of mass" in ex.readout()
-    assert all(f"I{k + 1} {c} {m / mr2:.4g}" in ex.readout()
-               for k, (m, c) in enumerate(zip(moments, ("(red)", "(green)", "(blue)"), strict=True)))
+    assert all(
+        f"I{k + 1} {c} {m / mr2:.4g}" in ex.readout()
+        for k, (m, c) in enumerate(zip(moments, ("(red)", "(green)", "(blue)"), strict=True))
+    )
     pts = ex.axes_node.points.astype(float)
     np.testing.assert_allclose(pts[:, 0], np.tile(dk.centre_of_mass(p), (3, 1)), atol=1e-6)
     np.testing.assert_allclose(pts[:, 1] - pts[:, 0], axes * 1.3 * p.radius, atol=1e-6)
@@ -581,7 +585,12 @@ def _on_screen_left_of_panel(app, view, key, *, centred=False) -> bool:
 def test_the_first_view_and_each_preset_show_their_exhibits_whole_left_of_the_panel(app):
     for key in app.exhibits:
         assert _on_screen_left_of_panel(app, "All", key), key
-    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop"), ("Top", "cyclotron")):
+    for view, key in (
+        ("Cyclotron", "cyclotron"),
+        ("Disk", "disk"),
+        ("Hoop", "hoop"),
+        ("Top", "cyclotron"),
+    ):
         assert _on_screen_left_of_panel(app, view, key, centred=True), view
 
 
@@ -593,8 +602,11 @@ def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
         for _ in range(4):
             app.step_frame()
         for view in ("All", "Cyclotron", "Disk", "Hoop", "Top"):
-            boxes = [b for b in screen.label_boxes(app.server, app.camera_preset(view), *PAGE)
-                     if b.x0 < PANEL_LEFT]  # fmt: skip
+            boxes = [
+                b
+                for b in screen.label_boxes(app.server, app.camera_preset(view), *PAGE)
+                if b.x0 < PANEL_LEFT
+            ]
             assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
 
 
@@ -668,7 +680,9 @@ def test_the_released_disk_draws_poinsot_with_the_contact_point_on_the_invariabl
     plane_normal = P @ pc["normal"]
     centre = np.asarray(pc_view.frame.position, float)
     plane_at = np.asarray(pc_view.plane_frame.position, float)
-    assert (plane_at - centre) @ plane_normal == pytest.approx(pc["distance"] * pc_view.scale, rel=1e-6)
+    assert (plane_at - centre) @ plane_normal == pytest.approx(
+        pc["distance"] * pc_view.scale, rel=1e-6
+    )
     # the contact point, drawn on the ellipsoid, lies in the plane
     contact = centre + P @ pc["contact_space"] * pc_view.scale
     assert (contact - plane_at) @ plane_normal == pytest.approx(0.0, abs=1e-6)

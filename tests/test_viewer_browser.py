@@ -21,7 +21,6 @@ from waiting import frames_later, scaled, wait_until
 pytestmark = pytest.mark.browser
 
 
-
 @pytest.fixture(scope="module")
 def viewer():
     browser.require_browser()

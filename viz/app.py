@@ -65,7 +65,10 @@ VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exh
 PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
 PRESENT_DISTANCE = 0.7  # presentation mode's camera distance, times the preset's
 PANEL_SHIFT = 0.3  # of the viewing distance: a preset's sideways slide clear of the GUI panel
-OVERVIEW = ((1.5, -8.4, 3.9), (1.5, 0.0, 1.0))  # the three exhibits left of the GUI panel at 1280x800
+OVERVIEW = (
+    (1.5, -8.4, 3.9),
+    (1.5, 0.0, 1.0),
+)  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -157,9 +160,11 @@ class MechvizApp:
             # the map is also the scene's ambient light: without it, faces turned away from the
             # default directional lights render black (the disk, seen edge-on to them)
             scene.add_light_hemisphere(
-                "/lights/sky", sky_color=(255, 255, 255), ground_color=(110, 110, 120),
+                "/lights/sky",
+                sky_color=(255, 255, 255),
+                ground_color=(110, 110, 120),
                 intensity=1.2,
-            )  # fmt: skip
+            )
         if theme not in GRIDS:
             raise ValueError(f"theme must be one of {', '.join(GRIDS)}; got {theme!r}")
         self.theme = theme
@@ -244,7 +249,9 @@ class MechvizApp:
                 if target in self.exhibits:
                     panel = self.panels.get(target)
                     title = self.exhibits[target].title
-                    self.notify(f"Invalid value ({title})", panel.explain(exc) if panel else str(exc))
+                    self.notify(
+                        f"Invalid value ({title})", panel.explain(exc) if panel else str(exc)
+                    )
                     self._sync_widgets(target)
                 else:
                     self.notify("Invalid value", str(exc), color="red")
@@ -280,7 +287,9 @@ class MechvizApp:
         elif op == "chart_window":
             v = cmd.get("value")
             if v not in CHART_WINDOWS.values():
-                raise ValueError(f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {v!r}")
+                raise ValueError(
+                    f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {v!r}"
+                )
             self.chart_window = float(v)
             for ex in self.exhibits.values():
                 ex.set_chart_window(self.chart_window)
@@ -289,7 +298,9 @@ class MechvizApp:
             self._present(cmd.get("value"), cmd.get("client"))
         elif op == "theme":
             if cmd.get("value") not in GRIDS:
-                raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}")
+                raise ValueError(
+                    f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}"
+                )
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
@@ -313,9 +324,11 @@ class MechvizApp:
         """The page's theme; while presenting, the panel minimized (its button brings it back)."""
         if self.gui is not None:
             self.gui.configure_theme(
-                control_width="medium", show_logo=False, brand_color=(40, 110, 200),
+                control_width="medium",
+                show_logo=False,
+                brand_color=(40, 110, 200),
                 dark_mode=self.theme == "dark",
-            )  # fmt: skip
+            )
             if self.presenting:
                 self.gui.main_panel.minimize()
             else:
@@ -474,23 +487,32 @@ class MechvizApp:
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["present"] = gui.add_dropdown(
-                "Present", options=("Off", *VIEWS), initial_value="Off",
+                "Present",
+                options=("Off", *VIEWS),
+                initial_value="Off",
                 hint="One exhibit alone, larger text, the panel collapsible: for a projector",
-            )  # fmt: skip
+            )
             w["chart_window"] = gui.add_dropdown(
-                "Chart window", options=tuple(CHART_WINDOWS), initial_value="10 s",
+                "Chart window",
+                options=tuple(CHART_WINDOWS),
+                initial_value="10 s",
                 hint="How much of the past the energy and error charts show",
-            )  # fmt: skip
+            )
             w["theme"] = gui.add_dropdown(
-                "Theme", options=tuple(GRIDS), initial_value=self.theme,
+                "Theme",
+                options=tuple(GRIDS),
+                initial_value=self.theme,
                 hint="Light or dark page; the scene's colours read on both (also on a projector)",
-            )  # fmt: skip
+            )
         self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
 
         @w["present"].on_update
         def _(event) -> None:
             if not self._syncing:
-                self.enqueue("app", {"op": "present", "value": w["present"].value, "client": event.client})
+                self.enqueue(
+                    "app", {"op": "present", "value": w["present"].value, "client": event.client}
+                )
+
         self._on(
             w["chart_window"],
             lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),

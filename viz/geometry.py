@@ -40,18 +40,35 @@ TRAIL = (235, 95, 40)
 CENTRE = (160, 92, 225)  # guiding centre, centre of mass, pivot, the predicted circle
 AXES_RGB = ((230, 60, 60), (30, 160, 50), (60, 110, 240))
 PALETTE = {
-    "charge": CHARGE, "compare": COMPARE, "beam slow": BEAM[0], "beam fast": BEAM[1],
-    "field": FIELD, "disk": DISK, "rim": RIM, "bead": BEAD, "axle": AXLE, "stand": STAND,
-    "force": FORCE, "omega": OMEGA, "momentum": MOMENTUM, "torque": TORQUE, "hoop": HOOP, "ghost": GHOST,
-    "trail": TRAIL, "centre": CENTRE, **{f"axis {k + 1}": c for k, c in enumerate(AXES_RGB)},
-}  # fmt: skip
+    "charge": CHARGE,
+    "compare": COMPARE,
+    "beam slow": BEAM[0],
+    "beam fast": BEAM[1],
+    "field": FIELD,
+    "disk": DISK,
+    "rim": RIM,
+    "bead": BEAD,
+    "axle": AXLE,
+    "stand": STAND,
+    "force": FORCE,
+    "omega": OMEGA,
+    "momentum": MOMENTUM,
+    "torque": TORQUE,
+    "hoop": HOOP,
+    "ghost": GHOST,
+    "trail": TRAIL,
+    "centre": CENTRE,
+    **{f"axis {k + 1}": c for k, c in enumerate(AXES_RGB)},
+}
 
 
 def contrast(a, b) -> float:
     """WCAG contrast ratio of two sRGB colours (1 to 21)."""
 
     def luminance(c) -> float:
-        lin = [v / 12.92 if v <= 0.03928 else ((v + 0.055) / 1.055) ** 2.4 for v in np.asarray(c) / 255]
+        lin = [
+            v / 12.92 if v <= 0.03928 else ((v + 0.055) / 1.055) ** 2.4 for v in np.asarray(c) / 255
+        ]
         return 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
 
     hi, lo = sorted((luminance(a), luminance(b)), reverse=True)

@@ -14,12 +14,12 @@ library can swallow the signal (the one place the command line handles signals).
 A second signal while the first is being handled ends the process at once as well.
 
 - :func:`hold_sigint` / :func:`release_sigint`, :func:`sigint_held`: Ctrl-C held while libraries
-  import, and delivered as soon as they are done. Some libraries import their optional parts inside ``try: ... except BaseException:`` (trimesh
-does, and viser imports trimesh), so a ``KeyboardInterrupt`` raised during such an import is
-swallowed and the program carries on as if Ctrl-C had never been pressed. Blocking SIGINT in
-the importing thread (``pthread_sigmask``) keeps the signal pending instead; unblocking it
-afterwards delivers it, and the ``KeyboardInterrupt`` is raised at that point, outside the
-library's ``try``.
+  import, and delivered as soon as they are done. Some libraries import their optional parts
+  inside ``try: ... except BaseException:`` (trimesh does, and viser imports trimesh), so a
+  ``KeyboardInterrupt`` raised during such an import is swallowed and the program carries on as
+  if Ctrl-C had never been pressed. Blocking SIGINT in the importing thread
+  (``pthread_sigmask``) keeps the signal pending instead; unblocking it afterwards delivers it,
+  and the ``KeyboardInterrupt`` is raised at that point, outside the library's ``try``.
 """
 
 from __future__ import annotations

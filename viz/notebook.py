@@ -94,10 +94,15 @@ def demos() -> dict[str, str]:
 
 
 def load(
-    demo: str, *, duration: float | None = None, fps: int | None = None,
-    method: str | None = None, dt: float | None = None, dv: float | None = None,
+    demo: str,
+    *,
+    duration: float | None = None,
+    fps: int | None = None,
+    method: str | None = None,
+    dt: float | None = None,
+    dv: float | None = None,
     **parameters: float,
-):  # fmt: skip
+):
     """A demo (built-in name or ``.toml`` path) with changes, checked: ``duration`` [s of
     playback], ``fps``, ``method``, ``dt``, ``dv`` (every scripted kick's strength, m/s) and the
     exhibit's physical parameters by name (``field=2.0``). ``ValueError`` names what is wrong."""
@@ -123,9 +128,12 @@ def load(
 
 
 def show(
-    demo: str, *, height: int = DEFAULT_HEIGHT, save: str | os.PathLike | None = None,
+    demo: str,
+    *,
+    height: int = DEFAULT_HEIGHT,
+    save: str | os.PathLike | None = None,
     **changes: Any,
-) -> Embed:  # fmt: skip
+) -> Embed:
     """Record ``demo`` headless (with :func:`load`'s ``changes``) and return it for inline
     display; ``save`` writes the page to that file instead of into the notebook."""
     from dynamics.files import write_files_atomically
@@ -138,7 +146,9 @@ def show(
     src = None
     if save is not None:
         path = Path(save)
-        write_files_atomically(path.parent if str(path.parent) else Path("."), {path.name: recorded.html})
+        write_files_atomically(
+            path.parent if str(path.parent) else Path("."), {path.name: recorded.html}
+        )
         src = str(save)
     return Embed(d.name, d.title, recorded.html, figs, height, src)
 

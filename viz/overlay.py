@@ -86,7 +86,9 @@ class Overlay:
         label = f"t = {k / fps * self.speed:.2f} s"
         W, H = self.size
         w = d.textlength(label, font=self.f_text)
-        d.text((W - self.pad - w, H - self.pad - self.line_h), label, font=self.f_text, fill=self.ink)
+        d.text(
+            (W - self.pad - w, H - self.pad - self.line_h), label, font=self.f_text, fill=self.ink
+        )
         return np.asarray(img.convert("RGB"))
 
 

@@ -254,9 +254,7 @@ def render_frames(
                 for k in range(frames):
                     page.clock.run_for(ms[k] - prev)
                     prev = ms[k]
-                    shot = cdp.send(
-                        "Page.captureScreenshot", {"format": "png", "clip": clip}
-                    )
+                    shot = cdp.send("Page.captureScreenshot", {"format": "png", "clip": clip})
                     yield _decode_png(base64.b64decode(shot["data"]), W, H)
             except PlaywrightError as exc:
                 raise VideoError(f"Chromium failed while drawing the frames: {exc}") from None
@@ -275,7 +273,9 @@ def _open_player(page, html_path: Path, W: int, H: int, speed: float) -> dict[st
     # fixedDpr: the client would otherwise lower its resolution when frames are slow.
     page.goto(html_path.as_uri() + "?fixedDpr=1")
     # Overlays that are not part of the scene: the software-WebGL notice, notifications.
-    page.add_style_tag(content="[role=alert], .mantine-Notifications-root {display: none !important;}")
+    page.add_style_tag(
+        content="[role=alert], .mantine-Notifications-root {display: none !important;}"
+    )
     canvas = page.locator('canvas[data-engine^="three.js"]')
     time_box = page.get_by_role("textbox")
     deadline = time.monotonic() + LOAD_TIMEOUT_S
@@ -337,10 +337,26 @@ class _Mp4Writer:
         import imageio_ffmpeg
 
         self.gen = imageio_ffmpeg.write_frames(
-            str(path), size, fps=fps, codec="libx264", pix_fmt_in="rgb24",
-            pix_fmt_out="yuv420p", quality=None, macro_block_size=2, ffmpeg_log_level="error",
-            output_params=["-crf", "20", "-preset", "medium", "-movflags", "+faststart", "-f", "mp4"],
-        )  # fmt: skip
+            str(path),
+            size,
+            fps=fps,
+            codec="libx264",
+            pix_fmt_in="rgb24",
+            pix_fmt_out="yuv420p",
+            quality=None,
+            macro_block_size=2,
+            ffmpeg_log_level="error",
+            output_params=[
+                "-crf",
+                "20",
+                "-preset",
+                "medium",
+                "-movflags",
+                "+faststart",
+                "-f",
+                "mp4",
+            ],
+        )
         self.gen.send(None)
 
     def add(self, frame: np.ndarray) -> None:
@@ -377,8 +393,13 @@ class _GifWriter:
         img = Image.fromarray(frame)
         if self.palette is None:
             first = img.quantize(131, method=Image.Quantize.FASTOCTREE).getpalette()[: 131 * 3]
-            cube = [c for r in range(5) for g in range(5) for b in range(5)
-                    for c in (r * 63, g * 63, b * 63)]  # fmt: skip
+            cube = [
+                c
+                for r in range(5)
+                for g in range(5)
+                for b in range(5)
+                for c in (r * 63, g * 63, b * 63)
+            ]
             self.palette = Image.new("P", (1, 1))
             self.palette.putpalette(first + cube)
         indices = img.quantize(palette=self.palette, dither=Image.Dither.NONE).tobytes()
@@ -400,9 +421,14 @@ class _GifWriter:
         images = self._images()
         first = next(images)
         first.save(
-            self.path, format="GIF", save_all=True, append_images=images, loop=0,
-            duration=gif_delays_ms(len(self.frames), self.fps), optimize=False,
-        )  # fmt: skip
+            self.path,
+            format="GIF",
+            save_all=True,
+            append_images=images,
+            loop=0,
+            duration=gif_delays_ms(len(self.frames), self.fps),
+            optimize=False,
+        )
 
 
 @dataclass
@@ -436,9 +462,13 @@ def check_request(fmt: str, size: tuple[int, int], fps: int) -> None:
 
 
 def write_video(
-    clip: Clip, path: str | os.PathLike, *, fmt: str | None = None,
-    size: tuple[int, int] = DEFAULT_SIZE, progress: ProgressFn | None = None,
-) -> VideoResult:  # fmt: skip
+    clip: Clip,
+    path: str | os.PathLike,
+    *,
+    fmt: str | None = None,
+    size: tuple[int, int] = DEFAULT_SIZE,
+    progress: ProgressFn | None = None,
+) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`),
@@ -492,8 +522,9 @@ def write_video(
     return VideoResult(path, clip.frames, clip.fps, size, path.stat().st_size, load, render, encode)
 
 
-def measure(demo: str = "helix", duration: float = 4.0, fps: int = 30,
-            size: tuple[int, int] = (640, 360)) -> dict[str, Any]:  # fmt: skip
+def measure(
+    demo: str = "helix", duration: float = 4.0, fps: int = 30, size: tuple[int, int] = (640, 360)
+) -> dict[str, Any]:
     """Record ``demo`` for ``duration`` s and film it as MP4 and GIF in a temporary folder:
     seconds to load the page, ms per frame (drawing; overlay + encoding), file sizes."""
     from . import record as rec

@@ -45,9 +45,7 @@ def warm_method(system_name: str, method: str) -> float:
 
 def every_method(systems: Iterable[str]) -> list[tuple[str, str]]:
     """``(system, method)`` for every compiled method of ``systems``."""
-    return [
-        (s, m.name) for s in systems for m in dynamics.methods_for(s) if m.backend != "scipy"
-    ]
+    return [(s, m.name) for s in systems for m in dynamics.methods_for(s) if m.backend != "scipy"]
 
 
 def warm_all(
@@ -141,7 +139,9 @@ def fill_cache_in_parallel(
     import numba
 
     where = str(Path(dynamics.__file__).resolve().parent)
-    stamp = Path(numba.config.CACHE_DIR) / f"filled-{hashlib.sha256(where.encode()).hexdigest()[:16]}"
+    stamp = (
+        Path(numba.config.CACHE_DIR) / f"filled-{hashlib.sha256(where.encode()).hexdigest()[:16]}"
+    )
     t0 = time.perf_counter()
     if stamp.exists():
         if meanwhile is not None:

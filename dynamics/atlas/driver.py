@@ -169,23 +169,51 @@ def _run_tasks(client, spec, path, todo, report, bar, on_chunk) -> None:
     key = spec.run_key()
     futures = {}
     try:
-        for c in todo:
-            name = f"atlas-{key}-{c[0]}-{c[1]}-{c[2]}"
-            fut = client.submit(compute_chunk, spec, c, key=name, pure=False)
-            futures[fut] = c
-        for fut, cells in as_completed(list(futures), with_results=True):
-            c = futures.pop(fut)
-            _store.write_chunk(path, spec, c, cells, report.session)
-            report.computed.append(c)
-            report.task_seconds += float(cells["seconds"])
-            bar.update(1)
-            if on_chunk is not None:
-                on_chunk(c, report)
+        with _ctrl_c_between_chunks() as stop:
+            for c in todo:
+                name = f"atlas-{key}-{c[0]}-{c[1]}-{c[2]}"
+                fut = client.submit(compute_chunk, spec, c, key=name, pure=False)
+                futures[fut] = c
+            for fut, cells in as_completed(list(futures), with_results=True):
+                if stop.is_set():  # results that finished meanwhile are not written
+                    raise KeyboardInterrupt
+                c = futures.pop(fut)
+                _store.write_chunk(path, spec, c, cells, report.session)
+                report.computed.append(c)
+                report.task_seconds += float(cells["seconds"])
+                bar.update(1)
+                if on_chunk is not None:
+                    on_chunk(c, report)
+                if stop.is_set():
+                    raise KeyboardInterrupt
     except KeyboardInterrupt:
         report.interrupted = True
         with contextlib.suppress(Exception):
             client.cancel(list(futures), force=True)
         raise AtlasInterrupted(report) from None
+
+
+@contextlib.contextmanager
+def _ctrl_c_between_chunks():
+    """Ctrl-C sets the event this yields, and the loop stops at the next chunk: a
+    ``KeyboardInterrupt`` raised inside a chunk's write (the Zarr store waits on its own event
+    loop, which can hold the exception until the write is done) would otherwise let every
+    finished result be written before the run stops. A second Ctrl-C raises at once."""
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def on_sigint(signum, frame) -> None:
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager

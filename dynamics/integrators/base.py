@@ -117,7 +117,9 @@ class Method:
         kind = "adaptive" if self.adaptive else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"
         imp = ", implicit" if self.implicit else ""
-        return f"{self.title}: {self.order_text()}, {kind}{imp}, {props}; evaluations: {self.counts}"
+        return (
+            f"{self.title}: {self.order_text()}, {kind}{imp}, {props}; evaluations: {self.counts}"
+        )
 
 
 ALL = frozenset({"cyclotron", "hoop", "free-body"})

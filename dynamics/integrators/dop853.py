@@ -169,8 +169,27 @@ def _runner(sys_id: int, d: int):
     numba keys its disk cache on them."""
 
     @njit(cache=True)
-    def run(Y, p, t0, t1, rtol, atol, H, F, stats, status, base, span, Y0, Y1, Q, dense, last,
-            tableau, land):  # fmt: skip
+    def run(
+        Y,
+        p,
+        t0,
+        t1,
+        rtol,
+        atol,
+        H,
+        F,
+        stats,
+        status,
+        base,
+        span,
+        Y0,
+        Y1,
+        Q,
+        dense,
+        last,
+        tableau,
+        land,
+    ):
         """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place; ``_rhs(sys_id, y, p, out)``.
 
         ``H`` (N,) carries each member's next step size between calls (0: choose one, as scipy does
@@ -217,7 +236,9 @@ def _runner(sys_id: int, d: int):
                     _rhs(sys_id, y, p, F[i])
                     stats[i, 0] += 1
                     if H[i] <= 0.0:
-                        H[i] = _initial_step(sys_id, y, F[i], p, abs(t1 - t0), rtol, atol, tmp, K[1])
+                        H[i] = _initial_step(
+                            sys_id, y, F[i], p, abs(t1 - t0), rtol, atol, tmp, K[1]
+                        )
                         stats[i, 0] += 1
                 h_abs = H[i]
                 while True:
@@ -320,7 +341,9 @@ def _runner(sys_id: int, d: int):
                         for j in range(d):
                             y[j] = y_new[j]
                     else:
-                        _dense_coefficients(sys_id, p, Y0[i], y_new, K, h, Q[i], tmp, kout, A_DENSE, D)
+                        _dense_coefficients(
+                            sys_id, p, Y0[i], y_new, K, h, Q[i], tmp, kout, A_DENSE, D
+                        )
                         stats[i, 0] += N_STAGES_EXTENDED - N_STAGES - 1
                         dense[i] = True
                         _interpolate(Q[i], Y0[i], (t1 - t) / h, y)
@@ -361,7 +384,19 @@ class Dop853Carry:
 
 
 def run_dop853(
-    sys_id: int, Y, p, t0, t1, rtol, atol, H, F, stats, status, carry: Dop853Carry, land: bool = False
+    sys_id: int,
+    Y,
+    p,
+    t0,
+    t1,
+    rtol,
+    atol,
+    H,
+    F,
+    stats,
+    status,
+    carry: Dop853Carry,
+    land: bool = False,
 ) -> None:
     """Advance every row of ``Y`` (N, d) of system ``sys_id`` from ``t0`` to ``t1`` [s], going on
     from ``carry``'s kept steps and keeping the last ones there. ``land``: ``t1`` is a final time;
@@ -376,6 +411,23 @@ def run_dop853(
     hoop, 48 to 35 on the disk and 38 to 27 on the charge.
     """
     _runner(int(sys_id), int(Y.shape[1]))(
-        Y, p, t0, t1, rtol, atol, H, F, stats, status, carry.base, carry.span, carry.Y0, carry.Y1,
-        carry.Q, carry.dense, carry.last, TABLEAU, bool(land),
-    )  # fmt: skip
+        Y,
+        p,
+        t0,
+        t1,
+        rtol,
+        atol,
+        H,
+        F,
+        stats,
+        status,
+        carry.base,
+        carry.span,
+        carry.Y0,
+        carry.Y1,
+        carry.Q,
+        carry.dense,
+        carry.last,
+        TABLEAU,
+        bool(land),
+    )

@@ -292,8 +292,26 @@ def _two_sum(a, b):
 
 
 @njit(cache=True)
-def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b, factor,
-                    stats, kept, base, comp, span, last):  # fmt: skip
+def _advance_member(
+    sys_id,
+    i,
+    Y,
+    p,
+    t0,
+    t1,
+    order,
+    scale_r,
+    scale_a,
+    inv_a,
+    inv_b,
+    factor,
+    stats,
+    kept,
+    base,
+    comp,
+    span,
+    last,
+):
     """Advance member ``i`` (row ``Y[i]``) from ``t0`` to ``t1``; returns ``OK`` or ``NONFINITE``.
     Touches only row ``i`` of every array, so that members may run on different threads."""
     d = Y.shape[1]
@@ -352,8 +370,9 @@ def _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv
 
 
 @njit(cache=True)
-def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
-                        comp, span, last):  # fmt: skip
+def run_taylor_compiled(
+    sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base, comp, span, last
+):
     """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place, at order ``order`` with
     steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring), one member after another; stops
     at the first member that fails (``status = (NONFINITE, its steps, its index)``).
@@ -373,8 +392,26 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     total = 0
     for i in range(n):
         before = stats[i, 1]
-        code = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a, inv_b,
-                               factor, stats, kept, base, comp, span, last)  # fmt: skip
+        code = _advance_member(
+            sys_id,
+            i,
+            Y,
+            p,
+            t0,
+            t1,
+            order,
+            scale_r,
+            scale_a,
+            inv_a,
+            inv_b,
+            factor,
+            stats,
+            kept,
+            base,
+            comp,
+            span,
+            last,
+        )
         total += stats[i, 1] - before
         if code != OK:
             report(status, code, stats[i, 1], i)
@@ -383,8 +420,9 @@ def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
 
 
 @njit(cache=True, parallel=True)
-def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base,
-                        comp, span, last):  # fmt: skip
+def run_taylor_parallel(
+    sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base, comp, span, last
+):
     """:func:`run_taylor_compiled` with the members spread over numba's threads. Each member's
     arithmetic is the serial loop's (bitwise the same result); a failure does not stop the other
     members, and ``status`` names the first member that failed."""
@@ -396,8 +434,26 @@ def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     before = stats[:, 1].copy()
     codes = np.zeros(n, np.int64)
     for i in prange(n):
-        codes[i] = _advance_member(sys_id, i, Y, p, t0, t1, order, scale_r, scale_a, inv_a,
-                                   inv_b, factor, stats, kept, base, comp, span, last)  # fmt: skip
+        codes[i] = _advance_member(
+            sys_id,
+            i,
+            Y,
+            p,
+            t0,
+            t1,
+            order,
+            scale_r,
+            scale_a,
+            inv_a,
+            inv_b,
+            factor,
+            stats,
+            kept,
+            base,
+            comp,
+            span,
+            last,
+        )
     status[0] = OK
     for i in range(n):
         if codes[i] != OK:
@@ -435,5 +491,21 @@ def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCar
     (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
     order, a = order_for(rtol, atol, sys_id)
     run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
-    return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.kept,
-               carry.base, carry.comp, carry.span, carry.last)  # fmt: skip
+    return run(
+        sys_id,
+        Y,
+        p,
+        t0,
+        t1,
+        rtol,
+        atol,
+        order,
+        a,
+        stats,
+        status,
+        carry.kept,
+        carry.base,
+        carry.comp,
+        carry.span,
+        carry.last,
+    )

@@ -80,16 +80,31 @@ def _add_params(p: argparse.ArgumentParser, spec: SystemSpec, start: tuple[str, 
     with its unit and default, from the system's description."""
     p._negative_number_matcher = _NEGATIVE_NUMBER  # type: ignore[attr-defined]
     for s in spec.params:
-        p.add_argument(s.flag, dest=s.name, type=number, default=None,
-                       help=f"{s.help} (default {_default_text(s.default)})")  # fmt: skip
+        p.add_argument(
+            s.flag,
+            dest=s.name,
+            type=number,
+            default=None,
+            help=f"{s.help} (default {_default_text(s.default)})",
+        )
     for name in start:
         s = spec.setting(name)
         if s.choices:
-            p.add_argument(s.flag, dest=s.name, default=None, choices=s.choices,
-                           help=f"{s.help} (default {s.default})")  # fmt: skip
+            p.add_argument(
+                s.flag,
+                dest=s.name,
+                default=None,
+                choices=s.choices,
+                help=f"{s.help} (default {s.default})",
+            )
         elif isinstance(s.default, float):
-            p.add_argument(s.flag, dest=s.name, type=number, default=None,
-                           help=f"{s.help} (default {s.default:g})")  # fmt: skip
+            p.add_argument(
+                s.flag,
+                dest=s.name,
+                type=number,
+                default=None,
+                help=f"{s.help} (default {s.default:g})",
+            )
 
 
 def _default_text(value) -> str:
@@ -159,10 +174,16 @@ def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
             base = list(s.default)
             start[s.name] = tuple(b if v is None else v for b, v in zip(base, given, strict=True))
     setup = spec.setup(
-        _given(args, spec, [x.name for x in spec.params]), start,
-        method=args.method, dt=args.dt, rtol=args.rtol, atol=getattr(args, "atol", None),
+        _given(args, spec, [x.name for x in spec.params]),
+        start,
+        method=args.method,
+        dt=args.dt,
+        rtol=args.rtol,
+        atol=getattr(args, "atol", None),
     )
-    overrides = {n: getattr(args, n) for n in spec.state_overrides if getattr(args, n, None) is not None}
+    overrides = {
+        n: getattr(args, n) for n in spec.state_overrides if getattr(args, n, None) is not None
+    }
     if overrides:
         state = setup.state.copy()
         names = list(setup.system.state_names)
@@ -188,8 +209,12 @@ def _blame(spec: SystemSpec, args: argparse.Namespace, bad) -> str:
         with contextlib.suppress(CliError, ValueError, ArithmeticError), np.errstate(all="ignore"):
             if not bad(_setup(spec, trial)):
                 blamed.append(name)
-    shown = [f"{flag_for(n)} {getattr(args, n):g}" if isinstance(getattr(args, n), float)
-             else flag_for(n) for n in (blamed or given)]
+    shown = [
+        f"{flag_for(n)} {getattr(args, n):g}"
+        if isinstance(getattr(args, n), float)
+        else flag_for(n)
+        for n in (blamed or given)
+    ]
     return ", ".join(shown)
 
 
@@ -357,12 +382,20 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         for name in _component_flags(spec):
             p.add_argument(f"--{name}", type=number, default=None, help=_component_help(spec, name))
         p.add_argument("--t-end", type=number, required=True, help="duration [s]")
-        p.add_argument("--method", default=None,
-                       help="integration method (--list-methods; default the system's)")
-        p.add_argument("--dt", type=number, default=None,
-                       help=f"fixed step size [s] (default {spec.dt:.4g})")
-        p.add_argument("--rtol", type=number, default=None,
-                       help=f"relative tolerance of adaptive methods (default {spec.rtol:g})")
+        p.add_argument(
+            "--method",
+            default=None,
+            help="integration method (--list-methods; default the system's)",
+        )
+        p.add_argument(
+            "--dt", type=number, default=None, help=f"fixed step size [s] (default {spec.dt:.4g})"
+        )
+        p.add_argument(
+            "--rtol",
+            type=number,
+            default=None,
+            help=f"relative tolerance of adaptive methods (default {spec.rtol:g})",
+        )
         p.add_argument(
             "--atol",
             type=number,

@@ -103,18 +103,29 @@ def _run(args: argparse.Namespace) -> int:
     from mechviz_bench.exhibits import bench_cases
 
     result = run_bench(
-        quick=args.quick, out=args.out, extras={"viewer": viewer}, peers=args.peers,
-        exhibit_cases=bench_cases(), interruptible=ctrl_c_within_a_second,
-        phases={(f"compile ahead ({processes} processes and this one)" if processes
-                 else "compile ahead (this process; the cache was filled)"): round(fill_s, 2),
-                "viewer frame cost and recording speed": round(viewer_s, 2)},
-    )  # fmt: skip
+        quick=args.quick,
+        out=args.out,
+        extras={"viewer": viewer},
+        peers=args.peers,
+        exhibit_cases=bench_cases(),
+        interruptible=ctrl_c_within_a_second,
+        phases={
+            (
+                f"compile ahead ({processes} processes and this one)"
+                if processes
+                else "compile ahead (this process; the cache was filled)"
+            ): round(fill_s, 2),
+            "viewer frame cost and recording speed": round(viewer_s, 2),
+        },
+    )
     s = summary(result)
     missed = s["targets"]["missed"]
     if args.json:
         print(json.dumps(s, indent=1, default=str))
         return 1 if missed else 0
-    print(f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})")
+    print(
+        f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})"
+    )
     print("time to reach each accuracy: fastest scipy option / fastest of ours")
     for key, row in result["ratios"].items():
         cells = []
@@ -124,8 +135,10 @@ def _run(args: argparse.Namespace) -> int:
                 continue
             bound = ">=" if e.get("ratio_is_lower_bound") else ""
             ours = e.get("ours", {})
-            cells.append(f"{t}: {bound}{e['ratio']:.0f}x ({ours.get('method')} "
-                         f"{1e3 * ours.get('seconds', 0):.3g} ms)")  # fmt: skip
+            cells.append(
+                f"{t}: {bound}{e['ratio']:.0f}x ({ours.get('method')} "
+                f"{1e3 * ours.get('seconds', 0):.3g} ms)"
+            )
         print(f"  {key:7s} " + "; ".join(cells))
     for name, why in s["peers_skipped"].items():
         print(f"peer {name} skipped: {why}")
@@ -133,13 +146,16 @@ def _run(args: argparse.Namespace) -> int:
         print("time of each peer over our fastest (below 1: the peer is faster)")
         for peer, rows in s["peer_ratios"].items():
             for key, row in rows.items():
-                cells = "; ".join(f"{t}: {'n/a' if r is None else f'{r:.2f}'}"
-                                  for t, r in row.items())  # fmt: skip
+                cells = "; ".join(
+                    f"{t}: {'n/a' if r is None else f'{r:.2f}'}" for t, r in row.items()
+                )
                 print(f"  {peer:14s} {key:7s} {cells}")
     fa = s.get("first_answer")
     if fa:
-        print(f"first answer in a fresh process (hoop, 1e-9): taylor {fa['taylor']['median_s']} s, "
-              f"dop853 {fa['dop853']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s")
+        print(
+            f"first answer in a fresh process (hoop, 1e-9): taylor {fa['taylor']['median_s']} s, "
+            f"dop853 {fa['dop853']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s"
+        )
     print("ns per compiled step (numba / C, same run):")
     for k, v in s["per_step_ns"].items():
         print(f"  {k:14s} {v['numba']:8.1f} / {v['c'] if v['c'] is not None else 'n/a'}")
@@ -188,8 +204,9 @@ def add_commands(sub) -> None:
         "endurance.json; exit status 1 if a target is missed",
     )
     p.add_argument(
-        "--clients", type=int, default=3,
+        "--clients",
+        type=int,
+        default=3,
         help=f"browser clients for --endurance, 1 to {MAX_CLIENTS} (default 3)",
     )
     p.set_defaults(func=_run)
-

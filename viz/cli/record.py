@@ -37,9 +37,11 @@ def add_commands(sub) -> None:
     )
     p.add_argument("--dt", type=number, metavar="DT", help="step size [s] for fixed-step methods")
     p.add_argument(
-        "--theme", choices=("light", "dark"), default="light",
+        "--theme",
+        choices=("light", "dark"),
+        default="light",
         help="page of the .html (default light); the scene's colours read on both",
-    )  # fmt: skip
+    )
     from .video import add_record_options
 
     add_record_options(p)  # --video, --size

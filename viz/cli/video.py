@@ -50,13 +50,17 @@ def add_commands(sub) -> None:
         "--format", choices=video.FORMATS, help="mp4 or gif (default: from --out, else mp4)"
     )
     p.add_argument(
-        "--size", type=size_type, metavar="WxH",
+        "--size",
+        type=size_type,
+        metavar="WxH",
         help=f"frame size in pixels, even numbers (default {video.DEFAULT_SIZE[0]}x{video.DEFAULT_SIZE[1]})",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--fps", type=int, metavar="N",
+        "--fps",
+        type=int,
+        metavar="N",
         help=f"frames per second, up to {video.MAX_FPS} (default: the demo's, else 30)",
-    )  # fmt: skip
+    )
     p.set_defaults(func=run_video)
 
 
@@ -154,13 +158,16 @@ def run_video(args: argparse.Namespace) -> int:
 def add_record_options(p: argparse.ArgumentParser) -> None:
     """``--video`` and ``--size`` on ``mechviz record``."""
     p.add_argument(
-        "--video", choices=video.FORMATS,
+        "--video",
+        choices=video.FORMATS,
         help="also film the recording into DEMO.mp4 or DEMO.gif (headless Chromium)",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--size", type=size_type, metavar="WxH",
+        "--size",
+        type=size_type,
+        metavar="WxH",
         help=f"video frame size (default {video.DEFAULT_SIZE[0]}x{video.DEFAULT_SIZE[1]})",
-    )  # fmt: skip
+    )
 
 
 def check_record_options(args: argparse.Namespace, demos) -> None:

@@ -31,9 +31,11 @@ def add_commands(sub) -> None:
         "--no-env-map", action="store_true", help="no environment lighting (faster software GL)"
     )
     p.add_argument(
-        "--theme", choices=("light", "dark"), default="light",
+        "--theme",
+        choices=("light", "dark"),
+        default="light",
         help="page theme (default light; the panel switches it too)",
-    )  # fmt: skip
+    )
     p.set_defaults(func=_view)
 
 

@@ -85,7 +85,9 @@ class ExhibitConfig:
         for fld in ("method", *(["compare_method"] if hasattr(self, "compare_method") else [])):
             m = getattr(self, fld)
             if m is not None and m not in names:
-                raise dynamics.SettingError(fld, f"{fld} must be one of {', '.join(names)}; got {m!r}")
+                raise dynamics.SettingError(
+                    fld, f"{fld} must be one of {', '.join(names)}; got {m!r}"
+                )
         # the step settings every run takes, and those of a comparison run where there is one,
         # by the rules of dynamics.steps
         for name in ("dt", "compare_dt"):
@@ -348,7 +350,9 @@ class ExhibitModel:
             grown = float(np.max(np.abs(smp.energy_error)))
             if not math.isfinite(grown) or grown > DIVERGED:
                 reason = f"{label}run diverged: the energy changed by a factor {1 + grown:.3g}"
-                self._fail(dynamics.IntegrationError(sim.method.name, sim.step_label(), sim.t, reason))
+                self._fail(
+                    dynamics.IntegrationError(sim.method.name, sim.step_label(), sim.t, reason)
+                )
                 return
 
     def _fail(self, error: dynamics.IntegrationError) -> None:
@@ -458,7 +462,9 @@ class ExhibitModel:
         if new == self.config:
             return f"{self.title}: unchanged"
         old = self.config
-        changed = {f.name for f in dataclasses.fields(new) if getattr(new, f.name) != getattr(old, f.name)}
+        changed = {
+            f.name for f in dataclasses.fields(new) if getattr(new, f.name) != getattr(old, f.name)
+        }
         described = f"{self.title}: " + ", ".join(f"{k} = {v}" for k, v in changes.items())
         if changed <= self.view_fields:  # how it is drawn, not what moves: the run goes on
             self.config = new

@@ -66,8 +66,12 @@ class CyclotronConfig(ExhibitConfig):
             if s[3] == 0.0 and s[4] == 0.0:
                 raise ValueError("state must have a transverse velocity (vx, vy not both 0)")
         if not (isinstance(self.beam_size, int) and 1 <= self.beam_size <= 1000):
-            raise ValueError(f"beam_size must be a whole number from 1 to 1000, got {self.beam_size!r}")
-        lo, hi = (positive("beam_speeds", v) for v in finite_numbers("beam_speeds", self.beam_speeds, 2))
+            raise ValueError(
+                f"beam_size must be a whole number from 1 to 1000, got {self.beam_size!r}"
+            )
+        lo, hi = (
+            positive("beam_speeds", v) for v in finite_numbers("beam_speeds", self.beam_speeds, 2)
+        )
         if lo > hi:
             raise ValueError(f"beam_speeds must be (low, high), got {self.beam_speeds!r}")
         finite_numbers("kick", (self.kick,), 1)
@@ -224,7 +228,9 @@ class CyclotronModel(ExhibitModel):
                 return cy.effective_potential(p, r(s), p_phi(s))
 
         out["r"] = Variable("distance from the axis r [m]", r)
-        out["p_r"] = Variable("radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1])
+        out["p_r"] = Variable(
+            "radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1]
+        )
         out["p_phi"] = Variable("canonical ang. momentum p_φ [kg m²/s]", p_phi)
         out["V_eff"] = Variable("V_eff(r) [J]", v_eff)
         return out
@@ -243,25 +249,37 @@ class CyclotronModel(ExhibitModel):
             return [
                 Curve(w["x"], w["V"], "V_eff(r)"),
                 Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "level E⊥", dashed=True),
-                Curve(np.array([w["r0"]]), np.array([cy.effective_potential(p, w["r0"], w["p_phi"])
-                      if w["r0"] > 0 else np.nan]), "bottom r0",
-                      kw={"marker": "o", "ls": "none"}),
-            ]  # fmt: skip
+                Curve(
+                    np.array([w["r0"]]),
+                    np.array(
+                        [cy.effective_potential(p, w["r0"], w["p_phi"]) if w["r0"] > 0 else np.nan]
+                    ),
+                    "bottom r0",
+                    kw={"marker": "o", "ls": "none"},
+                ),
+            ]
         if (x, y) == ("x", "y"):
             centre, rho = cy.guiding_centre(p, st), cy.larmor_radius(p, st)
             phi = np.linspace(0.0, 2 * math.pi, 181)
             return [
-                Curve(centre[0] + rho * np.cos(phi), centre[1] + rho * np.sin(phi),
-                      "predicted circle", dashed=True),
-                Curve(np.array([centre[0]]), np.array([centre[1]]), "guiding centre",
-                      kw={"marker": "+", "ms": 9, "ls": "none"}),
-            ]  # fmt: skip
+                Curve(
+                    centre[0] + rho * np.cos(phi),
+                    centre[1] + rho * np.sin(phi),
+                    "predicted circle",
+                    dashed=True,
+                ),
+                Curve(
+                    np.array([centre[0]]),
+                    np.array([centre[1]]),
+                    "guiding centre",
+                    kw={"marker": "+", "ms": 9, "ls": "none"},
+                ),
+            ]
         return []
 
     @classmethod
     def pictures(cls, config) -> tuple[tuple[str, str], ...]:
         return (("r", "V_eff"), ("x", "y"))
-
 
     # ------------------------------------------------------------------ a recording's figures
     @classmethod
@@ -288,11 +306,22 @@ class CyclotronModel(ExhibitModel):
             rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2])
             if rates:
                 periods = 2 * math.pi / np.asarray(rates.value)
-                figs.append(figure("shortest period in the beam", periods.min(), 2 * math.pi / w, "s"))
-                figs.append(figure("longest period in the beam", periods.max(), 2 * math.pi / w, "s"))
+                figs.append(
+                    figure("shortest period in the beam", periods.min(), 2 * math.pi / w, "s")
+                )
+                figs.append(
+                    figure("longest period in the beam", periods.max(), 2 * math.pi / w, "s")
+                )
             v = np.hypot(S[0, :, 3], S[0, :, 4])
-            figs.append(figure("speed ratio in the beam", v.max() / v.min(), None, "",
-                               "the periods agree although the speeds differ by this factor"))  # fmt: skip
+            figs.append(
+                figure(
+                    "speed ratio in the beam",
+                    v.max() / v.min(),
+                    None,
+                    "",
+                    "the periods agree although the speeds differ by this factor",
+                )
+            )
         for entry in tr.event_log:
             eff = entry["effects"][main]
             post = t > entry["t"] + 1e-9
@@ -302,10 +331,17 @@ class CyclotronModel(ExhibitModel):
                 continue
             shift = float(np.linalg.norm(after.value[0] - before.value[0]))
             figs.append(figure("circle shift after the kick", shift, eff["predicted_shift"], "m"))
-            figs.append(figure("radius after the kick", after.value[1], eff["predicted_radius"][0], "m"))
-            keep(figs, "gyrofrequency after the kick",
-                  measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2]),
-                  w, "rad/s", "unchanged: the period does not depend on the energy")  # fmt: skip
+            figs.append(
+                figure("radius after the kick", after.value[1], eff["predicted_radius"][0], "m")
+            )
+            keep(
+                figs,
+                "gyrofrequency after the kick",
+                measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2]),
+                w,
+                "rad/s",
+                "unchanged: the period does not depend on the energy",
+            )
         if len(tr.states) > 1:
             for label, run in tr.runs.items():
                 E = tr.energy_error[label][:, 0]
@@ -342,7 +378,16 @@ def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
     point = np.where(x == r_now, V, np.nan)
     bottom = np.where(x == r0, V, np.nan) if lo <= r0 <= hi else np.full_like(x, np.nan)
     return {
-        "x": x, "V": V, "level": np.full_like(x, e_perp), "point": point, "bottom": bottom,
-        "x_range": (float(lo), float(hi)), "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
-        "r": r_now, "r0": r0, "r_min": r_min, "r_max": r_max, "p_phi": p_phi,
-    }  # fmt: skip
+        "x": x,
+        "V": V,
+        "level": np.full_like(x, e_perp),
+        "point": point,
+        "bottom": bottom,
+        "x_range": (float(lo), float(hi)),
+        "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
+        "r": r_now,
+        "r0": r0,
+        "r_min": r_min,
+        "r_max": r_max,
+        "p_phi": p_phi,
+    }

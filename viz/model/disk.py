@@ -136,7 +136,9 @@ class DiskModel(ExhibitModel):
 
     def growth_rate_theory(self) -> float:
         """Linear growth rate [1/s] of the wobble from the release state (released only)."""
-        return measure.wobble_growth_rate_theory(self.sim.system.kernel_params(), self.sim.state0[0])
+        return measure.wobble_growth_rate_theory(
+            self.sim.system.kernel_params(), self.sim.state0[0]
+        )
 
     def measured(self) -> dict:
         """Driven: the bearing force amplitude at B from dL/dt of the sampled motion
@@ -144,9 +146,15 @@ class DiskModel(ExhibitModel):
         (:func:`dynamics.measure.wobble_growth_rate`)."""
         t, x = self.motion.arrays()
         if self.config.mode == "driven":
-            return {"bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])}
+            return {
+                "bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])
+            }
         middle = int(np.argsort(dk.free_kernel_params(self.params))[1])
-        freq = measure.crossing_frequency(t, x[:, middle]) if len(t) else measure.unresolved("no samples")
+        freq = (
+            measure.crossing_frequency(t, x[:, middle])
+            if len(t)
+            else measure.unresolved("no samples")
+        )
         return {
             "growth_rate": measure.wobble_growth_rate(t, x),
             # the component on the intermediate axis is sn or cn: two zero crossings a period
@@ -169,18 +177,26 @@ class DiskModel(ExhibitModel):
         L in space (conserved)."""
         p = config.physics()
         if config.mode == "driven":
-            out = common_variables({"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"})
+            out = common_variables(
+                {"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"}
+            )
 
             def L(s):
-                return dk.rotation_about_axle(s.states[:, 0]) @ (dk.inertia_tensor(p) @ (p.omega * dk.AXLE))
+                return dk.rotation_about_axle(s.states[:, 0]) @ (
+                    dk.inertia_tensor(p) @ (p.omega * dk.AXLE)
+                )
 
             about = "A"
         else:
-            out = common_variables({
-                # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
-                "w1": "body ω₁ [rad/s]", "w2": "body ω₂ [rad/s]", "w3": "body ω₃ [rad/s]",
-                **{f"q{k}": f"quaternion q{k}" for k in range(4)},
-            })  # fmt: skip
+            out = common_variables(
+                {
+                    # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
+                    "w1": "body ω₁ [rad/s]",
+                    "w2": "body ω₂ [rad/s]",
+                    "w3": "body ω₃ [rad/s]",
+                    **{f"q{k}": f"quaternion q{k}" for k in range(4)},
+                }
+            )
             moments = dk.free_kernel_params(p)
 
             def L(s):
@@ -188,8 +204,9 @@ class DiskModel(ExhibitModel):
 
             about = "CM"
         for k, axis in enumerate("xyz"):
-            out[f"L{axis}"] = Variable(f"L_{axis} about {about} [kg m²/s]",
-                                       lambda s, k=k: L(s)[:, k])  # fmt: skip
+            out[f"L{axis}"] = Variable(
+                f"L_{axis} about {about} [kg m²/s]", lambda s, k=k: L(s)[:, k]
+            )
         return out
 
     @classmethod
@@ -220,8 +237,7 @@ class DiskModel(ExhibitModel):
         a, b = moments[i] * (moments[k] - moments[i]), moments[j] * (moments[k] - moments[j])
         c = two_e * moments[k] - l2
         reach = math.sqrt(two_e / float(moments.min()))  # no component of w is larger
-        return [Curve(*_conic(a, b, c, reach), "exact polhode",
-                      dashed=True)]  # fmt: skip
+        return [Curve(*_conic(a, b, c, reach), "exact polhode", dashed=True)]
 
     @classmethod
     def pictures(cls, config) -> tuple[tuple[str, str], ...]:
@@ -234,7 +250,6 @@ class DiskModel(ExhibitModel):
                 "once the disk is released.</small>"
             )
         return super().stability_text()
-
 
     # ------------------------------------------------------------------ a recording's figures
     @classmethod
@@ -250,12 +265,23 @@ class DiskModel(ExhibitModel):
     def _driven_figures(tr: Traces, p) -> list[dict[str, Any]]:
         t, S = tr.times[tr.main], tr.states[tr.main]
         figs = [figure("spin rate", measure.slope(t, S[:, 0, 0]), p.omega, "rad/s")]
-        keep(figs, "bearing force amplitude at B",
-              measure.bearing_force_amplitude(p, t, S[:, 0, 0], S[:, 0, 1]), dk.axle_force_amplitude(p),
-              "N", "from d L / dt of the simulated motion; seed: 5/8 M R omega^2")  # fmt: skip
+        keep(
+            figs,
+            "bearing force amplitude at B",
+            measure.bearing_force_amplitude(p, t, S[:, 0, 0], S[:, 0, 1]),
+            dk.axle_force_amplitude(p),
+            "N",
+            "from d L / dt of the simulated motion; seed: 5/8 M R omega^2",
+        )
         if len(t) >= 3:
             F = measure.bearing_force(p, t, S[:, 0, 0], S[:, 0, 1])
-            keep(figs, "bearing force frequency", measure.crossing_frequency(t, F[:, 0]), p.omega, "rad/s")
+            keep(
+                figs,
+                "bearing force frequency",
+                measure.crossing_frequency(t, F[:, 0]),
+                p.omega,
+                "rad/s",
+            )
         return figs
 
     @staticmethod
@@ -263,16 +289,30 @@ class DiskModel(ExhibitModel):
         t, S = tr.times[tr.main], tr.states[tr.main]
         moments = dk.free_kernel_params(p)
         figs: list[dict[str, Any]] = []
-        keep(figs, "wobble growth rate", measure.wobble_growth_rate(t, S[:, 0, :3]),
-              measure.wobble_growth_rate_theory(moments, S[0, 0, :3]), "1/s",
-              "spin about the intermediate axis: w_perp grows as exp(rate t)")  # fmt: skip
+        keep(
+            figs,
+            "wobble growth rate",
+            measure.wobble_growth_rate(t, S[:, 0, :3]),
+            measure.wobble_growth_rate_theory(moments, S[0, 0, :3]),
+            "1/s",
+            "spin about the intermediate axis: w_perp grows as exp(rate t)",
+        )
         L = np.linalg.norm(dk.free_angular_momentum_space(moments, S[:, 0]), axis=-1)
-        figs.append(figure("final |L| change", abs(L[-1] - L[0]) / L[0], 0.0, "",
-                           "torque-free: |L| is conserved"))  # fmt: skip
+        figs.append(
+            figure(
+                "final |L| change",
+                abs(L[-1] - L[0]) / L[0],
+                0.0,
+                "",
+                "torque-free: |L| is conserved",
+            )
+        )
         return figs
 
 
-def _conic(a: float, b: float, c: float, reach: float, n: int = 721) -> tuple[np.ndarray, np.ndarray]:
+def _conic(
+    a: float, b: float, c: float, reach: float, n: int = 721
+) -> tuple[np.ndarray, np.ndarray]:
     """Points of ``a x^2 + b y^2 = c``: an ellipse (one closed curve) or a hyperbola (both
     branches, split by NaN, out to ``reach`` from the centre), or nothing (NaN)."""
     if a < 0 and b < 0:

@@ -152,10 +152,14 @@ class HoopModel(ExhibitModel):
         """The angles, their rates and the two normal-mode coordinates (the angles on the mode
         shapes, :func:`dynamics.measure.modal_coordinates`)."""
         _, shapes = hp.normal_modes(config.physics())
-        out = common_variables({
-            "theta1": "hoop angle θ1 [rad]", "theta2": "bead angle θ2 [rad]",
-            "omega1": "hoop rate θ1' [rad/s]", "omega2": "bead rate θ2' [rad/s]",
-        })  # fmt: skip
+        out = common_variables(
+            {
+                "theta1": "hoop angle θ1 [rad]",
+                "theta2": "bead angle θ2 [rad]",
+                "omega1": "hoop rate θ1' [rad/s]",
+                "omega2": "bead rate θ2' [rad/s]",
+            }
+        )
         for k in (0, 1):
             out[f"q{k + 1}"] = Variable(
                 f"mode-{k + 1} coordinate q{k + 1} [rad]",
@@ -186,9 +190,8 @@ class HoopModel(ExhibitModel):
         th = np.linspace(-math.pi, math.pi, 361)
         top = 2 * w1 * np.cos(th / 2)
         out = [
-            Curve(np.concatenate([th, th[::-1]]), np.concatenate([top, -top[::-1]]),
-                  "separatrix"),
-        ]  # fmt: skip
+            Curve(np.concatenate([th, th[::-1]]), np.concatenate([top, -top[::-1]]), "separatrix"),
+        ]
         if len(samples):
             s = samples.states[-1]
             # on the mode-1 set, to what an integrator keeps of it (the set is unstable at
@@ -197,8 +200,14 @@ class HoopModel(ExhibitModel):
                 e = 0.5 * s[2] ** 2 - w1 * w1 * math.cos(s[0])
                 with np.errstate(invalid="ignore"):
                     v = np.sqrt(2 * (e + w1 * w1 * np.cos(th)))
-                out.append(Curve(np.concatenate([th, th[::-1]]), np.concatenate([v, -v[::-1]]),
-                                 "exact pendulum orbit", dashed=True))  # fmt: skip
+                out.append(
+                    Curve(
+                        np.concatenate([th, th[::-1]]),
+                        np.concatenate([v, -v[::-1]]),
+                        "exact pendulum orbit",
+                        dashed=True,
+                    )
+                )
         return out
 
     @classmethod
@@ -222,7 +231,9 @@ class HoopModel(ExhibitModel):
             for label in tr.states:
                 E = tr.energy_error[label][:, 0]
                 figs.append(figure(f"final energy error, {label}", float(E[-1]), None, ""))
-                figs.append(figure(f"largest |energy error|, {label}", float(np.abs(E).max()), None, ""))
+                figs.append(
+                    figure(f"largest |energy error|, {label}", float(np.abs(E).max()), None, "")
+                )
             return figs
         amps = measure.modal_coordinates(S[0, 0, :2], shapes)
         measured = measure.mode_frequencies(t, S[:, 0, :2], shapes)
@@ -230,7 +241,13 @@ class HoopModel(ExhibitModel):
             keep(figs, f"mode {k + 1} frequency (linear theory)", measured[k], freqs[k], "rad/s")
         a1 = abs(float(amps[0]))
         if measured[0] and abs(amps[1]) < 1e-12 and a1 > 0.2:
-            figs.append(figure("mode 1 frequency (exact, finite amplitude)", measured[0],
-                               2 * math.pi / hp.mode1_period(p, a1), "rad/s",
-                               "rigid-pendulum period 4 K(sin^2(A/2)) / omega_1"))  # fmt: skip
+            figs.append(
+                figure(
+                    "mode 1 frequency (exact, finite amplitude)",
+                    measured[0],
+                    2 * math.pi / hp.mode1_period(p, a1),
+                    "rad/s",
+                    "rigid-pendulum period 4 K(sin^2(A/2)) / omega_1",
+                )
+            )
         return figs

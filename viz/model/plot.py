@@ -99,8 +99,13 @@ def draw_xy(
     artists = []
     for k, c in enumerate(curves):
         # solid curves under the path (it runs on them), dashed ones over it (both show)
-        style = {"color": CURVE_COLOURS[k % len(CURVE_COLOURS)], "lw": 1.3,
-                 "ls": "--" if c.dashed else "-", "zorder": 3 if c.dashed else 1, **c.kw}  # fmt: skip
+        style = {
+            "color": CURVE_COLOURS[k % len(CURVE_COLOURS)],
+            "lw": 1.3,
+            "ls": "--" if c.dashed else "-",
+            "zorder": 3 if c.dashed else 1,
+            **c.kw,
+        }
         artists += ax.plot(c.x, c.y, label=c.label, **style)
     artists += ax.plot(xs, ys, color=PATH_COLOUR, lw=1.2, label=path_label, zorder=2)
     artists += ax.plot(xs[-1:], ys[-1:], "o", color=POINT_COLOUR, ms=5, zorder=4)
@@ -113,9 +118,16 @@ def draw_xy(
     ax.grid(True, lw=0.4, alpha=0.5)
     if legend and (curves or path_label):
         # below the axes, not over the path: the figure's constrained layout makes room
-        ax.legend(handles=artists[:-1], fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2),
-                  ncols=2 if len(artists) > 3 else 1, frameon=False, handlelength=1.4,
-                  columnspacing=0.8)  # fmt: skip
+        ax.legend(
+            handles=artists[:-1],
+            fontsize=7,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.2),
+            ncols=2 if len(artists) > 3 else 1,
+            frameon=False,
+            handlelength=1.4,
+            columnspacing=0.8,
+        )
     return artists
 
 

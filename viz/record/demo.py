@@ -117,9 +117,13 @@ class Demo(_Struct):
         return (self.frames - 1) / self.fps * self.speed
 
     def with_overrides(
-        self, *, duration: float | None = None, fps: int | None = None,
-        method: str | None = None, dt: float | None = None,
-    ) -> Demo:  # fmt: skip
+        self,
+        *,
+        duration: float | None = None,
+        fps: int | None = None,
+        method: str | None = None,
+        dt: float | None = None,
+    ) -> Demo:
         """This demo with command-line overrides applied and checked (``ValueError`` naming the
         option otherwise). A new method drops the demo's step setting it does not take."""
         changes: dict[str, Any] = {}
@@ -290,7 +294,9 @@ def with_defaults(d: Demo) -> Demo:
     if d.motion is None and any(s.name == "motion" for s in spec.start):
         changes["motion"] = spec.setting("motion").default
     if not d.method:
-        start = {"motion": changes.get("motion", d.motion)} if "motion" in changes or d.motion else {}
+        start = (
+            {"motion": changes.get("motion", d.motion)} if "motion" in changes or d.motion else {}
+        )
         changes["method"] = spec.default_method(spec.start_values(start))
     return msgspec.structs.replace(d, **changes) if changes else d
 
@@ -316,11 +322,13 @@ def check(d: Demo) -> None:
     _finite_positive("duration", d.duration)
     _finite_positive("speed", d.speed)
     if not 1 <= d.fps <= 240:
-        raise dynamics.SettingError("fps", f"fps must be a whole number from 1 to 240, got {d.fps!r}")
+        raise dynamics.SettingError(
+            "fps", f"fps must be a whole number from 1 to 240, got {d.fps!r}"
+        )
     if not d.duration * d.fps < MAX_FRAMES:  # before counting frames: 1e308 x 30 overflows
         raise dynamics.SettingError(
             "duration",
-            f"duration x fps gives {d.duration * d.fps:.3g} frames; the limit is {MAX_FRAMES}"
+            f"duration x fps gives {d.duration * d.fps:.3g} frames; the limit is {MAX_FRAMES}",
         )
     has_motion = any(s.name == "motion" for s in dynamics.SPECS[d.exhibit].start)
     if not has_motion and d.motion is not None:
@@ -333,11 +341,15 @@ def check(d: Demo) -> None:
         keys = ", ".join(sorted(_INITIAL_KEYS[d.exhibit]))
         raise ValueError(f"initial.{sorted(unknown)[0]} is not a key for the {d.exhibit} ({keys})")
     if d.initial.beam is not None and not 1 <= d.initial.beam <= 1000:
-        raise ValueError(f"initial.beam must be a whole number from 1 to 1000, got {d.initial.beam}")
+        raise ValueError(
+            f"initial.beam must be a whole number from 1 to 1000, got {d.initial.beam}"
+        )
     if d.initial.state is not None and {"speed", "vz", "centre", "beam", "modes"} & ini:
         raise ValueError("initial.state gives the whole start; leave out the other initial keys")
     if d.compare is not None and d.exhibit == "disk":
-        raise ValueError("compare: the disk shows one run; a comparison is for the cyclotron and the hoop")
+        raise ValueError(
+            "compare: the disk shows one run; a comparison is for the cyclotron and the hoop"
+        )
     if d.compare is not None and d.initial.beam is not None:
         raise ValueError("compare: a beam runs one method; leave out [compare] or initial.beam")
     for key, value in (("position", d.camera.position), ("look_at", d.camera.look_at)):

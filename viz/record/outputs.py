@@ -39,9 +39,12 @@ def samples(tr: Traces, label: str, member: int = 0) -> Samples:
     err = tr.error[label]
     K = len(tr.times[label])
     return Samples(
-        tr.times[label], tr.states[label][:, member], tr.energy[label][:, member],
-        tr.energy_error[label][:, member], np.full(K, np.nan) if err is None else err[:, member],
-    )  # fmt: skip
+        tr.times[label],
+        tr.states[label][:, member],
+        tr.energy[label][:, member],
+        tr.energy_error[label][:, member],
+        np.full(K, np.nan) if err is None else err[:, member],
+    )
 
 
 def ghost_samples(tr: Traces) -> Samples | None:
@@ -54,7 +57,12 @@ def ghost_samples(tr: Traces) -> Samples | None:
 
 def derived_variables(d: Demo) -> dict:
     """The exhibit's plot quantities beyond the state, energy and errors (the CSV's last columns)."""
-    names = set(dynamics.SYSTEMS[_system_name(d)].state_names) | {"t", "energy", "energy_error", "error"}
+    names = set(dynamics.SYSTEMS[_system_name(d)].state_names) | {
+        "t",
+        "energy",
+        "energy_error",
+        "error",
+    }
     variables = MODELS[d.exhibit].plot_variables(d.config())
     return {n: v for n, v in variables.items() if n not in names}
 
@@ -80,17 +88,34 @@ def traces_csv(d: Demo, tr: Traces) -> bytes:
         for j in range(S.shape[1]):
             more = columns(samples(tr, label, j))
             for k in range(K):
-                w.writerow([
-                    label, j, fmt(tr.times[label][k]), *map(fmt, S[k, j]),
-                    fmt(tr.energy[label][k, j]), fmt(tr.energy_error[label][k, j]),
-                    "" if err is None else fmt(err[k, j]), *map(fmt, more[k]),
-                ])  # fmt: skip
+                w.writerow(
+                    [
+                        label,
+                        j,
+                        fmt(tr.times[label][k]),
+                        *map(fmt, S[k, j]),
+                        fmt(tr.energy[label][k, j]),
+                        fmt(tr.energy_error[label][k, j]),
+                        "" if err is None else fmt(err[k, j]),
+                        *map(fmt, more[k]),
+                    ]
+                )
     ghost = ghost_samples(tr)
     if ghost is not None:
         more = columns(ghost)
         for k in range(K):
-            w.writerow(["linear-theory", 0, fmt(tr.t[k]), *map(fmt, tr.ghost[k, 0]), "", "", "",
-                        *map(fmt, more[k])])  # fmt: skip
+            w.writerow(
+                [
+                    "linear-theory",
+                    0,
+                    fmt(tr.t[k]),
+                    *map(fmt, tr.ghost[k, 0]),
+                    "",
+                    "",
+                    "",
+                    *map(fmt, more[k]),
+                ]
+            )
     return buf.getvalue().encode()
 
 
@@ -105,8 +130,14 @@ def draw_pictures(d: Demo, tr: Traces, axes) -> None:
         curves = list(cls.plot_curves(config, x, y, main))
         if ghost is not None:
             with np.errstate(all="ignore"):
-                curves.append(Curve(variables[x].values(ghost), variables[y].values(ghost),
-                                    "linear theory", dashed=True))  # fmt: skip
+                curves.append(
+                    Curve(
+                        variables[x].values(ghost),
+                        variables[y].values(ghost),
+                        "linear theory",
+                        dashed=True,
+                    )
+                )
         draw_xy(ax, variables, x, y, main, curves, path_label=tr.main)
         ax.xaxis.label.set_fontsize(8)
         ax.yaxis.label.set_fontsize(8)
@@ -139,8 +170,14 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
         for lbl, c in zip(tr.states, colours, strict=False):
             X = tr.states[lbl]
             for j in range(X.shape[1]):
-                ax1.plot(tr.times[lbl], X[:, j, 0], color=c, lw=1, alpha=0.8 if X.shape[1] == 1 else 0.5,
-                         label=f"x, {lbl}" if j == 0 else None)  # fmt: skip
+                ax1.plot(
+                    tr.times[lbl],
+                    X[:, j, 0],
+                    color=c,
+                    lw=1,
+                    alpha=0.8 if X.shape[1] == 1 else 0.5,
+                    label=f"x, {lbl}" if j == 0 else None,
+                )
         _mark_periods(ax1, T, t[-1], "predicted period 2 pi m / |qB|")
         for entry in tr.event_log:
             ax1.axvline(
@@ -200,10 +237,17 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
             ax1.plot(tr.t, tr.ghost[:, 0, 0], color="0.5", lw=1, ls="--", label="linear theory")
         amps = measure.modal_coordinates(S[0, 0, :2], _shapes)
         k = int(np.argmax(np.abs(amps)))
-        _mark_periods(ax1, 2 * math.pi / freqs[k], t[-1], f"predicted period of mode {k + 1} (linear)")
+        _mark_periods(
+            ax1, 2 * math.pi / freqs[k], t[-1], f"predicted period of mode {k + 1} (linear)"
+        )
         if k == 0 and abs(amps[1]) < 1e-12 and abs(amps[0]) > 0.2:
-            _mark_periods(ax1, hoop.mode1_period(p, abs(float(amps[0]))), t[-1],
-                          "predicted period, exact (finite amplitude)", color="tab:purple")  # fmt: skip
+            _mark_periods(
+                ax1,
+                hoop.mode1_period(p, abs(float(amps[0]))),
+                t[-1],
+                "predicted period, exact (finite amplitude)",
+                color="tab:purple",
+            )
         ax1.set_ylabel("angle [rad]")
     ax1.legend(fontsize=7, loc="upper right")
     for lbl, c in zip(tr.states, colours, strict=False):
@@ -211,12 +255,22 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
         ax2.semilogy(tr.times[lbl], np.maximum(E, 1e-17), color=c, lw=1, label=lbl)
         if tr.error[lbl] is not None:
             e = np.nanmax(tr.error[lbl], axis=1)
-            ax3.semilogy(tr.times[lbl], np.maximum(e, 1e-17), color=c, lw=1,
-                         label=f"{lbl} vs {tr.reference[lbl]}")  # fmt: skip
+            ax3.semilogy(
+                tr.times[lbl],
+                np.maximum(e, 1e-17),
+                color=c,
+                lw=1,
+                label=f"{lbl} vs {tr.reference[lbl]}",
+            )
     for fg in figs:
         if fg["name"].startswith("final energy error") and fg["predicted"]:
-            ax2.axhline(abs(fg["predicted"]), color="k", ls="--", lw=1,
-                        label="predicted final, " + fg["name"].split(", ")[-1])  # fmt: skip
+            ax2.axhline(
+                abs(fg["predicted"]),
+                color="k",
+                ls="--",
+                lw=1,
+                label="predicted final, " + fg["name"].split(", ")[-1],
+            )
     ax2.set_ylabel("|relative energy error|")
     ax2.legend(fontsize=7)
     ax3.set_ylabel("relative error")
@@ -224,17 +278,26 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
     if ax3.lines:
         ax3.legend(fontsize=7)
     else:
-        ax3.text(0.5, 0.5, "no reference solution", ha="center", va="center",
-                 transform=ax3.transAxes)  # fmt: skip
+        ax3.text(
+            0.5, 0.5, "no reference solution", ha="center", va="center", transform=ax3.transAxes
+        )
     lines = [
-        f"{f['name']}: {f['measured']:.6g}" + ("" if f["predicted"] is None else
-                                              f"  (predicted {f['predicted']:.6g})")
-        for f in figs if f["measured"] is not None
-    ]  # fmt: skip
+        f"{f['name']}: {f['measured']:.6g}"
+        + ("" if f["predicted"] is None else f"  (predicted {f['predicted']:.6g})")
+        for f in figs
+        if f["measured"] is not None
+    ]
     fig.suptitle(f"{d.title}\n{step_text(tr)}", fontsize=11)
     if lines:
-        ax4.text(0.0, 1.0, "measured against predicted\n" + "\n".join(lines[:7]),
-                 transform=ax4.transAxes, fontsize=8, va="top", family="monospace")  # fmt: skip
+        ax4.text(
+            0.0,
+            1.0,
+            "measured against predicted\n" + "\n".join(lines[:7]),
+            transform=ax4.transAxes,
+            fontsize=8,
+            va="top",
+            family="monospace",
+        )
     out = io.BytesIO()
     fig.savefig(out, format="png")
     return out.getvalue()
@@ -255,8 +318,15 @@ def _mark_periods(ax, T, t_end, label, color="k"):
         label = f"{label}, every {every}th"
     marks = T * np.arange(every, n + 1, every, dtype=float)
     ax.vlines(
-        marks, 0, 1, transform=ax.get_xaxis_transform(), colors=color, linestyles="--",
-        lw=0.8, alpha=0.6, label=label,
+        marks,
+        0,
+        1,
+        transform=ax.get_xaxis_transform(),
+        colors=color,
+        linestyles="--",
+        lw=0.8,
+        alpha=0.6,
+        label=label,
     )
 
 

@@ -117,14 +117,18 @@ def record(
     except WriteFailed as exc:
         raise RecordingFailed(f"recording of {d.name} failed: {exc}") from exc
     except KeyboardInterrupt as exc:
-        err = RecordingFailed(f"recording of {d.name} interrupted; {existing_recording(out, d.name)}")
+        err = RecordingFailed(
+            f"recording of {d.name} interrupted; {existing_recording(out, d.name)}"
+        )
         err.interrupted = True
         raise err from exc
     except (dynamics.IntegrationError, OSError, ValueError) as exc:
         err = RecordingFailed(
             f"recording of {d.name} failed: {exc}; {existing_recording(out, d.name)}"
         )
-        err.bad_input = isinstance(exc, ValueError) or getattr(exc, "errno", 0) == errno.ENAMETOOLONG
+        err.bad_input = (
+            isinstance(exc, ValueError) or getattr(exc, "errno", 0) == errno.ENAMETOOLONG
+        )
         raise err from exc
     wall = time.perf_counter() - t_start
     return RecordResult(d, {s: out / f"{d.name}{s}" for s in SUFFIXES}, man, wall, d.frames)

@@ -135,10 +135,14 @@ def _run(
             ex.advance_to(ev.t)
             _raise_if_failed(ex)
             effects = ex.kick_effects(ev.dv)  # the only scripted action (the schema says so)
-            log.append({
-                "t": ev.t, "action": ev.action, "dv": ev.dv,
-                "effects": {labels[role]: e for role, e in effects.items()},
-            })  # fmt: skip
+            log.append(
+                {
+                    "t": ev.t,
+                    "action": ev.action,
+                    "dv": ev.dv,
+                    "effects": {labels[role]: e for role, e in effects.items()},
+                }
+            )
         ex.advance_to(float(t))
         _raise_if_failed(ex)
         for lbl, sim in runs.items():
@@ -157,12 +161,19 @@ def _run(
         if np.all(np.isnan(err[lbl])):
             err[lbl] = None
     return Traces(
-        t_frames, times, states, energy, eerr, err,
+        t_frames,
+        times,
+        states,
+        energy,
+        eerr,
+        err,
         {lbl: s.reference_kind for lbl, s in runs.items()},
         {lbl: s.steps for lbl, s in runs.items()},
         {lbl: s.nfev for lbl, s in runs.items()},
         {lbl: _describe(s) for lbl, s in runs.items()},
-        ghost, log, ex.measured(),
+        ghost,
+        log,
+        ex.measured(),
     )
 
 
@@ -181,9 +192,15 @@ def check_work(ex: ExhibitModel, demo: Demo) -> None:
 def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
     m = sim.method
     return {
-        "method": m.name, "title": m.title, "order": _order(sim), "evaluations": m.counts,
-        "structure": list(m.structure), "step": sim.step_label(), "dt": sim.dt, "rtol": sim.rtol,
-    }  # fmt: skip
+        "method": m.name,
+        "title": m.title,
+        "order": _order(sim),
+        "evaluations": m.counts,
+        "structure": list(m.structure),
+        "step": sim.step_label(),
+        "dt": sim.dt,
+        "rtol": sim.rtol,
+    }
 
 
 def _order(sim: dynamics.Simulation) -> int | None:

@@ -110,7 +110,7 @@ def check_scales(d: Demo) -> None:
         raise dynamics.SettingError(
             "duration",
             f"duration = {d.duration:g} s at fps = {d.fps} gives one frame; a recording needs "
-            f"two at least (duration >= {1 / d.fps:.3g} s)"
+            f"two at least (duration >= {1 / d.fps:.3g} s)",
         )
     cfg = d.config()
     defaults = MODELS[d.exhibit].Config().params
@@ -169,13 +169,13 @@ def _check_steps(d: Demo, span: float) -> None:
             raise dynamics.SettingError(
                 key,
                 f"{key} = {dt:g} s is longer than the recording's {span:.3g} s of simulated time "
-                f"(speed = {d.speed:g} x duration = {d.duration:g} s): no step would be taken"
+                f"(speed = {d.speed:g} x duration = {d.duration:g} s): no step would be taken",
             )
         if span / dt > MAX_STEPS:
             raise dynamics.SettingError(
                 key,
                 f"{key} = {dt:g} s gives {span / dt:.3g} steps over the recording's {span:.3g} s "
-                f"of simulated time (speed x duration); the limit is {MAX_STEPS:.0e}"
+                f"of simulated time (speed x duration); the limit is {MAX_STEPS:.0e}",
             )
 
 

@@ -12,7 +12,6 @@ EXHIBITS: dict[str, type[Exhibit]] = {
 }
 
 
-
 __all__ = [
     "EXHIBITS",
     "CyclotronConfig",

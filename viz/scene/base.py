@@ -89,7 +89,8 @@ class Exhibit(ExhibitModel):
         """The exhibit's text labels in the scene (for presentation mode's larger text)."""
         handles = self.scene._handle_from_node_name
         return [
-            h for name, h in handles.items()
+            h
+            for name, h in handles.items()
             if name.startswith(self.root + "/") and type(h).__name__ == "LabelHandle"
         ]
 

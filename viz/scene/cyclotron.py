@@ -39,9 +39,12 @@ class BeamTrails:
         self.frames = 0
         seg_colors = np.repeat(np.repeat(colors[:, None, None, :], self.k - 1, axis=1), 2, axis=2)
         self.node = scene.add_line_segments(
-            name, np.zeros((n * (self.k - 1), 2, 3), np.float32),
-            colors=seg_colors.reshape(-1, 2, 3), thickness=1.5, thickness_units="screen",
-        )  # fmt: skip
+            name,
+            np.zeros((n * (self.k - 1), 2, 3), np.float32),
+            colors=seg_colors.reshape(-1, 2, 3),
+            thickness=1.5,
+            thickness_units="screen",
+        )
 
     def push(self, positions: np.ndarray) -> None:
         """Sample the charges' drawn positions (n, 3) on every ``EVERY``-th call; redraw then."""
@@ -71,27 +74,40 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         s, r, H = self.scene, self.root, self.config.height
         s.add_frame(r, show_axes=False, position=self.origin)
         self.label = s.add_label(
-            f"{r}/label", "Cyclotron: charge in a uniform field B",
-            position=(0.0, 0.0, H + 0.5), anchor="bottom-center",
-        )  # fmt: skip
+            f"{r}/label",
+            "Cyclotron: charge in a uniform field B",
+            position=(0.0, 0.0, H + 0.5),
+            anchor="bottom-center",
+        )
         self.field_arrows = s.add_arrows(
-            f"{r}/field", self._field_points(1.0), colors=geo.FIELD,
-            shaft_radius=0.012, head_radius=0.045, head_length=0.12,
-        )  # fmt: skip
+            f"{r}/field",
+            self._field_points(1.0),
+            colors=geo.FIELD,
+            shaft_radius=0.012,
+            head_radius=0.045,
+            head_length=0.12,
+        )
         self.field_label = s.add_label(f"{r}/field_label", "B", position=(1.6, 1.6, H + 0.1))
         # one batched node: instance 0 the charge, 1 the comparison run (scale 0 while there
         # is none), 2 the guiding centre
         ball = geo.sphere_mesh(0.07)
         self.bodies = s.add_batched_meshes_simple(
-            f"{r}/charges", ball.vertices, ball.faces,
-            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)), batched_positions=np.zeros((3, 3)),
+            f"{r}/charges",
+            ball.vertices,
+            ball.faces,
+            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)),
+            batched_positions=np.zeros((3, 3)),
             batched_scales=np.array([1.0, 0.0, 0.5]),
-            batched_colors=np.array([geo.CHARGE, geo.COMPARE, geo.CENTRE], np.uint8), lod="off",
-        )  # fmt: skip
+            batched_colors=np.array([geo.CHARGE, geo.COMPARE, geo.CENTRE], np.uint8),
+            lod="off",
+        )
         self.ring = s.add_line_segments(
-            f"{r}/theory_circle", geo.circle_segments(1.0),
-            colors=np.array(geo.CENTRE, np.uint8), thickness=2.0, thickness_units="screen",
-        )  # fmt: skip
+            f"{r}/theory_circle",
+            geo.circle_segments(1.0),
+            colors=np.array(geo.CENTRE, np.uint8),
+            thickness=2.0,
+            thickness_units="screen",
+        )
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
@@ -136,12 +152,17 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         t = np.linspace(0.0, 1.0, n)[:, None]
         colors = ((1 - t) * np.array(geo.BEAM[0]) + t * np.array(geo.BEAM[1])).astype(np.uint8)
         self.beam_node = self.scene.add_batched_meshes_simple(
-            f"{self.root}/beam", sphere.vertices, sphere.faces,
+            f"{self.root}/beam",
+            sphere.vertices,
+            sphere.faces,
             batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
             batched_positions=self._display(self.beam.state[:, :3]),
-            batched_colors=colors, lod="off",
-        )  # fmt: skip
-        self.beam_trails = BeamTrails(self.scene, f"{self.root}/beam_trails", colors, self.config.height)
+            batched_colors=colors,
+            lod="off",
+        )
+        self.beam_trails = BeamTrails(
+            self.scene, f"{self.root}/beam_trails", colors, self.config.height
+        )
 
     # ------------------------------------------------------------------ drawing
     def _display(self, xyz: np.ndarray) -> np.ndarray:
@@ -241,13 +262,27 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         panel.param_inputs()
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
-            strength = panel.slider("kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None)
-            kick = gui.add_button("Kick", hint="Radial velocity kick: the predicted circle moves at once")
-            beam = panel.put("beam", gui.add_checkbox(
-                "Beam", initial_value=c.beam, hint="Many charges, a spread of speeds"
-            ))  # fmt: skip
-            panel.slider("beam_size", "Beam size", 2, 200, 1, c.beam_size,
-                         lambda v: panel.send({"op": "set", "beam_size": int(v)}))  # fmt: skip
+            strength = panel.slider(
+                "kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None
+            )
+            kick = gui.add_button(
+                "Kick", hint="Radial velocity kick: the predicted circle moves at once"
+            )
+            beam = panel.put(
+                "beam",
+                gui.add_checkbox(
+                    "Beam", initial_value=c.beam, hint="Many charges, a spread of speeds"
+                ),
+            )
+            panel.slider(
+                "beam_size",
+                "Beam size",
+                2,
+                200,
+                1,
+                c.beam_size,
+                lambda v: panel.send({"op": "set", "beam_size": int(v)}),
+            )
         kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
         panel.plot(

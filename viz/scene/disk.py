@@ -39,7 +39,9 @@ class PoinsotPicture:
     def __init__(self, scene, root: str) -> None:
         self.scene, self.root = scene, root
         self.frame = scene.add_frame(f"{root}/poinsot", show_axes=False, visible=False)
-        self.plane_frame = scene.add_frame(f"{root}/invariable_plane", show_axes=False, visible=False)
+        self.plane_frame = scene.add_frame(
+            f"{root}/invariable_plane", show_axes=False, visible=False
+        )
         self.ellipsoid = None
         self.polhode = geo.ChunkedTrail(scene, f"{root}/poinsot/polhode", geo.CENTRE, cap=900)
         self.herpolhode = geo.ChunkedTrail(
@@ -55,14 +57,20 @@ class PoinsotPicture:
         mesh = geo.sphere_mesh(1.0, 3)
         mesh.apply_scale(semi * self.scale)
         self.ellipsoid = self.scene.add_mesh_simple(
-            f"{self.root}/poinsot/ellipsoid", mesh.vertices, mesh.faces, color=geo.CENTRE,
+            f"{self.root}/poinsot/ellipsoid",
+            mesh.vertices,
+            mesh.faces,
+            color=geo.CENTRE,
             opacity=0.35,
-        )  # fmt: skip
+        )
         plane = geo.disk_mesh(0.9 * radius, 0.004 * radius)
         self.scene.add_mesh_simple(
-            f"{self.root}/invariable_plane/plane", plane.vertices, plane.faces,
-            color=geo.MOMENTUM, opacity=0.25,
-        )  # fmt: skip
+            f"{self.root}/invariable_plane/plane",
+            plane.vertices,
+            plane.faces,
+            color=geo.MOMENTUM,
+            opacity=0.25,
+        )
         self.polhode.clear()
         self.herpolhode.clear()
         self.frame.visible = self.plane_frame.visible = shown
@@ -126,9 +134,12 @@ class DiskExhibit(DiskModel, Exhibit):
             head_length=0.14,
         )
         self.cone_rim = s.add_line_segments(
-            f"{r}/L_cone_rim", np.zeros((1, 2, 3), np.float32), colors=np.array(geo.MOMENTUM, np.uint8),
-            thickness=1.5, thickness_units="screen",
-        )  # fmt: skip
+            f"{r}/L_cone_rim",
+            np.zeros((1, 2, 3), np.float32),
+            colors=np.array(geo.MOMENTUM, np.uint8),
+            thickness=1.5,
+            thickness_units="screen",
+        )
         self.forces = s.add_arrows(
             f"{r}/bearing_forces",
             np.zeros((2, 2, 3), np.float32),
@@ -159,9 +170,12 @@ class DiskExhibit(DiskModel, Exhibit):
         rim = geo.circle_segments(1.004 * R, 96)  # just outside the edge: seen from both sides
         rim[..., 1] += R  # centred on the disk centre (0, R, 0)
         self.rim_node = s.add_line_segments(
-            f"{body}/rim", rim, colors=np.array(geo.RIM, np.uint8), thickness=2.5,
+            f"{body}/rim",
+            rim,
+            colors=np.array(geo.RIM, np.uint8),
+            thickness=2.5,
             thickness_units="screen",
-        )  # fmt: skip
+        )
         self.bead_node = s.add_icosphere(
             f"{body}/bead", radius=0.09 * R, color=geo.BEAD, position=dk.bead_position(p)
         )
@@ -181,9 +195,7 @@ class DiskExhibit(DiskModel, Exhibit):
             ring = geo.torus_mesh(0.08 * R, 0.025 * R)
             ring.apply_translation(LIFT + to_world(pt))
             self.bearings.append(
-                s.add_mesh_simple(
-                    f"{r}/bearing_{name}", ring.vertices, ring.faces, color=geo.AXLE
-                )
+                s.add_mesh_simple(f"{r}/bearing_{name}", ring.vertices, ring.faces, color=geo.AXLE)
             )
             self.bearings.append(
                 s.add_label(
@@ -263,7 +275,9 @@ class DiskExhibit(DiskModel, Exhibit):
         self._vector_points = np.zeros((3, 2, 3), np.float32)  # reused by every frame
         # dL/dt = omega x L, fixed in the body too: drawn at L's tip, at the length L's tip moves
         # in one radian of turn (so it is tangent to the cone's rim and as long as its radius)
-        self._body_dL = np.cross(p.omega * dk.AXLE, self._body_L) / abs(p.omega) * self.momentum_scale
+        self._body_dL = (
+            np.cross(p.omega * dk.AXLE, self._body_L) / abs(p.omega) * self.momentum_scale
+        )
         phi = np.linspace(0.0, 2 * np.pi, 97)
         rim = LIFT + to_world(np.einsum("kij,j->ki", dk.rotation_about_axle(phi), self._body_L))
         rim = LIFT + (rim - LIFT) * self.momentum_scale
@@ -395,9 +409,16 @@ class DiskExhibit(DiskModel, Exhibit):
         gui, c = panel.gui, self.config
         panel.readout_and_chart(compare=False)
         with gui.add_folder("Motion"):
-            mode = panel.put("mode", gui.add_dropdown("Motion", options=MODES, initial_value=c.mode))
+            mode = panel.put(
+                "mode", gui.add_dropdown("Motion", options=MODES, initial_value=c.mode)
+            )
             panel.slider(
-                "spin", "Extra spin at release [rad/s]", 0.0, 0.5, 0.01, float(c.extra_spin[2]),
+                "spin",
+                "Extra spin at release [rad/s]",
+                0.0,
+                0.5,
+                0.01,
+                float(c.extra_spin[2]),
                 lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}),
                 hint="Spin about the disk normal added at release: seeds the tumble",
             )

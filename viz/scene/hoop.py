@@ -42,14 +42,19 @@ class ConfigurationSpace:
         frame = np.array([[c[k], c[(k + 1) % 4]] for k in range(4)], np.float32)
         axes = np.array([[(-half, 0, 0), (half, 0, 0)], [(0, 0, -half), (0, 0, half)]], np.float32)
         scene.add_line_segments(
-            f"{root}/frame", np.concatenate([frame, axes]) + centre.astype(np.float32),
-            colors=np.array(geo.AXLE, np.uint8), thickness=1.0, thickness_units="screen",
-        )  # fmt: skip
+            f"{root}/frame",
+            np.concatenate([frame, axes]) + centre.astype(np.float32),
+            colors=np.array(geo.AXLE, np.uint8),
+            thickness=1.0,
+            thickness_units="screen",
+        )
         self.modes = scene.add_line_segments(
-            f"{root}/modes", np.zeros((2, 2, 3), np.float32),
+            f"{root}/modes",
+            np.zeros((2, 2, 3), np.float32),
             colors=np.repeat(np.array(MODE_COLOURS, np.uint8)[:, None, :], 2, axis=1),
-            thickness=2.0, thickness_units="screen",
-        )  # fmt: skip
+            thickness=2.0,
+            thickness_units="screen",
+        )
         self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
         self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
         self.scale = 1.0
@@ -113,16 +118,28 @@ class HoopExhibit(HoopModel, Exhibit):
         ident = np.tile([1.0, 0.0, 0.0, 0.0], (3, 1))
         colors = np.array([geo.HOOP, geo.GHOST, geo.COMPARE], np.uint8)
         self.rings = s.add_batched_meshes_simple(
-            f"{r}/rings", ring.vertices, ring.faces, batched_wxyzs=ident,
-            batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=colors, batched_opacities=np.array([1.0, 0.45, 1.0]), lod="off",
-        )  # fmt: skip
+            f"{r}/rings",
+            ring.vertices,
+            ring.faces,
+            batched_wxyzs=ident,
+            batched_positions=np.zeros((3, 3)),
+            batched_scales=np.array([1.0, 1.0, 0.0]),
+            batched_colors=colors,
+            batched_opacities=np.array([1.0, 0.45, 1.0]),
+            lod="off",
+        )
         bead_colors = np.array([geo.BEAD, geo.GHOST, geo.COMPARE], np.uint8)
         self.beads = s.add_batched_meshes_simple(
-            f"{r}/beads", bead.vertices, bead.faces, batched_wxyzs=ident,
-            batched_positions=np.zeros((3, 3)), batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=bead_colors, batched_opacities=np.array([1.0, 0.5, 1.0]), lod="off",
-        )  # fmt: skip
+            f"{r}/beads",
+            bead.vertices,
+            bead.faces,
+            batched_wxyzs=ident,
+            batched_positions=np.zeros((3, 3)),
+            batched_scales=np.array([1.0, 1.0, 0.0]),
+            batched_colors=bead_colors,
+            batched_opacities=np.array([1.0, 0.5, 1.0]),
+            lod="off",
+        )
         self.cmp_label = s.add_label(
             f"{r}/compare_label",
             "",
@@ -268,8 +285,15 @@ class HoopExhibit(HoopModel, Exhibit):
         panel.readout_and_chart(compare=True)
         with gui.add_folder("Initial condition"):
             mode = panel.put("mode", gui.add_dropdown("Mode", options=MODES, initial_value=c.mode))
-            panel.slider("amplitude", "Amplitude [rad]", 0.05, 2.5, 0.05, float(c.amplitude),
-                         lambda v: panel.send({"op": "set", "amplitude": float(v)}))  # fmt: skip
+            panel.slider(
+                "amplitude",
+                "Amplitude [rad]",
+                0.05,
+                2.5,
+                0.05,
+                float(c.amplitude),
+                lambda v: panel.send({"op": "set", "amplitude": float(v)}),
+            )
 
             def angle(k):
                 def apply(x):
@@ -280,8 +304,15 @@ class HoopExhibit(HoopModel, Exhibit):
                 return apply
 
             for k in (0, 1):
-                panel.number(f"th{k + 1}", f"θ{k + 1} (custom) [rad]", c.angles[k], angle(k),
-                             current=lambda k=k: self.config.angles[k], lo=-3.14, hi=3.14)  # fmt: skip
+                panel.number(
+                    f"th{k + 1}",
+                    f"θ{k + 1} (custom) [rad]",
+                    c.angles[k],
+                    angle(k),
+                    current=lambda k=k: self.config.angles[k],
+                    lo=-3.14,
+                    hi=3.14,
+                )
         panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
         panel.plot(
             "Mode 1 (θ1 = θ2) is exactly a pendulum, θ'' = −ω₁² sin θ with ω₁ = √(g/2a): its "
@@ -296,22 +327,24 @@ class HoopExhibit(HoopModel, Exhibit):
                 "(the table gives both). At small amplitude they agree.</small>"
             )
             u = panel.viser.uplot
-            panel.put("modes_chart", gui.add_uplot(
-                data=tuple(np.zeros(2) for _ in range(5)),
-                series=(
-                    u.Series(label="t [s]"),
-                    u.Series(label="q1 [rad]", stroke="#e63c3c", width=1.5),
-                    u.Series(label="q2 [rad]", stroke="#3c6ef0", width=1.5),
-                    u.Series(label="q1 linear", stroke="#e63c3c", width=1.0, dash=[4, 3]),
-                    u.Series(label="q2 linear", stroke="#3c6ef0", width=1.0, dash=[4, 3]),
+            panel.put(
+                "modes_chart",
+                gui.add_uplot(
+                    data=tuple(np.zeros(2) for _ in range(5)),
+                    series=(
+                        u.Series(label="t [s]"),
+                        u.Series(label="q1 [rad]", stroke="#e63c3c", width=1.5),
+                        u.Series(label="q2 [rad]", stroke="#3c6ef0", width=1.5),
+                        u.Series(label="q1 linear", stroke="#e63c3c", width=1.0, dash=[4, 3]),
+                        u.Series(label="q2 linear", stroke="#3c6ef0", width=1.0, dash=[4, 3]),
+                    ),
+                    scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(-1.0, 1.0))},
+                    aspect=1.6,
                 ),
-                scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(-1.0, 1.0))},
-                aspect=1.6,
-            ))  # fmt: skip
+            )
         panel.param_inputs()
         panel.integrator_inputs(compare=True)
 
     def sync_panel(self, panel) -> None:
         w = panel.w
         w["hoop.th1"].value, w["hoop.th2"].value = (number_text(x) for x in self.config.angles)
-

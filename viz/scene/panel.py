@@ -89,7 +89,9 @@ class Panel:
         self.plot_choice = exhibit.default_plot(exhibit.config)  # (x, y) of the panel's plot
         self._plot_image: PlotImage | None = None
         self._plot_names: tuple[str, ...] | None = None  # the quantities of the motion shown
-        self._plot_drawn: tuple | None = None  # what the image shows: (choice, trace version, theme)
+        self._plot_drawn: tuple | None = (
+            None  # what the image shows: (choice, trace version, theme)
+        )
         self._plot_time = -math.inf  # when it was drawn (time.monotonic)
 
     def send(self, command) -> None:
@@ -109,7 +111,16 @@ class Panel:
         self.app.enqueue("call", lambda app: app._sync_widgets(self.key))
 
     def number(
-        self, name: str, label: str, value: float, apply, *, current=None, lo=None, hi=None, hint=None
+        self,
+        name: str,
+        label: str,
+        value: float,
+        apply,
+        *,
+        current=None,
+        lo=None,
+        hi=None,
+        hint=None,
     ):
         """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value.
 
@@ -148,7 +159,9 @@ class Panel:
 
     def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
         """A slider whose typed-in values obey the same range as its track."""
-        h = self.put(name, self.gui.add_slider(label, min=lo, max=hi, step=step, initial_value=value, **kw))
+        h = self.put(
+            name, self.gui.add_slider(label, min=lo, max=hi, step=step, initial_value=value, **kw)
+        )
         self.labels[name] = label
 
         def on(v):
@@ -186,7 +199,7 @@ class Panel:
         label = self.labels.get(field)
         if label is None:
             return message
-        return label + message[len(field):] if message.startswith(field) else f"{label}: {message}"
+        return label + message[len(field) :] if message.startswith(field) else f"{label}: {message}"
 
     # ------------------------------------------------------------------ building blocks
     def readout_and_chart(self, compare: bool) -> None:
@@ -227,10 +240,12 @@ class Panel:
                 name, label = setting.name, setting.panel_label
                 value = self.exhibit.config.params[name]
                 self.number(
-                    f"params.{name}", label, value,
+                    f"params.{name}",
+                    label,
+                    value,
                     lambda x, n=name: self.send({"op": "set", "params": {n: x}}),
                     current=lambda n=name: self.exhibit.config.params[n],
-                )  # fmt: skip
+                )
 
     def integrator_inputs(self, *, compare: bool) -> None:
         gui, ex = self.gui, self.exhibit
@@ -241,8 +256,13 @@ class Panel:
                 "method", gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
             )
             self.put("about", gui.add_markdown(method_text(ex.config.method)))
-            self.number("dt", "Step dt [s]", ex.config.dt, lambda x: self.send({"op": "set", "dt": x}),
-                        current=lambda: self.exhibit.config.dt)  # fmt: skip
+            self.number(
+                "dt",
+                "Step dt [s]",
+                ex.config.dt,
+                lambda x: self.send({"op": "set", "dt": x}),
+                current=lambda: self.exhibit.config.dt,
+            )
             self.put("limit", gui.add_markdown(ex.stability_text()))
             # a dropdown of decades: a number input shows 1e-9 as 0.0000000
             rtol = self.put(
@@ -296,13 +316,24 @@ class Panel:
         labels = tuple(v.label for v in variables.values())
         x, y = self.plot_choice
         with self.gui.add_folder("Plot any two variables"):
-            self.put("plot_note", self.gui.add_markdown(
-                f"<small>{note} Blue: the main run over the chart window, red: now; the other "
-                "lines are exact curves of the theory (see the legend).</small>"
-            ))  # fmt: skip
-            self.put("plot_y", self.gui.add_dropdown("y", options=labels, initial_value=variables[y].label))
-            self.put("plot_x", self.gui.add_dropdown("x", options=labels, initial_value=variables[x].label))
-            self.put("plot", self.gui.add_image(np.full((500, 560, 3), 255, np.uint8), format="jpeg"))
+            self.put(
+                "plot_note",
+                self.gui.add_markdown(
+                    f"<small>{note} Blue: the main run over the chart window, red: now; the other "
+                    "lines are exact curves of the theory (see the legend).</small>"
+                ),
+            )
+            self.put(
+                "plot_y",
+                self.gui.add_dropdown("y", options=labels, initial_value=variables[y].label),
+            )
+            self.put(
+                "plot_x",
+                self.gui.add_dropdown("x", options=labels, initial_value=variables[x].label),
+            )
+            self.put(
+                "plot", self.gui.add_image(np.full((500, 560, 3), 255, np.uint8), format="jpeg")
+            )
 
         def choose(axis: int, label: str) -> None:
             variables = ex.plot_variables(ex.config)
@@ -343,9 +374,14 @@ class Panel:
         x, y = self.plot_choice
         samples = ex.plot_samples()
         image.image = self._plot_image.render(
-            dark, variables=variables, x=x, y=y, samples=samples,
-            curves=ex.plot_curves(ex.config, x, y, samples), path_label=ex.sim.method.name,
-        )  # fmt: skip
+            dark,
+            variables=variables,
+            x=x,
+            y=y,
+            samples=samples,
+            curves=ex.plot_curves(ex.config, x, y, samples),
+            path_label=ex.sim.method.name,
+        )
         self._plot_drawn, self._plot_time = drawn, now
 
     def sync_plot(self, variables) -> None:
