@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import signal
 import subprocess
 from pathlib import Path
 
@@ -44,6 +45,13 @@ def _status() -> str | None:
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:
+    # A run started in the background (``make test &``, nohup) inherits SIGINT and SIGHUP
+    # ignored, and so would every process a test starts: the tests of Ctrl-C and of a closed
+    # terminal need them as a terminal gives them.
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if hasattr(signal, "SIGHUP") and signal.getsignal(signal.SIGHUP) is signal.SIG_IGN:
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
     session.config._git_status_before = (  # type: ignore[attr-defined]
         None if os.environ.get("MECHVIZ_WRITE_DOCS") == "1" else _status()
     )

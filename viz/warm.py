@@ -60,24 +60,23 @@ def warm_all(
     return time.perf_counter() - t0
 
 
-_END_SIGNALS = {getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)}
+_HELD_SIGNALS = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
 
 
 @contextlib.contextmanager
 def _quiet_start():
-    """While workers start: Ctrl-C ignored and SIGTERM / SIGHUP held (both kept across exec,
-    until a worker's set-up): a signal that comes then neither leaves a pool half made here
-    nor makes a worker still importing print a traceback. A held signal is handled as this
-    ends."""
-    masks = hasattr(signal, "pthread_sigmask")  # not on Windows
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, _END_SIGNALS) if masks else None
+    """While workers start: Ctrl-C, SIGTERM and SIGHUP held, here and in each worker (a mask
+    is kept across exec) until the worker's set-up: a signal that comes then neither leaves
+    workers half started nor makes one still importing print a traceback, and none is lost:
+    a held signal is handled as this ends (and in a worker as its set-up ends)."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no masks, nothing held
+        yield
+        return
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
-        if masks:
-            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _end_with_parent(parent: int) -> None:
@@ -90,7 +89,7 @@ def _end_with_parent(parent: int) -> None:
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
     signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
     if hasattr(signal, "pthread_sigmask"):  # held while it started
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _END_SIGNALS)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
     with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
         import ctypes
 
