@@ -24,6 +24,7 @@ from dynamics.integrators.base import get_method
 from dynamics.simulation import Simulation
 
 from . import exhibits, experiments
+from .peer_sweeps import flag_outliers, peer_table, sweep_peer
 from .problems import (
     ADAPTIVE_OURS,
     ADAPTIVE_SCIPY,
@@ -37,13 +38,10 @@ from .report import SCIPY_FACTOR, markdown
 from .sweeps import (
     TARGETS,
     Settings,
-    flag_outliers,
-    peer_table,
     ratio_table,
     retime_ratios,
     sweep_adaptive,
     sweep_fixed,
-    sweep_peer,
 )
 
 

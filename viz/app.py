@@ -50,14 +50,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-
-from . import warm
 from .frames import FrameLog
 from .live_record import add_record_toggle
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, CyclotronExhibit, Exhibit
 from .scene.panel import Panel
+from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
@@ -81,29 +79,6 @@ GRIDS = {
     "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
     "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
 }
-
-
-# --------------------------------------------------------------------------- numba warm-up
-def warm_up(
-    which: str = "defaults",
-    configs: Mapping[str, Any] | None = None,
-    should_stop: Callable[[], bool] | None = None,
-) -> float:
-    """Compile the kernels the exhibits start with (``"defaults"``) or every method (``"all"``).
-
-    ``should_stop`` is polled between methods (Ctrl-C during start-up)."""
-    if which == "all":
-        systems = {cls.Config.system_name for cls in EXHIBITS.values()}
-        return warm.warm_all(warm.every_method(sorted(systems)), should_stop)
-    cfg = configs or {}
-    # the tight DOP853 reference runs of the systems without an exact solution everywhere
-    needed = [(s.name, "dop853") for s in (dynamics.Hoop, dynamics.ReleasedDisk)]
-    for key, cls in EXHIBITS.items():
-        c = cfg.get(key) or cls.Config()
-        needed.append((c.system_name, c.method))
-        if getattr(c, "compare_method", None):
-            needed.append((c.system_name, c.compare_method))
-    return warm.warm_all(needed, should_stop)
 
 
 # --------------------------------------------------------------------------- the app

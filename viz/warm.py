@@ -11,11 +11,14 @@ import contextlib
 import signal
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
 
 import numpy as np
 
 import dynamics
+
+from .model import MODELS
 
 _lock = threading.Lock()
 _done: set[tuple[str, str]] = set()
@@ -181,3 +184,25 @@ def fill_cache_in_parallel(
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.touch()
     return time.perf_counter() - t0, n
+
+
+def warm_up(
+    which: str = "defaults",
+    configs: Mapping[str, Any] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> float:
+    """Compile the kernels the exhibits start with (``"defaults"``) or every method (``"all"``).
+
+    ``should_stop`` is polled between methods (Ctrl-C during start-up)."""
+    if which == "all":
+        systems = {cls.Config.system_name for cls in MODELS.values()}
+        return warm_all(every_method(sorted(systems)), should_stop)
+    cfg = configs or {}
+    # the tight DOP853 reference runs of the systems without an exact solution everywhere
+    needed = [(s.name, "dop853") for s in (dynamics.Hoop, dynamics.ReleasedDisk)]
+    for key, cls in MODELS.items():
+        c = cfg.get(key) or cls.Config()
+        needed.append((c.system_name, c.method))
+        if getattr(c, "compare_method", None):
+            needed.append((c.system_name, c.compare_method))
+    return warm_all(needed, should_stop)
