@@ -94,6 +94,8 @@ def ctrl_c_within_a_second() -> Iterator[None]:
 
     def hard_exit(signum: int) -> None:
         if not done.is_set():
+            if sys.stderr.isatty():  # a progress line may be showing: clear it first
+                sys.stderr.write("\r\033[K")
             sys.stderr.write("mechviz: interrupted\n")
             sys.stderr.flush()
             os._exit(128 + signum)
