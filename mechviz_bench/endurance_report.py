@@ -108,7 +108,7 @@ def _summarize(
     )
     return {
         "about": "mechviz endurance benchmark: the live viewer's server loop with "
-        "headless Chromium clients connected; see viz/endurance.py",
+        "headless Chromium clients connected; see mechviz_bench/endurance.py",
         "command": f"mechviz bench --endurance {seconds:g} --clients {clients}",
         "date": datetime.datetime.fromtimestamp(started, datetime.UTC).strftime(
             "%Y-%m-%dT%H:%M:%SZ"
