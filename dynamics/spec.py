@@ -199,7 +199,9 @@ class SystemSpec:
         if m.backend == "exact":
             step = step_control(m, dt, None, None)
         else:
-            step = step_control(m, self.dt if dt is None else dt, rtol, atol)
+            step = step_control(
+                m, self.dt if dt is None else dt, self.rtol if rtol is None else rtol, atol
+            )
         if state is not None:
             s0 = checked_state(system, state)
         return Setup(self, p, st, system, s0, m, step)
