@@ -199,6 +199,7 @@ def test_list_methods_shows_every_method_with_its_properties():
             "euler with dt=",
         ),
         (["analyze", "pendulum"], "pendulum"),
+        (["simulate", "disk", "--t-end", "1", "--wx", "0.1"], "--wx"),  # the disk is driven
     ],
 )
 def test_bad_input_exits_nonzero_with_one_line_naming_the_flag(args, needle):

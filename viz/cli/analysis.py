@@ -169,7 +169,7 @@ def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
     for s in spec.start:
         given = [getattr(args, c, None) for c in s.components]
         if any(v is not None for v in given):
-            if start.get("motion", "released") != "released" and s.name == "extra_spin":
+            if s.name == "extra_spin" and spec.start_values(start)["motion"] != "released":
                 raise CliError("--wx/--wy/--wz: only apply to --motion released")
             base = list(s.default)
             start[s.name] = tuple(b if v is None else v for b, v in zip(base, given, strict=True))
