@@ -185,7 +185,11 @@ def simulate(
         raise SettingError(
             next(iter(start)), "state gives the whole start; leave out " + ", ".join(start)
         )
-    setup = spec.setup(params, start, method=method, dt=dt, rtol=rtol, atol=atol, state=state)
+    try:
+        setup = spec.setup(params, start, method=method, dt=dt, rtol=rtol, atol=atol, state=state)
+    except SettingError as exc:  # a start setting is an argument of its own name here
+        field = exc.field.removeprefix("initial.")
+        raise SettingError(field, str(exc), fields=(field,)) from None
     t_end = _v.positive("t_end", t_end)
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
         raise SettingError(

@@ -43,6 +43,9 @@ class Setting:
     components: tuple[str, ...] = ()
     #: The values a word setting takes (``motion``: driven, released).
     choices: tuple[str, ...] = ()
+    #: ``(setting, value)``: given, this setting only means something when that other start
+    #: setting has that value (the disk's ``extra_spin`` needs ``motion = "released"``).
+    needs: tuple[str, Any] | None = None
 
     @property
     def flag(self) -> str:
@@ -152,6 +155,13 @@ class SystemSpec:
                 out[s.name] = s.check(values.get(s.name, s.default))
             except _v.SettingError as exc:
                 raise _v.SettingError(f"initial.{s.name}", str(exc)) from None
+        for s in self.start:
+            if s.needs is not None and s.name in values and out[s.needs[0]] != s.needs[1]:
+                other, value = s.needs
+                raise _v.SettingError(
+                    f"initial.{s.name}",
+                    f"{s.name} only applies when {other} is {value!r}, not {out[other]!r}",
+                )
         return out
 
     def analyze(self, values: Mapping[str, Any]) -> dict[str, Any]:

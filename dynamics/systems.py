@@ -388,6 +388,7 @@ DISK = SystemSpec(
             lambda n, v: _v.numbers(n, v, 3),
             "spin added at release (disk-frame components) [rad/s]",
             components=("wx", "wy", "wz"),
+            needs=("motion", "released"),
         ),
     ),
     build=_build_disk,

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+import dynamics
 from dynamics import api, measure
 
 
@@ -111,3 +112,10 @@ def test_fixed_step_samples_fall_at_exactly_the_times_asked():
     omega1 = api.analyze("hoop")["mode_frequencies"][0]
     bound = 1.5 * (omega1 * 0.1) ** 2 / 6 * (omega1 * 0.05)
     assert np.max(np.abs(rate - run.column("omega1")[1:-1])) < bound
+
+
+def test_a_start_setting_that_cannot_apply_is_refused_naming_it():
+    """The disk is driven unless released: an extra spin at release would be silently ignored."""
+    with pytest.raises(dynamics.SettingError) as err:
+        api.simulate("disk", t_end=1.0, extra_spin=(1e-3, 0.0, 0.0))
+    assert err.value.field == "extra_spin" and "released" in str(err.value)
