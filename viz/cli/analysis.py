@@ -71,7 +71,7 @@ def setting_error(exc: SettingError, args: argparse.Namespace | None = None) -> 
     return CliError(f"{', '.join(shown)}: {exc}")
 
 
-def _given(args: argparse.Namespace, spec: SystemSpec, names) -> dict[str, Any]:
+def _given(args: argparse.Namespace, names) -> dict[str, Any]:
     return {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
 
 
@@ -120,7 +120,7 @@ def analyze(system: str, args: argparse.Namespace) -> dict[str, Any]:
     """The seed's analytic results for ``system`` as a JSON-ready dict
     (:func:`dynamics.analysis.analyze`); :class:`CliError` naming the flag otherwise."""
     spec = SPECS[system]
-    given = _given(args, spec, [s.name for s in spec.params] + list(spec.analysis_start))
+    given = _given(args, [s.name for s in spec.params] + list(spec.analysis_start))
     try:
         return analysis.analyze(system, given)
     except SettingError as exc:
@@ -165,7 +165,7 @@ def _component_help(spec: SystemSpec, name: str) -> str:
 
 def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
     """The run's start from the flags given (the rest from the system's description)."""
-    start = _given(args, spec, [s.name for s in spec.start])
+    start = _given(args, [s.name for s in spec.start])
     for s in spec.start:
         given = [getattr(args, c, None) for c in s.components]
         if any(v is not None for v in given):
@@ -174,7 +174,7 @@ def _setup(spec: SystemSpec, args: argparse.Namespace) -> Setup:
             base = list(s.default)
             start[s.name] = tuple(b if v is None else v for b, v in zip(base, given, strict=True))
     setup = spec.setup(
-        _given(args, spec, [x.name for x in spec.params]),
+        _given(args, [x.name for x in spec.params]),
         start,
         method=args.method,
         dt=args.dt,
@@ -226,7 +226,7 @@ def _energy_overflows(setup: Setup) -> bool:
 def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     """Run ``system`` as the flags say and report its end (see ``mechviz simulate --help``)."""
     spec = SPECS[system]
-    given = _given(args, spec, [s.name for s in spec.params] + list(spec.analysis_start))
+    given = _given(args, [s.name for s in spec.params] + list(spec.analysis_start))
     try:
         analysis.check_representable(spec.analyze, given)
         setup = _setup(spec, args)

@@ -112,11 +112,6 @@ class ExhibitConfig:
         return self.spec.parameters(self.params)
 
 
-def default_params(spec: dynamics.SystemSpec) -> dict:
-    """The default parameters of a system as the ``params`` dict of a config."""
-    return spec.default_params()
-
-
 # =========================================================================== sample buffers
 class Ring:
     """The last ``maxlen`` rows of shape ``shape`` in one preallocated buffer written twice (at

@@ -20,7 +20,7 @@ from dynamics import cyclotron as cy
 from dynamics import measure
 from dynamics.systems import CYCLOTRON
 
-from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers, positive
+from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
 from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
 from .traces import Traces
@@ -42,7 +42,7 @@ class CyclotronConfig(ExhibitConfig):
 
     method: str = CYCLOTRON.default_method({})
     dt: float = CYCLOTRON.dt
-    params: dict = field(default_factory=lambda: default_params(CYCLOTRON))
+    params: dict = field(default_factory=CYCLOTRON.default_params)
     speed: float = CYCLOTRON.setting("speed").default
     vz: float = CYCLOTRON.setting("vz").default
     centre: tuple = CYCLOTRON.setting("centre").default

@@ -21,7 +21,7 @@ from dynamics import disk as dk
 from dynamics import measure
 from dynamics.systems import DISK
 
-from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
 from .traces import Traces
@@ -43,7 +43,7 @@ class DiskConfig(ExhibitConfig):
     # error below 1e-3 of the exhibit over 10 minutes (docs/bench/defaults.md).
     method: str = DISK.default_method({"motion": "released"})
     dt: float = DISK.dt
-    params: dict = field(default_factory=lambda: default_params(DISK))
+    params: dict = field(default_factory=DISK.default_params)
     mode: str = DISK.setting("motion").default
     extra_spin: tuple = DISK.setting("extra_spin").default
     follow_cm: bool = True

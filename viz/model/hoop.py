@@ -20,7 +20,7 @@ from dynamics import hoop as hp
 from dynamics import measure
 from dynamics.systems import HOOP, HOOP_MODES
 
-from .base import ExhibitConfig, ExhibitModel, Motion, default_params, finite_numbers
+from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
 from .plot import Curve, Variable, common_variables
 from .traces import Traces
@@ -43,7 +43,7 @@ class HoopConfig(ExhibitConfig):
     # (docs/bench/defaults.md)
     method: str = HOOP.default_method({})
     dt: float = HOOP.dt
-    params: dict = field(default_factory=lambda: default_params(HOOP))
+    params: dict = field(default_factory=HOOP.default_params)
     # The description's default start: both modes at rest, each at half the amplitude ("mix")
     mode: str = "mix"
     amplitude: float = HOOP_MODES[0] + HOOP_MODES[1]

@@ -27,7 +27,6 @@ from ..model.base import (  # noqa: F401  (re-exported for the scenes)
     History,
     Motion,
     Ring,
-    default_params,
     finite_numbers,
     fmt,
     log10_abs,
