@@ -192,14 +192,7 @@ def _write_folder(folder: Path, files: dict[str, bytes]) -> None:
 
 def _point(home: Path, target: str) -> None:
     """Make ``home/current`` lead to ``target`` in one rename (the commit)."""
-    tmp = home / f"{CURRENT}.link-{_new_id()}"
-    os.symlink(target, tmp)
-    try:
-        os.replace(tmp, home / CURRENT)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
+    _put_link(home, CURRENT, target)
     _fsync_dir(home)
 
 

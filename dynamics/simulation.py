@@ -145,11 +145,11 @@ class Simulation:
     ) -> None:
         self.system = system
         self.method = method if isinstance(method, Method) else get_method(method)
-        if not self.method.applies_to(system.name):
+        if not self.method.applies_to(system):
             raise SettingError(
                 "method",
                 f"method {self.method.name!r} does not apply to {system.name}; "
-                f"choose one of {', '.join(m.name for m in methods_for(system.name))}",
+                f"choose one of {', '.join(m.name for m in methods_for(system))}",
             )
         if step is None:
             step = step_control(self.method, dt, rtol, atol)

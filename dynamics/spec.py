@@ -176,7 +176,7 @@ class SystemSpec:
     def methods(self, start: Mapping[str, Any] | None = None) -> list[Method]:
         """The methods that apply for these start settings."""
         system, _ = self.build(self.parameters(), self.start_values(start))
-        return methods_for(system.name)
+        return methods_for(system)
 
     def setup(
         self,
@@ -200,8 +200,8 @@ class SystemSpec:
             m = get_method(name)
         except ValueError as exc:
             raise _v.SettingError("method", str(exc)) from None
-        if not m.applies_to(system.name):
-            names = ", ".join(x.name for x in methods_for(system.name))
+        if not m.applies_to(system):
+            names = ", ".join(x.name for x in methods_for(system))
             raise _v.SettingError(
                 "method",
                 f"method {m.name!r} does not apply to the {self.name} here; choose one of {names}",

@@ -118,51 +118,25 @@ REASONS = {
 }
 
 
-def limit_omega_dt(method: str, system_name: str | None = None) -> float | None:
+def limit_omega_dt(method: str, system=None) -> float | None:
     """Largest stable ``omega h`` for ``method`` (``None``: no limit; ``0``: none stable).
 
-    ``yoshida4`` composes the system's own symmetric step: Boris on the charge and the rotation
-    splitting on the free body keep the norm at any step; only on the hoop (Verlet) is there a
+    ``yoshida4`` composes ``system``'s own symmetric step (a :mod:`dynamics.systems` adapter or
+    its class): where that step keeps the norm at any step (Boris on the charge, the rotation
+    splitting on the free body) so does the composition; only over Verlet (the hoop) is there a
     limit.
     """
-    if method == "yoshida4" and system_name in ("cyclotron", "free-body"):
-        return None
     if method not in LIMITS:
         raise ValueError(f"no stability limit known for method {method!r}")
+    if method == "yoshida4" and system is not None and LIMITS.get(system.symmetric_step) is None:
+        return None
     return LIMITS[method]
 
 
 def fastest_frequency(system, state: np.ndarray | None = None) -> float:
-    """The highest angular frequency [rad/s] a step has to resolve in ``system``.
-
-    Charge: ``|q B / m|``. Hoop: the higher normal mode ``sqrt((1 + m/M) g / a)`` (the
-    linearisation about the hanging rest). Free body: the spectral radius of the Jacobian of its
-    right-hand side at ``state`` (default: the system's initial state), by central differences.
-    """
-    from . import cyclotron, hoop
-    from .integrators.kernels import RHS
-
-    name = system.name
-    if name == "cyclotron":
-        return cyclotron.gyrofrequency(system.params)
-    if name == "hoop":
-        return float(hoop.normal_modes(system.params)[0][-1])
-    if name == "free-body":
-        y0 = np.asarray(system.default_state() if state is None else state, dtype=float)
-        p = system.kernel_params()
-        d = y0.size
-        jac = np.empty((d, d))
-        fp, fm = np.empty(d), np.empty(d)
-        for j in range(d):
-            e = 1e-6 * max(1.0, abs(y0[j]))
-            yp, ym = y0.copy(), y0.copy()
-            yp[j] += e
-            ym[j] -= e
-            RHS[system.sys_id](yp, p, fp)
-            RHS[system.sys_id](ym, p, fm)
-            jac[:, j] = (fp - fm) / (2 * e)
-        return _spectral_radius(jac)
-    raise ValueError(f"no characteristic frequency for system {name!r}")
+    """The highest angular frequency [rad/s] a step has to resolve in ``system`` from ``state``
+    (default: its initial state): each adapter's ``fastest_frequency`` says how it is found."""
+    return system.fastest_frequency(state)
 
 
 def stability_limit(method_name: str, system, state: np.ndarray | None = None) -> float | None:
@@ -177,28 +151,21 @@ def stability_limit(method_name: str, system, state: np.ndarray | None = None) -
     if isinstance(system, str):
         system = _default_system(system)
     method = get_method(method_name)
-    if not method.applies_to(system.name):
+    if not method.applies_to(system):
         raise ValueError(f"method {method_name!r} does not apply to {system.name}")
     if method.adaptive or method.backend == "exact":
         return None
-    x = limit_omega_dt(method_name, system.name)
+    x = limit_omega_dt(method_name, system)
     if x is None or x == 0.0:
         return x
     return x / fastest_frequency(system, state)
 
 
 def _default_system(name: str):
-    from .disk import DiskParams
-    from .systems import Cyclotron, Hoop, ReleasedDisk
+    """The adapter called ``name`` in :data:`dynamics.systems.SYSTEMS`, default parameters."""
+    from .systems import SYSTEMS
 
-    table = {
-        "cyclotron": Cyclotron,
-        "charge": Cyclotron,
-        "hoop": Hoop,
-        "free-body": lambda: ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
-        "disk": lambda: ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
-    }
     try:
-        return table[name]()
+        return SYSTEMS[name]()
     except KeyError:
-        raise ValueError(f"unknown system {name!r}; choose one of {', '.join(table)}") from None
+        raise ValueError(f"unknown system {name!r}; choose one of {', '.join(SYSTEMS)}") from None

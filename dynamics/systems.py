@@ -15,6 +15,7 @@ motion [s], from which the driver estimates the steps of an adaptive run.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -38,7 +39,20 @@ def _period(omega: float) -> float:
 
 
 class _Adapter:
-    """What every adapter has unless it says more."""
+    """What every adapter has unless it says more.
+
+    Which methods apply follows from two facts a system states about itself: ``closed_form``
+    (its exact flow is known from every state: the ``exact`` method) and ``symmetric_step``
+    (the name of its own symmetric second-order step, which ``yoshida4`` composes; ``None``
+    when it has none). Every system with a compiled right-hand side (``sys_id``) takes the
+    general methods.
+    """
+
+    closed_form: ClassVar[bool] = False
+    symmetric_step: ClassVar[str | None] = None
+    #: The one-amplitude family of starts the stability atlas sweeps: its unit, its axis label
+    #: and the default range of amplitudes (see :meth:`amplitude_state`).
+    amplitude: ClassVar[tuple[str, str, tuple[float, float]] | None] = None
 
     def report(self, t: float) -> dict[str, list[float]]:
         """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
@@ -56,8 +70,12 @@ class Cyclotron(_Adapter):
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
     name = "cyclotron"
+    Params: ClassVar[type] = cyclotron.CyclotronParams
     sys_id = kernels.CYCLOTRON
     state_names = cyclotron.STATE_NAMES
+    closed_form = True
+    symmetric_step = "boris"
+    amplitude = ("m/s", "speed across the field [m/s]", (0.1, 2.0))
 
     def kernel_params(self) -> np.ndarray:
         return self.params.kernel_params()
@@ -79,6 +97,16 @@ class Cyclotron(_Adapter):
     def time_scale(self, states: np.ndarray) -> float:
         """The gyro-period ``2 pi m / |qB|``."""
         return _period(cyclotron.gyrofrequency(self.params))
+
+    def fastest_frequency(self, state: np.ndarray | None = None) -> float:
+        """The gyrofrequency ``|q B / m|`` [rad/s], from any state."""
+        return cyclotron.gyrofrequency(self.params)
+
+    def amplitude_state(self, a: float) -> np.ndarray:
+        """At the origin moving along +y at speed ``a`` [m/s] across the field."""
+        out = np.zeros(6)
+        out[4] = a
+        return out
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {
@@ -104,8 +132,11 @@ class Hoop(_Adapter):
 
     params: hoop.HoopParams = hoop.HoopParams()
     name = "hoop"
+    Params: ClassVar[type] = hoop.HoopParams
     sys_id = kernels.HOOP
     state_names = hoop.STATE_NAMES
+    symmetric_step = "verlet"
+    amplitude = ("rad", "amplitude A of each normal mode [rad]", (0.01, 1.5))
 
     def kernel_params(self) -> np.ndarray:
         return self.params.kernel_params()
@@ -130,6 +161,15 @@ class Hoop(_Adapter):
         once if that is shorter (a hoop set whirling)."""
         rate = float(np.max(np.abs(np.atleast_2d(states)[:, 2:4]), initial=0.0))
         return min(_period(hoop.normal_modes(self.params)[0][-1]), _period(rate))
+
+    def fastest_frequency(self, state: np.ndarray | None = None) -> float:
+        """The higher normal mode ``sqrt((1 + m/M) g / a)`` [rad/s] (the linearisation about
+        hanging at rest, whatever the state)."""
+        return float(hoop.normal_modes(self.params)[0][-1])
+
+    def amplitude_state(self, a: float) -> np.ndarray:
+        """Both normal modes at amplitude ``a`` [rad], at rest."""
+        return hoop.mode_state(self.params, (a, a))
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
@@ -160,8 +200,11 @@ class ReleasedDisk(_Adapter):
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
     name = "free-body"
+    Params: ClassVar[type] = disk.DiskParams
     sys_id = kernels.FREE_BODY
     state_names = disk.FREE_STATE_NAMES
+    symmetric_step = "splitting"
+    amplitude = ("rad/s", "extra spin (A, 0, A) at release [rad/s]", (0.0, 1.0))
 
     def kernel_params(self) -> np.ndarray:
         return disk.free_kernel_params(self.params)
@@ -183,6 +226,30 @@ class ReleasedDisk(_Adapter):
         """The period of the fastest body-frame angular velocity component."""
         w = np.abs(np.atleast_2d(states)[:, :3])
         return _period(float(np.max(w)) if w.size else 0.0)
+
+    def fastest_frequency(self, state: np.ndarray | None = None) -> float:
+        """The spectral radius [rad/s] of the Jacobian of the right-hand side at ``state``
+        (default: the start at release), by central differences: the tumble has no single
+        frequency, and the linearisation is what a step has to resolve."""
+        y0 = np.asarray(self.default_state() if state is None else state, dtype=float)
+        p = self.kernel_params()
+        rhs = kernels.RHS[self.sys_id]
+        d = y0.size
+        jac = np.empty((d, d))
+        fp, fm = np.empty(d), np.empty(d)
+        for j in range(d):
+            e = 1e-6 * max(1.0, abs(y0[j]))
+            yp, ym = y0.copy(), y0.copy()
+            yp[j] += e
+            ym[j] -= e
+            rhs(yp, p, fp)
+            rhs(ym, p, fm)
+            jac[:, j] = (fp - fm) / (2 * e)
+        return float(np.max(np.abs(np.linalg.eigvals(jac))))
+
+    def amplitude_state(self, a: float) -> np.ndarray:
+        """Released with the extra spin ``(a, 0, a)`` [rad/s] (disk frame)."""
+        return disk.released_initial_state(self.params, (a, 0.0, a))
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         L = disk.free_angular_momentum_space(self.kernel_params(), states)
@@ -208,8 +275,10 @@ class DrivenDisk(_Adapter):
 
     params: disk.DiskParams = disk.DiskParams()
     name = "driven-disk"
+    Params: ClassVar[type] = disk.DiskParams
     sys_id = None
     state_names = ("angle", "omega")
+    closed_form = True
 
     def kernel_params(self) -> np.ndarray:
         return np.array([self.params.omega])
@@ -231,6 +300,10 @@ class DrivenDisk(_Adapter):
     def time_scale(self, states: np.ndarray) -> float:
         """The period of the spin ``2 pi / |omega|``."""
         return _period(self.params.omega)
+
+    def fastest_frequency(self, state: np.ndarray | None = None) -> float:
+        """The spin ``|omega|`` [rad/s]."""
+        return abs(self.params.omega)
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
@@ -257,7 +330,7 @@ class DrivenDisk(_Adapter):
 
 System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk
 
-# Every system by the name the methods and the driver know it by (``Method.systems``).
+# Every system by the name the methods and the driver know it by.
 SYSTEMS: dict[str, type] = {s.name: s for s in (Cyclotron, Hoop, ReleasedDisk, DrivenDisk)}
 
 

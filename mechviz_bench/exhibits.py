@@ -27,6 +27,7 @@ import numpy as np
 from dynamics import cyclotron, disk, hoop, stability
 from dynamics.integrators.base import IntegrationError
 from dynamics.simulation import Simulation
+from dynamics.systems import CYCLOTRON, HOOP
 
 SPAN = 600.0  # 10 minutes of simulated time [s]
 SAMPLE = 1.0  # error sampled every second [s]
@@ -38,21 +39,21 @@ def _exhibits(cases: dict) -> dict:
     """``cases``: exhibit name -> ``{"system", "state", "state_note"}`` (the viewer's defaults);
     adds each exhibit's on-screen error, size and candidate methods."""
     out = {}
-    if "cyclotron" in cases:
-        c = cases["cyclotron"]
+    if CYCLOTRON.name in cases:
+        c = cases[CYCLOTRON.name]
         s0 = np.asarray(c["state"], float)
 
         def charge_err(y, ref):
             return float(np.linalg.norm(y[:3] - ref[:3]))
 
-        out["cyclotron"] = {
+        out[CYCLOTRON.name] = {
             **c,
             "size": 2.0 * cyclotron.larmor_radius(c["system"].params, s0),
             "error": charge_err,
             "methods": ("exact", "boris", "rk4", "yoshida4"),
         }
-    if "hoop" in cases:
-        c = cases["hoop"]
+    if HOOP.name in cases:
+        c = cases[HOOP.name]
         hp = c["system"].params
 
         def hoop_err(y, ref):
@@ -60,7 +61,7 @@ def _exhibits(cases: dict) -> dict:
             c2, b2 = hoop.positions(hp, ref)
             return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
 
-        out["hoop"] = {
+        out[HOOP.name] = {
             **c,
             "size": 2.0 * hp.radius,
             "error": hoop_err,
@@ -177,12 +178,12 @@ def bench_cases() -> dict[str, dict]:
     cyc, hoop, disk = CyclotronConfig(), HoopConfig(), DiskConfig()
     released = dynamics.ReleasedDisk(disk.physics(), tuple(disk.extra_spin))
     return {
-        "cyclotron": {
+        CYCLOTRON.name: {
             "system": dynamics.Cyclotron(cyc.physics()),
             "state": cyc.initial_state(),
             "state_note": f"speed {cyc.speed:g} m/s, vz {cyc.vz:g} m/s (the viewer's default)",
         },
-        "hoop": {
+        HOOP.name: {
             "system": dynamics.Hoop(hoop.physics()),
             "state": hoop.initial_state(),
             "state_note": f"mode {hoop.mode!r}, amplitude {hoop.amplitude:g} rad (the viewer's default)",

@@ -26,7 +26,7 @@ from dynamics import hoop, stability
 from dynamics.integrators import kernels
 from dynamics.integrators.base import IntegrationError
 from dynamics.simulation import Simulation
-from dynamics.systems import Cyclotron, Hoop
+from dynamics.systems import DISK, HOOP, Cyclotron, Hoop
 
 from .problems import PROBLEMS
 
@@ -34,8 +34,8 @@ from .problems import PROBLEMS
 LONG_RUNS = {
     # problem: (step, methods); the step is loose on purpose: a frame-budget step.
     "charge": (0.1, ("rk4", "boris", "yoshida4", "midpoint")),
-    "hoop": (0.05, ("rk4", "verlet", "yoshida4")),
-    "disk": (0.1, ("rk4", "splitting", "yoshida4")),
+    HOOP.name: (0.05, ("rk4", "verlet", "yoshida4")),
+    DISK.name: (0.1, ("rk4", "splitting", "yoshida4")),
 }
 
 
@@ -137,18 +137,18 @@ def stability_points(progress=None) -> dict:
     """Theory curves and measured points of the amplification factor against ``omega dt``."""
     xs = np.linspace(0.0, 4.0, 401)
     methods = {
-        "euler": ("charge", _charge_factor),
-        "rk4": ("charge", _charge_factor),
-        "midpoint": ("charge", _charge_factor),
-        "boris": ("charge", _charge_factor),
-        "exact": ("charge", _charge_factor),
-        "verlet": ("hoop mode 2", hoop_mode2_factor),
-        "yoshida4": ("hoop mode 2", hoop_mode2_factor),
+        "euler": ("charge", Cyclotron, _charge_factor),
+        "rk4": ("charge", Cyclotron, _charge_factor),
+        "midpoint": ("charge", Cyclotron, _charge_factor),
+        "boris": ("charge", Cyclotron, _charge_factor),
+        "exact": ("charge", Cyclotron, _charge_factor),
+        "verlet": ("hoop mode 2", Hoop, hoop_mode2_factor),
+        "yoshida4": ("hoop mode 2", Hoop, hoop_mode2_factor),
     }
     out = {"x": xs.tolist(), "methods": {}}
-    for m, (where, fn) in methods.items():
+    for m, (where, system, fn) in methods.items():
         theory = [stability.amplification(m, x) for x in xs]
-        limit = stability.limit_omega_dt(m, "hoop" if where.startswith("hoop") else "cyclotron")
+        limit = stability.limit_omega_dt(m, system)
         pts = []
         for x in X_POINTS:
             g, status = fn(m, x)
@@ -173,10 +173,10 @@ STEP_CASES = (
     # name, system key, table, system id, h, steps
     ("rk4-charge", "charge", kernels.RK4, kernels.CYCLOTRON, 0.01, 1_000_000),
     ("boris", "charge", kernels.SYMMETRIC2, kernels.CYCLOTRON, 0.01, 1_000_000),
-    ("rk4-hoop", "hoop", kernels.RK4, kernels.HOOP, 0.001, 125_000),
-    ("verlet-hoop", "hoop", kernels.SYMMETRIC2, kernels.HOOP, 0.001, 125_000),
-    ("rk4-free-body", "disk", kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
-    ("splitting", "disk", kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
+    ("rk4-hoop", HOOP.name, kernels.RK4, kernels.HOOP, 0.001, 125_000),
+    ("verlet-hoop", HOOP.name, kernels.SYMMETRIC2, kernels.HOOP, 0.001, 125_000),
+    ("rk4-free-body", DISK.name, kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
+    ("splitting", DISK.name, kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
 )
 # C -O2 per-step costs measured earlier on this machine (other load): reference figures.
 NOTES_C_NS = {
@@ -282,7 +282,7 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
 
     rounds = 2 if quick else 5
     member_steps = ENSEMBLE_MEMBER_STEPS // (2 if quick else 1)
-    pb = PROBLEMS["hoop"]
+    pb = PROBLEMS[HOOP.name]
     rng = np.random.default_rng(0)
     rows = {}
     saved = taylor.PARALLEL_MIN

@@ -41,7 +41,7 @@ from dynamics.disk import DiskParams
 from dynamics.files import write_json_atomically
 from dynamics.hoop import HoopParams
 from dynamics.simulation import Simulation
-from dynamics.systems import Cyclotron, Hoop, ReleasedDisk
+from dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
 
 REFERENCE_PATH = asset("bench", "references.json")
 REFERENCE_TOL = 1e-13  # the DOP853 cross-check
@@ -89,8 +89,8 @@ PROBLEMS: dict[str, Problem] = {
         2.0 * math.pi,
         True,
     ),
-    "hoop": Problem(
-        "hoop",
+    HOOP.name: Problem(
+        HOOP.name,
         "Bead on a hoop (20 s)",
         Hoop(),
         (0.5, -0.3, 0.0, 0.0),
@@ -101,8 +101,8 @@ PROBLEMS: dict[str, Problem] = {
         2.0 * math.pi / math.sqrt(9.81 / 2.0),  # the slower normal mode
         False,
     ),
-    "disk": Problem(
-        "disk",
+    DISK.name: Problem(
+        DISK.name,
         "Released disk with bead (50 s)",
         ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
         tuple(ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)).default_state()),

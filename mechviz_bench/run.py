@@ -22,6 +22,7 @@ from pathlib import Path
 
 from dynamics.integrators.base import get_method
 from dynamics.simulation import Simulation
+from viz.progress import progress_bar
 
 from . import exhibits, experiments
 from .peer_sweeps import flag_outliers, peer_table, sweep_peer
@@ -62,38 +63,20 @@ class Phases:
 
 
 class Progress:
-    """A one-line progress bar on stderr when it is a terminal; silent otherwise."""
+    """The bench's progress: a bar of its steps on stderr (tqdm, :func:`viz.progress.progress_bar`)
+    with the current step's label; silent off a terminal."""
 
     def __init__(self, total: int, enabled: bool | None = None) -> None:
-        self.total = max(total, 1)
-        self.done = 0
-        self.label = ""
-        self.t0 = time.perf_counter()
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.bar = progress_bar("mechviz bench", max(total, 1), enabled=enabled is not False)
 
     def set(self, label: str) -> None:
-        self.label = label
-        self._draw()
+        self.bar.set_postfix_str(label[:40])
 
     def __call__(self, n: int = 1) -> None:
-        self.done = min(self.total, self.done + n)
-        self._draw()
-
-    def _draw(self) -> None:
-        if not self.enabled:
-            return
-        width = 30
-        fill = int(width * self.done / self.total)
-        secs = time.perf_counter() - self.t0
-        sys.stderr.write(
-            f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} "
-            f"{secs:5.0f} s  {self.label[:40]:<40}"
-        )
-        sys.stderr.flush()
+        self.bar.update(min(n, self.bar.total - self.bar.n))
 
     def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")
+        self.bar.close()
 
 
 def machine() -> dict:

@@ -16,7 +16,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,8 @@ import pytest
 pytest.importorskip("distributed")
 pytest.importorskip("xarray")
 pytest.importorskip("zarr")
+
+from waiting import scaled, wait_until
 
 from dynamics import hoop
 from dynamics.atlas import store
@@ -52,7 +53,7 @@ def client():
         silence_logs=logging.CRITICAL,
     )
     c = Client(cluster)
-    c.wait_for_workers(2, timeout=120)
+    c.wait_for_workers(2, timeout=scaled(120))
     yield c
     c.close()
     cluster.close()
@@ -79,15 +80,6 @@ def assert_same_map(ds, reference, spec: AtlasSpec) -> None:
     for name in VARIABLES[spec.kind]:
         assert same_bits(ds[name].values, reference[name].values), name
     assert ds["chunk_done"].values.all()
-
-
-def wait_for(condition, timeout: float, what: str) -> None:
-    """Poll ``condition`` until it holds (no fixed sleep: the wait ends as soon as it does)."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
 
 
 def test_distributed_map_equals_serial_bit_for_bit(client, tmp_path):
@@ -145,16 +137,16 @@ def test_interrupted_run_resumes_to_the_same_map_computing_no_chunk_twice(client
         cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
     )
     try:
-        wait_for(lambda: path.exists() and (path / "zarr.json").exists(), 120, "the store")
-        wait_for(lambda: store.done_chunks(path).sum() >= 3, 120, "three chunks to land")
+        wait_until(lambda: path.exists() and (path / "zarr.json").exists(), 120, "the store")
+        wait_until(lambda: store.done_chunks(path).sum() >= 3, 120, "three chunks to land")
         if how == "ctrl-c":
             os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
-            _, err = proc.communicate(timeout=60)
+            _, err = proc.communicate(timeout=scaled(60))
             assert proc.returncode == 130, err.decode()
             assert b"--resume" in err and b"Traceback" not in err, err.decode()
         else:
             os.killpg(proc.pid, signal.SIGKILL)  # the command and its cluster, all at once
-            proc.communicate(timeout=60)
+            proc.communicate(timeout=scaled(60))
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -192,7 +184,7 @@ def test_worker_killed_mid_run_leaves_a_complete_and_correct_map(client, tmp_pat
     assert killed, "no worker was busy to kill"
     assert report.complete and sorted(report.computed) == spec.chunks()
     assert_same_map(store.load(tmp_path / "a.zarr"), compute_serial(spec), spec)
-    client.wait_for_workers(2, timeout=120)  # the nanny brings it back for the next test
+    client.wait_for_workers(2, timeout=scaled(120))  # the nanny brings it back for the next test
     assert killed[0] not in client.run(os.getpid).values()
 
 
@@ -249,6 +241,7 @@ def test_maps_have_labelled_axes_and_colour_bars(tmp_path):
         assert label in text
 
 
+@pytest.mark.slow
 def test_resume_of_another_run_is_refused_in_one_line_and_changes_nothing(tmp_path, capsys):
     spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
     out = tmp_path / "atlas"

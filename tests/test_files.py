@@ -125,6 +125,7 @@ files.write_files_atomically(out, {"a.viser": b"new viser", "a.csv": b"new csv"}
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP", "SIGINT"])
+@pytest.mark.slow
 def test_a_signal_while_writing_leaves_the_folder_as_it_was(tmp_path, signame):
     files.write_files_atomically(tmp_path, OLD)
     child = subprocess.Popen(

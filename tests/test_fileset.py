@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from killing import killed_after_nth_call
 
 from dynamics import fileset
 from dynamics.files import WriteInterrupted
@@ -75,33 +76,23 @@ def write_earlier_layout(folder: Path, files: dict[str, bytes]) -> None:
     (folder / ".a.csv.4242.old").write_bytes(b"older")
 
 
-_CHILD = """
-import os, signal, sys
+_CHILD = killed_after_nth_call(
+    ("rename", "replace", "symlink", "unlink", "rmdir", "mkdir"),
+    """
 from pathlib import Path
-kill_at, count = int(sys.argv[2]), 0
-def counted(real):
-    def op(*args, **kwargs):
-        global count
-        result = real(*args, **kwargs)
-        count += 1
-        if count == kill_at:
-            os.kill(os.getpid(), signal.SIGKILL)
-        return result
-    return op
-for name in ("rename", "replace", "symlink", "unlink", "rmdir", "mkdir"):
-    setattr(os, name, counted(getattr(os, name)))
 from dynamics import fileset
 import json
 files = {k: v.encode("latin-1") for k, v in json.loads(sys.stdin.read()).items()}
-fileset.write_set(Path(sys.argv[1]), "a", files)
+fileset.write_set(Path(sys.argv[2]), "a", files)
 print(count)
-"""
+""",
+)
 
 
 def run_child(folder: Path, kill_at: int) -> subprocess.CompletedProcess:
     data = json.dumps({k: v.decode("latin-1") for k, v in NEW.items()})
     return subprocess.run(
-        [sys.executable, "-c", _CHILD, str(folder), str(kill_at)],
+        [sys.executable, "-c", _CHILD, str(kill_at), str(folder)],
         input=data,
         capture_output=True,
         text=True,
@@ -110,6 +101,7 @@ def run_child(folder: Path, kill_at: int) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("start", ["empty", "set", "earlier layout"])
+@pytest.mark.slow
 def test_sigkill_after_any_step_leaves_a_whole_set_and_the_next_write_cleans_up(tmp_path, start):
     def prepare(folder: Path) -> dict[str, bytes]:
         if start == "set":
@@ -203,6 +195,7 @@ with fileset._Lock(home, [], None):
 """
 
 
+@pytest.mark.slow
 def test_a_second_writer_waits_for_the_first_and_both_sets_arrive_whole(tmp_path):
     holder = subprocess.Popen(
         [sys.executable, "-c", _HOLDER, str(tmp_path)],

@@ -53,7 +53,7 @@ def _final_error(system, method, s0, T, n):
 FIXED = [
     (m.name, system)
     for system in PROBLEMS
-    for m in methods_for(system)
+    for m in methods_for(PROBLEMS[system][0])
     if not m.adaptive and m.backend == "numba" and m.name != "exact"
 ]
 
@@ -305,7 +305,7 @@ import dynamics
 from dynamics.disk import DiskParams
 systems = [dynamics.Cyclotron(), dynamics.Hoop(), dynamics.ReleasedDisk(DiskParams(omega=1.0))]
 for system in systems:
-    for m in dynamics.methods_for(system.name):
+    for m in dynamics.methods_for(system):
         if m.backend == "scipy":
             continue
         kw = {"rtol": 1e-6} if m.adaptive else ({} if m.backend == "exact" else {"dt": 1e-3})

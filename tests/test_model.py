@@ -2,7 +2,8 @@
 :mod:`viz.model` with viser unimportable, and match what the drawn exhibit records.
 
 Also the shape of the code the model split promises: no import cycle (imports inside functions
-counted), no module over 600 lines.
+counted), no module over 600 lines, each system named (as a string) outside its own modules in
+at most two files.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ _HEADLESS = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_a_demo_runs_headless_without_viser_and_its_figures_are_the_physics():
     out = subprocess.run(
         [sys.executable, "-c", _HEADLESS], capture_output=True, text=True, timeout=300, cwd=ROOT
@@ -60,6 +62,7 @@ def test_a_demo_runs_headless_without_viser_and_its_figures_are_the_physics():
     assert figs["radius after the kick"]["measured"] == pytest.approx(np.hypot(1.0, 0.5), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_the_headless_model_records_what_the_drawn_exhibit_records():
     from viz.record.demo import load_demo
     from viz.record.run import run_demo, trace_demo
@@ -149,3 +152,43 @@ def test_no_module_is_over_six_hundred_lines():
         if (n := len(p.read_text(encoding="utf-8").splitlines())) > 600
     }
     assert not long, long
+
+
+def _string_constants(tree: ast.AST) -> set[str]:
+    """The string literals of ``tree``, docstrings left out (they document, they do not
+    dispatch)."""
+    docs = {
+        id(node.body[0].value)
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.body
+        and isinstance(node.body[0], ast.Expr)
+        and isinstance(node.body[0].value, ast.Constant)
+    }
+    return {
+        n.value
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Constant) and isinstance(n.value, str) and id(n) not in docs
+    }
+
+
+def test_each_system_is_named_in_its_own_modules_and_at_most_two_other_files():
+    import dynamics
+
+    own = {"dynamics", "viz/model", "viz/scene"}
+    by_system: dict[str, set[str]] = {}
+    for spec_name in dynamics.SPECS:
+        # the driver's names of the same system (the disk's two motions) count as its name
+        names = {spec_name} | {n for n in dynamics.SYSTEMS if spec_name in n}
+        if spec_name == "disk":
+            names |= {dynamics.ReleasedDisk.name}
+        for path in _modules().values():
+            rel = path.relative_to(ROOT)
+            if str(rel.parent) in own and rel.stem == spec_name:
+                continue
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            if names & _string_constants(tree):
+                by_system.setdefault(spec_name, set()).add(str(rel))
+    assert by_system, "the scan found no system's name at all: it scans nothing"
+    crowded = {n: sorted(f) for n, f in by_system.items() if len(f) > 2}
+    assert not crowded, crowded

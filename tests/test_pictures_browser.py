@@ -20,7 +20,7 @@ pytestmark = pytest.mark.browser
 def viewer():
     browser.require_browser()
     from viz.app import MechvizApp, warm_up
-    from viz.scene import CyclotronConfig, DiskConfig, HoopConfig
+    from viz.model import CyclotronConfig, DiskConfig, HoopConfig
 
     configs = {
         # off the axis and kicked: r swings in its well

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import http.client
 import os
+import signal
 import socket
 import subprocess
 import sys
 import threading
+import time
 import urllib.error
 import urllib.request
 
@@ -85,14 +87,20 @@ def test_the_root_url_redirects_to_the_list_or_the_only_recording(served, tmp_pa
         server.server_close()
 
 
+def start_play(folder, **popen) -> subprocess.Popen:
+    """``mechviz play FOLDER --port 0`` in a child process, its output as text."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "viz.cli", "play", str(folder), "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+        **({"stderr": subprocess.PIPE} | popen),
+    )
+
+
+@pytest.mark.slow
 def test_a_client_that_goes_away_is_not_an_error(tmp_path):
     (tmp_path / "big.viser").write_bytes(os.urandom(8 << 20))
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    proc = start_play(tmp_path)
     try:
         line = proc.stdout.readline()
         port = int(line.split("http://127.0.0.1:", 1)[1].split("/", 1)[0])
@@ -111,6 +119,7 @@ def test_a_client_that_goes_away_is_not_an_error(tmp_path):
     assert "Traceback" not in err and "Error" not in err, err
 
 
+@pytest.mark.slow
 def test_a_port_out_of_range_is_refused_with_status_2(tmp_path):
     (tmp_path / "a.viser").write_bytes(RECORDING)
     out = subprocess.run(
@@ -170,6 +179,7 @@ def _raise_descriptor_limit(needed: int) -> None:
         resource.setrlimit(resource.RLIMIT_NOFILE, (needed, hard))
 
 
+@pytest.mark.slow
 def test_a_request_is_answered_while_1100_idle_connections_are_open(tmp_path):
     import re
     import resource
@@ -181,12 +191,7 @@ def test_a_request_is_answered_while_1100_idle_connections_are_open(tmp_path):
     def usual_limit():  # the server runs with the usual 1,024 descriptors
         resource.setrlimit(resource.RLIMIT_NOFILE, (1024, hard))
 
-    server = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
-        stdout=subprocess.PIPE,
-        text=True,
-        preexec_fn=usual_limit,
-    )
+    server = start_play(tmp_path, stderr=None, preexec_fn=usual_limit)
     idle = []
     try:
         port = int(re.search(r":(\d+)/", server.stdout.readline()).group(1))
@@ -240,6 +245,7 @@ def test_file_names_with_terminal_escapes_are_printed_escaped(tmp_path, capsys):
     assert server_started.is_set() and "\x1b" not in out and "\\x1b]0;pwned" in out
 
 
+@pytest.mark.slow
 def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
     from viz.cli import main
 
@@ -263,3 +269,32 @@ def test_one_recording_made_by_record_is_served_anew_after_it_is_recorded_again(
     finally:
         server.shutdown()
         server.server_close()
+
+
+@pytest.mark.slow
+def test_play_serves_the_client_and_the_recording_then_stops_on_ctrl_c(tmp_path):
+    from viz import record as rec
+
+    res = rec.record(rec.load_demo("helix").with_overrides(duration=1.0, fps=10), tmp_path)
+    proc = start_play(tmp_path)
+    try:
+        url = None
+        deadline = time.monotonic() + scaled(30)
+        while url is None and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if line.startswith("helix.viser: "):
+                url = line.split(": ", 1)[1].strip()
+        assert url and url.startswith("http://127.0.0.1:")
+        page = urllib.request.urlopen(url, timeout=scaled(10)).read()
+        assert b"<html" in page.lower()[:200] or b"<!doctype html" in page.lower()[:200]
+        base, query = url.split("/?playbackPath=")
+        data = urllib.request.urlopen(f"{base}/{query}", timeout=scaled(10)).read()
+        assert data == res.paths[".viser"].read_bytes()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=scaled(10))
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    assert "stopped" in out

@@ -11,15 +11,9 @@ import pytest
 
 import dynamics
 from dynamics import hoop as hp
+from viz.model import CyclotronConfig, DiskConfig, HoopConfig
 from viz.model.plot import PlotImage, Samples
-from viz.scene import (
-    CyclotronConfig,
-    CyclotronExhibit,
-    DiskConfig,
-    DiskExhibit,
-    HoopConfig,
-    HoopExhibit,
-)
+from viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit
 
 CASES = [
     (CyclotronExhibit, CyclotronConfig(centre=(0.6, 0.0), vz=0.1)),
@@ -156,6 +150,7 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
         assert reach >= np.abs(w[:, [i, j]]).max()  # the curve reaches as far as the motion
 
 
+@pytest.mark.slow
 def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_other_motion(server):
     from viz.app import MechvizApp
 

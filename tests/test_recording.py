@@ -7,11 +7,6 @@ import csv
 import io
 import json
 import os
-import signal
-import subprocess
-import sys
-import time
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -180,12 +175,14 @@ def _interrupt_at(frame):
     return progress
 
 
+@pytest.mark.slow
 def test_a_dark_recording_opens_on_the_dark_page(tmp_path):
     res = rec.record(_short(), tmp_path, theme="dark")
     assert "darkMode:true" in res.paths[".html"].read_text()
     assert "darkMode:false" in rec.record(_short(), tmp_path / "light").paths[".html"].read_text()
 
 
+@pytest.mark.slow
 def test_interrupted_first_recording_leaves_nothing(tmp_path):
     out = tmp_path / "new"
     with pytest.raises(rec.RecordingFailed, match="interrupted; nothing was written") as info:
@@ -194,6 +191,7 @@ def test_interrupted_first_recording_leaves_nothing(tmp_path):
     assert _files(out) == {}
 
 
+@pytest.mark.slow
 def test_interrupted_recording_keeps_the_previous_files_unchanged(tmp_path):
     rec.record(_short(), tmp_path)
     before = _files(tmp_path)
@@ -203,6 +201,7 @@ def test_interrupted_recording_keeps_the_previous_files_unchanged(tmp_path):
     assert _files(tmp_path) == before
 
 
+@pytest.mark.slow
 def test_full_disk_while_writing_leaves_no_partial_file(tmp_path, monkeypatch):
     rec.record(_short(), tmp_path)
     before = _files(tmp_path)
@@ -236,6 +235,7 @@ def _blowing_up_demo(name="blowup"):
     return rec.parse_demo(raw, name=name)
 
 
+@pytest.mark.slow
 def test_method_that_blows_up_fails_the_recording_and_writes_nothing(tmp_path):
     with pytest.raises(rec.RecordingFailed, match=r"euler.*nothing was written") as info:
         rec.record(_blowing_up_demo(), tmp_path / "out")
@@ -282,6 +282,7 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
         ("tumbling-disk", "wobble growth rate", lambda m: m["growth_rate"].value),
     ],
 )
+@pytest.mark.slow
 def test_a_readout_and_the_manifest_report_the_same_number_for_one_motion(name, figure, readout):
     """The exhibit's readout (what the viewer shows) and the manifest measure with the same
     estimator on the same samples, so they are the same number."""
@@ -294,6 +295,7 @@ def test_a_readout_and_the_manifest_report_the_same_number_for_one_motion(name, 
 
 
 # --------------------------------------------------------------------------- command line
+@pytest.mark.slow
 def test_record_list_names_every_demo_with_a_description(capsys):
     assert main(["record", "--list"]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -301,6 +303,7 @@ def test_record_list_names_every_demo_with_a_description(capsys):
     assert all(len(line.split(None, 1)[1]) > 20 for line in out)
 
 
+@pytest.mark.slow
 def test_record_command_writes_the_files_and_reports(tmp_path, capsys):
     assert (
         main(["record", "hoop-mode1", "--out", str(tmp_path), "--duration", "1", "--fps", "10"])
@@ -354,6 +357,7 @@ def test_bad_arguments_give_a_one_line_error_and_exit_status_2(argv, message, ca
     ("extra", "named"),
     [("dt = 1e-9\n", "dt = 1e-09"), ("dt = 0.01\nspeed = 1e9\n", "speed x duration")],
 )
+@pytest.mark.slow
 def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys, extra, named):
     demo_file = tmp_path / "huge.toml"
     demo_file.write_text(
@@ -366,6 +370,7 @@ def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_record_command_reports_a_blow_up_in_one_line_with_status_1(tmp_path, capsys):
     demo_file = tmp_path / "blowup.toml"
     demo_file.write_text(
@@ -396,40 +401,8 @@ def test_demo_files_reject_unknown_keys():
         )
 
 
-# --------------------------------------------------------------------------- play
-@pytest.mark.slow
-def test_play_serves_the_client_and_the_recording_then_stops_on_ctrl_c(tmp_path):
-    res = rec.record(_short(), tmp_path)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        url = None
-        deadline = time.monotonic() + 30
-        while url is None and time.monotonic() < deadline:
-            line = proc.stdout.readline()
-            if line.startswith("helix.viser: "):
-                url = line.split(": ", 1)[1].strip()
-        assert url and url.startswith("http://127.0.0.1:")
-        page = urllib.request.urlopen(url, timeout=10).read()
-        assert b"<html" in page.lower()[:200] or b"<!doctype html" in page.lower()[:200]
-        base, query = url.split("/?playbackPath=")
-        data = urllib.request.urlopen(f"{base}/{query}", timeout=10).read()
-        assert data == res.paths[".viser"].read_bytes()
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=10)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 0, err
-    assert "Traceback" not in err
-    assert "stopped" in out
-
-
 # --------------------------------------------------------------------------- live Record toggle
+@pytest.mark.slow
 def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatch):
     import base64
     import re

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from killing import killed_after_nth_call
 
 from dynamics import fileset
 from viz import record as rec
@@ -70,27 +71,19 @@ def earlier_layout(out: Path) -> dict[str, bytes]:
 
 _RECORD = [sys.executable, "-m", "viz.cli", "record", "helix", "--duration", "0.6", "--fps", "5"]
 
-_KILL_AFTER_RENAME = """
-import os, signal, sys
-kill_at, count = int(sys.argv[1]), 0
-def counted(real):
-    def op(*args, **kwargs):
-        global count
-        result = real(*args, **kwargs)
-        count += 1
-        if count == kill_at:
-            os.kill(os.getpid(), signal.SIGKILL)
-        return result
-    return op
-os.rename, os.replace = counted(os.rename), counted(os.replace)
+_KILL_AFTER_RENAME = killed_after_nth_call(
+    ("rename", "replace"),
+    """
 from viz.cli import main
 sys.exit(main(sys.argv[2:]))
-"""
+""",
+)
 
 
 @pytest.mark.parametrize(
     ("start", "n"), [*(("earlier layout", n) for n in (1, 2, 3, 4)), ("links", 1)]
 )
+@pytest.mark.slow
 def test_record_killed_after_its_nth_rename_leaves_a_whole_recording(tmp_path, start, n):
     out = tmp_path / "out"
     if start == "links":
@@ -110,6 +103,7 @@ def test_record_killed_after_its_nth_rename_leaves_a_whole_recording(tmp_path, s
     assert_nothing_stray(out)
 
 
+@pytest.mark.slow
 def test_two_records_at_once_end_with_one_complete_recording(tmp_path):
     out = tmp_path / "out"
     old = earlier_layout(out)
@@ -138,6 +132,7 @@ def _snapshot(folder: Path) -> dict[str, bytes | str]:
     return out
 
 
+@pytest.mark.slow
 def test_ctrl_c_0_3_s_after_start_exits_130_and_leaves_the_folder_unchanged(tmp_path):
     record_short(tmp_path)
     before = _snapshot(tmp_path)
@@ -167,6 +162,7 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+@pytest.mark.slow
 def test_ctrl_c_while_trimesh_imports_is_not_swallowed(tmp_path):
     record_short(tmp_path)
     before = _snapshot(tmp_path)

@@ -162,6 +162,7 @@ else:
 
 
 @pytest.mark.parametrize("writer", ["set", "files"])
+@pytest.mark.slow
 def test_sighup_while_syncing_after_the_switch_ends_quietly_with_the_new_files(tmp_path, writer):
     res = subprocess.run(
         [sys.executable, "-c", _HUP_AFTER_SWITCH, str(tmp_path), writer],

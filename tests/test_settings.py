@@ -54,6 +54,7 @@ def _start(ex) -> tuple[np.ndarray, dict, str]:
 
 
 @pytest.mark.parametrize("system", list(dynamics.SPECS))
+@pytest.mark.slow
 def test_every_front_end_starts_a_system_from_the_same_default(system, app, server):
     from viz.record.demo import parse_demo
     from viz.scene import EXHIBITS
@@ -107,6 +108,7 @@ def _named(spec, field: str) -> dict[str, str]:
 
 
 @pytest.mark.parametrize(("field", "method", "typed"), BAD)
+@pytest.mark.slow
 def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(
     field, method, typed, app, monkeypatch
 ):

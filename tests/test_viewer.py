@@ -30,7 +30,8 @@ import screen  # noqa: E402  (tests/screen.py)
 from mechviz_bench.frame_cost import measure_frame_cost  # noqa: E402
 from viz import geometry as geo  # noqa: E402
 from viz.app import MechvizApp, warm_up  # noqa: E402
-from viz.scene import CyclotronConfig, CyclotronExhibit, DiskExhibit, HoopConfig, HoopExhibit  # noqa: E402  # noqa: E402
+from viz.model import CyclotronConfig, HoopConfig  # noqa: E402
+from viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
 from viz.scene.disk import LIFT, P  # noqa: E402
 from viz.scene.panel import Panel  # noqa: E402
 

@@ -10,7 +10,8 @@ API for other tools (the recorder, the bench)
 ---------------------------------------------
 Exhibits work without the app (:mod:`viz.scene` holds them and describes the contract)::
 
-    from viz.scene import CyclotronConfig, CyclotronExhibit
+    from viz.model import CyclotronConfig
+    from viz.scene import CyclotronExhibit
 
     ex = CyclotronExhibit(server, CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
     ex.advance(1 / 30)                 # simulated seconds; a blow-up pauses it (ex.paused, ex.failure)

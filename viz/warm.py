@@ -48,7 +48,12 @@ def warm_method(system_name: str, method: str) -> float:
 
 def every_method(systems: Iterable[str]) -> list[tuple[str, str]]:
     """``(system, method)`` for every compiled method of ``systems``."""
-    return [(s, m.name) for s in systems for m in dynamics.methods_for(s) if m.backend != "scipy"]
+    return [
+        (s, m.name)
+        for s in systems
+        for m in dynamics.methods_for(dynamics.SYSTEMS[s])
+        if m.backend != "scipy"
+    ]
 
 
 def warm_all(

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..systems import Hoop
 from .grid import AtlasSpec, Axis
 from .kernels import compute_chunk
 from .store import versions
@@ -35,7 +36,7 @@ from .store import versions
 def _spec(n: int, duration: float, chunk: tuple[int, int]) -> AtlasSpec:
     return AtlasSpec(
         "chaos",
-        "hoop",
+        Hoop.name,
         ("rk4",),
         Axis("theta2", -3.0, 3.0, n),
         Axis("theta1", -3.0, 3.0, n),

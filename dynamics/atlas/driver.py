@@ -228,7 +228,6 @@ def _progress(enabled: bool, total: int, initial: int):
         desc="mechviz atlas",
         disable=not enabled,
         file=sys.stderr,
-        dynamic_ncols=True,
     )
     try:
         yield bar

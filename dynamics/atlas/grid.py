@@ -29,10 +29,14 @@ import numpy as np
 
 from .. import params as _v
 from ..integrators import get_method, methods_for
+from ..systems import SYSTEMS, Hoop
 
 Kind = Literal["stability", "chaos", "accuracy"]
 KINDS: tuple[str, ...] = ("stability", "chaos", "accuracy")
-SYSTEM_NAMES = ("hoop", "cyclotron", "free-body")
+#: The systems an atlas can map: those with a compiled right-hand side, the hoop first.
+SYSTEM_NAMES = tuple(
+    sorted((n for n, s in SYSTEMS.items() if s.sys_id is not None), key=lambda n: n != Hoop.name)
+)
 
 #: Target wall time [s] of one chunk (one task) on one core.
 CHUNK_SECONDS = 1.0
@@ -87,7 +91,7 @@ class AtlasSpec:
     cluster it runs on).
 
     kind : ``"stability"``, ``"chaos"`` or ``"accuracy"`` (module docstring).
-    system : ``"hoop"``, ``"cyclotron"`` or ``"free-body"`` (chaos: hoop only).
+    system : a name in :data:`SYSTEM_NAMES` (chaos: the hoop only).
     params : the system's parameters by field name (its dataclass validates them).
     methods : method names; stability: fixed-step methods; chaos: one fixed-step method.
     y, x : the axes (names as in the module docstring).
@@ -121,7 +125,7 @@ class AtlasSpec:
             raise ValueError(
                 f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}"
             )
-        if self.kind == "chaos" and self.system != "hoop":
+        if self.kind == "chaos" and self.system != Hoop.name:
             raise ValueError("system: the chaos map is of the hoop's start plane (system hoop)")
         object.__setattr__(
             self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params))
@@ -132,7 +136,7 @@ class AtlasSpec:
             raise ValueError("methods: give at least one")
         if len(set(self.methods)) != len(self.methods):
             raise ValueError("methods: a method is named twice")
-        allowed = {m.name for m in methods_for(self.system) if m.backend == "numba"}
+        allowed = {m.name for m in methods_for(SYSTEMS[self.system]) if m.backend == "numba"}
         for name in self.methods:
             try:
                 m = get_method(name)

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from .store import spec_of
-from .theory import AMPLITUDE_LABELS, normal_mode_slopes
+from .theory import amplitude_label, normal_mode_slopes
 
 AXIS_LABELS = {
     "dt": "step dt [s]",
@@ -55,7 +55,7 @@ def figure(ds: xr.Dataset):
     for ax in axes[n:]:
         ax.set_visible(False)
     xs, ys = ds[x].values, ds[y].values
-    xlabel = AMPLITUDE_LABELS[spec.system] if x == "amplitude" else AXIS_LABELS[x]
+    xlabel = amplitude_label(spec.system) if x == "amplitude" else AXIS_LABELS[x]
     for k, (ax, method) in enumerate(zip(axes[:n], methods, strict=True)):
         if spec.kind == "stability":
             values = _log10_abs(ds["energy_error"].values[k])

@@ -58,7 +58,7 @@ def versions() -> dict[str, str]:
 
 def template(spec: AtlasSpec) -> xr.Dataset:
     """The empty dataset of ``spec``: every cell at its fill value, no chunk done."""
-    from .theory import AMPLITUDE_UNITS
+    from .theory import amplitude_unit
 
     y, x = spec.y.name, spec.x.name
     coords = {
@@ -91,7 +91,7 @@ def template(spec: AtlasSpec) -> xr.Dataset:
         attrs["mode1_unstable"] = json.dumps(mode1_unstable_intervals(system.params))
     ds = xr.Dataset(data, coords=coords, attrs=attrs)
     for name in (y, x):
-        unit = UNITS.get(name) or AMPLITUDE_UNITS[spec.system]
+        unit = UNITS.get(name) or amplitude_unit(spec.system)
         ds[name].attrs["units"] = unit
     return ds
 

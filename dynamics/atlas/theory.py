@@ -25,60 +25,53 @@ import math
 import numpy as np
 
 from .. import hoop, stability
-from ..cyclotron import CyclotronParams
-from ..disk import DiskParams, released_initial_state
 from ..hoop import HoopParams
 from ..simulation import REFERENCE_ATOL, REFERENCE_TOL, Simulation
-from ..systems import Cyclotron, Hoop, ReleasedDisk
-
-AMPLITUDE_UNITS = {"hoop": "rad", "cyclotron": "m/s", "free-body": "rad/s"}
-AMPLITUDE_LABELS = {
-    "hoop": "amplitude A of each normal mode [rad]",
-    "cyclotron": "speed across the field [m/s]",
-    "free-body": "extra spin (A, 0, A) at release [rad/s]",
-}
+from ..systems import SYSTEMS, Hoop
 
 
 def make_system(name: str, params: dict[str, float]):
-    """The system adapter ``name`` with the parameter fields ``params`` (defaults otherwise)."""
+    """The system adapter ``name`` (:data:`dynamics.systems.SYSTEMS`) with the parameter fields
+    ``params`` (defaults otherwise)."""
     try:
-        if name == "hoop":
-            return Hoop(HoopParams(**params))
-        if name == "cyclotron":
-            return Cyclotron(CyclotronParams(**params))
-        if name == "free-body":
-            return ReleasedDisk(DiskParams(**params))
+        cls = SYSTEMS[name]
+    except KeyError:
+        raise ValueError(f"unknown system {name!r}") from None
+    try:
+        return cls(cls.Params(**params))
     except TypeError as exc:  # an unknown field name
         raise ValueError(f"params: {exc}") from None
-    raise ValueError(f"unknown system {name!r}")
+
+
+def amplitude_unit(name: str) -> str:
+    """The unit of the amplitude axis of system ``name``."""
+    return SYSTEMS[name].amplitude[0]
+
+
+def amplitude_label(name: str) -> str:
+    """The label of the amplitude axis of system ``name``."""
+    return SYSTEMS[name].amplitude[1]
 
 
 def start_states(system, amplitudes: np.ndarray) -> np.ndarray:
     """(N, d) start states for ``amplitudes`` (module docstring)."""
-    a = np.asarray(amplitudes, dtype=float)
-    if system.name == "hoop":
-        return np.stack([hoop.mode_state(system.params, (x, x)) for x in a])
-    if system.name == "cyclotron":
-        out = np.zeros((a.size, 6))
-        out[:, 4] = a
-        return out
-    return np.stack([released_initial_state(system.params, (x, 0.0, x)) for x in a])
+    return np.stack([system.amplitude_state(float(x)) for x in np.asarray(amplitudes, float)])
 
 
 def fastest_period(spec) -> float:
     """The period [s] of the fastest linear motion at the largest amplitude of ``spec``."""
     system = spec.make_system()
     state = start_states(system, [max(abs(spec.x.start), abs(spec.x.stop))])[0]
-    return 2.0 * math.pi / stability.fastest_frequency(system, state)
+    return 2.0 * math.pi / system.fastest_frequency(state)
 
 
 def linear_limit_dt(system, method: str, amplitudes: np.ndarray) -> np.ndarray:
     """Largest linearly stable step [s] per amplitude: ``inf`` for no limit, 0 for none."""
-    x = stability.limit_omega_dt(method, system.name)
+    x = stability.limit_omega_dt(method, system)
     if x is None:
         return np.full(len(amplitudes), np.inf)
     states = start_states(system, amplitudes)
-    return np.array([x / stability.fastest_frequency(system, s) for s in states])
+    return np.array([x / system.fastest_frequency(s) for s in states])
 
 
 def normal_mode_slopes(p: HoopParams) -> tuple[float, float]:

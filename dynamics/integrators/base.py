@@ -20,7 +20,7 @@ step size and the time) when a state turns non-finite or an implicit step fails 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 from . import kernels as _k
 
@@ -63,7 +63,11 @@ class Method:
     structure: tuple[Structure, ...]
     adaptive: bool
     implicit: bool
-    systems: frozenset[str]
+    #: What a system must have for this method to apply: ``"rhs"`` a compiled right-hand side,
+    #: ``"closed-form"`` its exact flow from every state, ``"symmetric"`` a symmetric
+    #: second-order step of its own (which the method composes), or that step's name (the
+    #: method *is* that system's own step). Systems state theirs (:mod:`dynamics.systems`).
+    needs: str
     backend: Literal["numba", "scipy", "exact"]
     kernel: str | None = None
     scipy_name: str | None = None
@@ -71,8 +75,18 @@ class Method:
     variable_order: bool = False
     counts: str = "right-hand-side evaluations"
 
-    def applies_to(self, system: str) -> bool:
-        return system in self.systems
+    def applies_to(self, system: Any) -> bool:
+        """Whether this method can advance ``system`` (a :mod:`dynamics.systems` adapter or its
+        class)."""
+        if self.needs == "closed-form":
+            return system.closed_form
+        if system.sys_id is None:
+            return False
+        if self.needs == "rhs":
+            return True
+        if self.needs == "symmetric":
+            return system.symmetric_step is not None
+        return system.symmetric_step == self.needs
 
     def step_options(self, dt: float | None, rtol: float | None) -> dict[str, float]:
         """Of a step size ``dt`` [s] and a tolerance ``rtol``, the one this method takes, as
@@ -122,9 +136,6 @@ class Method:
         )
 
 
-ALL = frozenset({"cyclotron", "hoop", "free-body"})
-_SCIPY_SYSTEMS = ALL
-
 METHODS: dict[str, Method] = {
     m.name: m
     for m in [
@@ -135,7 +146,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric"),
             False,
             False,
-            frozenset({"cyclotron", "driven-disk"}),
+            "closed-form",
             "exact",
             kernel="exact",
             stability="exact for any step",
@@ -148,7 +159,7 @@ METHODS: dict[str, Method] = {
             (),
             False,
             False,
-            ALL,
+            "rhs",
             "numba",
             kernel="euler",
             stability="on an oscillation |R(i w h)|^2 = 1 + (w h)^2 > 1: unstable at every step",
@@ -160,7 +171,7 @@ METHODS: dict[str, Method] = {
             (),
             False,
             False,
-            ALL,
+            "rhs",
             "numba",
             kernel="rk4",
             stability="oscillation bounded (slowly damped) for w h < 2 sqrt(2)",
@@ -172,7 +183,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric"),
             False,
             True,
-            ALL,
+            "rhs",
             "numba",
             kernel="midpoint",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
@@ -185,7 +196,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric", "volume-preserving"),
             False,
             False,
-            frozenset({"cyclotron"}),
+            "boris",
             "numba",
             kernel="symmetric2",
             stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
@@ -198,7 +209,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric"),
             False,
             True,
-            frozenset({"hoop"}),
+            "verlet",
             "numba",
             kernel="symmetric2",
             stability="linear stability w_max h < 2",
@@ -211,7 +222,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric", "norm-preserving"),
             False,
             False,
-            frozenset({"free-body"}),
+            "splitting",
             "numba",
             kernel="symmetric2",
             stability="keeps |L| to round-off at any step",
@@ -224,7 +235,7 @@ METHODS: dict[str, Method] = {
             ("symplectic", "symmetric"),
             False,
             False,
-            frozenset({"cyclotron", "hoop", "free-body"}),
+            "symmetric",
             "numba",
             kernel="yoshida4",
             stability="composition of Boris / Stormer-Verlet / splitting",
@@ -237,7 +248,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             False,
-            ALL,
+            "rhs",
             "numba",
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
@@ -249,7 +260,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             False,
-            ALL,
+            "rhs",
             "numba",
             kernel="taylor",
             stability="step from the series' radius of convergence (Jorba and Zou)",
@@ -263,7 +274,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             False,
-            _SCIPY_SYSTEMS,
+            "rhs",
             "scipy",
             scipy_name="RK45",
             counts="right-hand-side evaluations (scipy's nfev)",
@@ -275,7 +286,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             False,
-            _SCIPY_SYSTEMS,
+            "rhs",
             "scipy",
             scipy_name="DOP853",
             counts="right-hand-side evaluations (scipy's nfev)",
@@ -287,7 +298,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             True,
-            _SCIPY_SYSTEMS,
+            "rhs",
             "scipy",
             scipy_name="Radau",
             counts="right-hand-side evaluations (scipy's nfev: Jacobians' not included)",
@@ -299,7 +310,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             True,
-            _SCIPY_SYSTEMS,
+            "rhs",
             "scipy",
             scipy_name="LSODA",
             variable_order=True,
@@ -312,7 +323,7 @@ METHODS: dict[str, Method] = {
             (),
             True,
             True,
-            _SCIPY_SYSTEMS,
+            "rhs",
             "scipy",
             scipy_name="odeint",
             variable_order=True,
@@ -346,5 +357,7 @@ def get_method(name: str) -> Method:
         raise ValueError(f"method must be one of {', '.join(METHODS)}; got {name!r}") from None
 
 
-def methods_for(system: str) -> list[Method]:
+def methods_for(system: Any) -> list[Method]:
+    """The methods that apply to ``system`` (a :mod:`dynamics.systems` adapter or its class; by
+    name: ``methods_for(dynamics.SYSTEMS[name])``), in the order of :data:`METHODS`."""
     return [m for m in METHODS.values() if m.applies_to(system)]

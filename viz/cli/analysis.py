@@ -23,7 +23,6 @@ import math
 import os
 import re
 import sys
-import time
 from typing import Any
 
 import numpy as np
@@ -41,9 +40,10 @@ from dynamics.simulation import (
 )
 from dynamics.spec import Setup, SystemSpec, checked_state
 from dynamics.steps import Fixed
-from dynamics.systems import SPECS
+from dynamics.systems import SPECS, SYSTEMS
 from viz.interrupts import ctrl_c_within_a_second
 
+from ..progress import progress_bar
 from .errors import CliError, number
 
 #: The most samples ``simulate --samples`` keeps.
@@ -79,36 +79,26 @@ def _add_params(p: argparse.ArgumentParser, spec: SystemSpec, start: tuple[str, 
     """The flags of ``spec``'s parameters and of the start settings named in ``start``, each
     with its unit and default, from the system's description."""
     p._negative_number_matcher = _NEGATIVE_NUMBER  # type: ignore[attr-defined]
-    for s in spec.params:
+    # a start setting of several numbers (a centre, mode amplitudes) has flags of its own
+    settings = [
+        *spec.params,
+        *(s for s in map(spec.setting, start) if not isinstance(s.default, tuple)),
+    ]
+    for s in settings:
+        kind: dict[str, Any] = {"choices": s.choices} if s.choices else {"type": number}
         p.add_argument(
             s.flag,
             dest=s.name,
-            type=number,
             default=None,
             help=f"{s.help} (default {_default_text(s.default)})",
+            **kind,
         )
-    for name in start:
-        s = spec.setting(name)
-        if s.choices:
-            p.add_argument(
-                s.flag,
-                dest=s.name,
-                default=None,
-                choices=s.choices,
-                help=f"{s.help} (default {s.default})",
-            )
-        elif isinstance(s.default, float):
-            p.add_argument(
-                s.flag,
-                dest=s.name,
-                type=number,
-                default=None,
-                help=f"{s.help} (default {s.default:g})",
-            )
 
 
 def _default_text(value) -> str:
-    return "5/4 of the disk mass, as in the seed" if value is None else f"{value:g}"
+    if value is None:  # the one parameter whose default follows from another
+        return "5/4 of the disk mass, as in the seed"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 # argparse takes "-1e-3" for an option (its pattern for negative numbers has no exponent).
@@ -289,8 +279,13 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
             f"period is {period:.3g} s), above the limit of {args.max_steps:.3g} "
             "(--max-steps raises it)"
         )
-    progress = _Progress(f"{spec.name} with {method.name}", t_end, enabled=steps > PROGRESS_STEPS)
-    sim.on_chunk = lambda s: progress(s.t)
+    progress = progress_bar(
+        f"simulating {spec.name} with {method.name}",
+        t_end,
+        enabled=steps > PROGRESS_STEPS,
+        bar_format="{desc}: {percentage:5.1f}% (t = {n:.4g} of {total:g} s)",
+    )
+    sim.on_chunk = lambda s: progress.update(min(s.t, t_end) - progress.n)
     try:
         traj = sim.run(t_end, n_samples=args.samples)
     except IntegrationError as exc:
@@ -324,35 +319,6 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         )
     out.update(sysm.report(traj.t[-1]))
     return out
-
-
-class _Progress:
-    """``simulating LABEL: 42% (t = 4.2 of 10 s)`` on stderr when it is a terminal, at most ten
-    times a second; silent otherwise or when not ``enabled``."""
-
-    def __init__(self, label: str, t_end: float, *, enabled: bool = True, stream=None) -> None:
-        self.stream = stream or sys.stderr
-        self.enabled = enabled and self.stream.isatty()
-        self.label, self.t_end = label, t_end
-        self.last = 0.0
-        self.shown = False
-
-    def __call__(self, t: float) -> None:
-        now = time.monotonic()
-        if not self.enabled or now - self.last < 0.1:
-            return
-        self.last = now
-        pct = 100.0 * t / self.t_end
-        self.stream.write(
-            f"\rsimulating {self.label}: {pct:5.1f}% (t = {t:.4g} of {self.t_end:g} s)"
-        )
-        self.stream.flush()
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
 
 
 # --------------------------------------------------------------------------- parser
@@ -450,7 +416,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
         if not args.list_methods:
             raise CliError(f"simulate: choose a system ({', '.join(SPECS)}) or --list-methods")
         for m in METHODS.values():
-            systems = ", ".join(sorted(m.systems))
+            systems = ", ".join(sorted(n for n, cls in SYSTEMS.items() if m.applies_to(cls)))
             print(f"{m.name:13s} {m.describe()}; applies to {systems}")
         return 0
     if not 2 <= args.samples <= MAX_SAMPLES:

@@ -14,9 +14,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import fields
 from pathlib import Path
 
-DEFAULT_AMPLITUDES = {"hoop": (0.01, 1.5), "cyclotron": (0.1, 2.0), "free-body": (0.0, 1.0)}
+from dynamics.atlas.grid import SYSTEM_NAMES
+from dynamics.systems import SYSTEMS
 
 
 def _axis_text(text: str) -> tuple[float, float, int, str]:
@@ -88,12 +90,11 @@ def _as_flag(message: str) -> str:
 
 def build_spec(args: argparse.Namespace):
     """The :class:`dynamics.atlas.AtlasSpec` the flags describe (``ValueError`` naming the flag)."""
-    from dynamics import methods_for
+    from dynamics import SYSTEMS, Hoop, methods_for
     from dynamics.atlas.grid import AtlasSpec, Axis
     from dynamics.atlas.theory import make_system, start_states
-    from dynamics.stability import fastest_frequency
 
-    system_name = "hoop" if args.kind == "chaos" else args.system
+    system_name = Hoop.name if args.kind == "chaos" else args.system
     params = dict(args.param or ())
     for name, value in params.items():
         if not math.isfinite(value):
@@ -107,11 +108,9 @@ def build_spec(args: argparse.Namespace):
     elif args.kind == "chaos":
         methods = ("rk4",)
     else:
-        fixed = [
-            m.name for m in methods_for(system_name) if m.backend == "numba" and not m.adaptive
-        ]
+        fixed = [m.name for m in methods_for(system) if m.backend == "numba" and not m.adaptive]
         methods = tuple(fixed)
-    lo, hi = DEFAULT_AMPLITUDES[system_name]
+    lo, hi = SYSTEMS[system_name].amplitude[2]
     amp = Axis("amplitude", *(args.amplitude or (lo, hi, 48, "linear")))
     extra = {}
     if args.kind == "chaos":
@@ -124,7 +123,7 @@ def build_spec(args: argparse.Namespace):
             "separation": args.separation,
         }
     else:
-        omega = fastest_frequency(system, start_states(system, [hi])[0])
+        omega = system.fastest_frequency(start_states(system, [hi])[0])
         x = amp
         if args.kind == "stability":
             y = Axis("dt", *(args.dt or (0.05 / omega, 3.5 / omega, 48, "linear")))
@@ -267,18 +266,20 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--system",
-        choices=("hoop", "cyclotron", "free-body"),
-        default="hoop",
-        help="stability and accuracy: the system (chaos: the hoop)",
+        choices=SYSTEM_NAMES,
+        default=SYSTEM_NAMES[0],
+        help=f"stability and accuracy: the system (chaos: the {SYSTEM_NAMES[0]})",
     )
     p.add_argument(
         "--param",
         type=_param_text,
         action="append",
         metavar="NAME=VALUE",
-        help="a system parameter by its field name (hoop: hoop_mass, bead_mass, radius, "
-        "gravity; cyclotron: charge, mass, field; free-body: disk_mass, radius, "
-        "bead_mass, omega); repeat for more",
+        help="a system parameter by its field name ("
+        + "; ".join(
+            f"{n}: {', '.join(f.name for f in fields(SYSTEMS[n].Params))}" for n in SYSTEM_NAMES
+        )
+        + "); repeat for more",
     )
     p.add_argument(
         "--methods", help="comma-separated methods (default: every fixed-step method; chaos: rk4)"
@@ -294,8 +295,9 @@ def add_commands(sub) -> None:
         "--amplitude",
         type=_axis_text,
         metavar="START:STOP:N[:log]",
-        help="amplitude axis (hoop: each normal mode [rad]; cyclotron: speed [m/s]; "
-        "free-body: extra spin [rad/s])",
+        help="amplitude axis ("
+        + "; ".join(f"{n}: {SYSTEMS[n].amplitude[1]}" for n in SYSTEM_NAMES)
+        + ")",
     )
     p.add_argument(
         "--theta1",

@@ -73,6 +73,7 @@ class ExhibitConfig:
 
     system_name: ClassVar[str]  # the driver's name of the system (:data:`dynamics.SYSTEMS`)
     spec: ClassVar[dynamics.SystemSpec]  # the system's description: parameters, start, step
+    demo_initial_keys: ClassVar[frozenset[str]] = frozenset()  # a demo's [initial] keys
 
     method: str = "rk4"
     dt: float = 1 / 60
@@ -81,7 +82,7 @@ class ExhibitConfig:
 
     def __post_init__(self) -> None:
         self.physics()  # SettingError naming the parameter
-        names = [m.name for m in dynamics.methods_for(self.system_name)]
+        names = [m.name for m in dynamics.methods_for(dynamics.SYSTEMS[self.system_name])]
         for fld in ("method", *(["compare_method"] if hasattr(self, "compare_method") else [])):
             m = getattr(self, fld)
             if m is not None and m not in names:

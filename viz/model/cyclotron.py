@@ -39,6 +39,10 @@ class CyclotronConfig(ExhibitConfig):
 
     system_name: ClassVar[str] = dynamics.Cyclotron.name
     spec: ClassVar[dynamics.SystemSpec] = CYCLOTRON
+    #: The keys of a demo file's [initial] table for this exhibit.
+    demo_initial_keys: ClassVar[frozenset[str]] = frozenset(
+        {"speed", "vz", "centre", "beam", "speeds", "state"}
+    )
 
     method: str = CYCLOTRON.default_method({})
     dt: float = CYCLOTRON.dt

@@ -38,6 +38,8 @@ class DiskConfig(ExhibitConfig):
 
     system_name: ClassVar[str] = dynamics.ReleasedDisk.name
     spec: ClassVar[dynamics.SystemSpec] = DISK
+    #: The keys of a demo file's [initial] table for this exhibit.
+    demo_initial_keys: ClassVar[frozenset[str]] = frozenset({"extra_spin"})
 
     # The method when released: RK4 at one step per frame, the cheapest keeping the on-screen
     # error below 1e-3 of the exhibit over 10 minutes (docs/bench/defaults.md).

@@ -38,6 +38,8 @@ class HoopConfig(ExhibitConfig):
 
     system_name: ClassVar[str] = dynamics.Hoop.name
     spec: ClassVar[dynamics.SystemSpec] = HOOP
+    #: The keys of a demo file's [initial] table for this exhibit.
+    demo_initial_keys: ClassVar[frozenset[str]] = frozenset({"modes", "state"})
 
     # RK4 at one step per frame: as cheap as it gets below 1e-3 over 10 minutes
     # (docs/bench/defaults.md)

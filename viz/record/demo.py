@@ -35,11 +35,6 @@ from .scales import CONFIG_KEYS, check_scales, in_demo_terms
 
 DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
-_INITIAL_KEYS = {
-    "cyclotron": {"speed", "vz", "centre", "beam", "speeds", "state"},
-    "disk": {"extra_spin"},
-    "hoop": {"modes", "state"},
-}
 
 
 class _Struct(msgspec.Struct, forbid_unknown_fields=True, frozen=True, omit_defaults=True):
@@ -333,12 +328,14 @@ def check(d: Demo) -> None:
     has_motion = any(s.name == "motion" for s in dynamics.SPECS[d.exhibit].start)
     if not has_motion and d.motion is not None:
         raise ValueError(f"motion is for the disk only, not the {d.exhibit}")
-    if d.ghost is not None and d.exhibit != "hoop":
+    fields_of = {f.name for f in dataclasses.fields(MODELS[d.exhibit].Config)}
+    if d.ghost is not None and "ghost" not in fields_of:
         raise ValueError(f"ghost is for the hoop only, not the {d.exhibit}")
     ini = {f for f in d.initial.__struct_fields__ if getattr(d.initial, f) is not None}
-    unknown = ini - _INITIAL_KEYS[d.exhibit]
+    allowed = MODELS[d.exhibit].Config.demo_initial_keys
+    unknown = ini - allowed
     if unknown:
-        keys = ", ".join(sorted(_INITIAL_KEYS[d.exhibit]))
+        keys = ", ".join(sorted(allowed))
         raise ValueError(f"initial.{sorted(unknown)[0]} is not a key for the {d.exhibit} ({keys})")
     if d.initial.beam is not None and not 1 <= d.initial.beam <= 1000:
         raise ValueError(
@@ -346,7 +343,7 @@ def check(d: Demo) -> None:
         )
     if d.initial.state is not None and {"speed", "vz", "centre", "beam", "modes"} & ini:
         raise ValueError("initial.state gives the whole start; leave out the other initial keys")
-    if d.compare is not None and d.exhibit == "disk":
+    if d.compare is not None and "compare_method" not in fields_of:
         raise ValueError(
             "compare: the disk shows one run; a comparison is for the cyclotron and the hoop"
         )
@@ -356,7 +353,7 @@ def check(d: Demo) -> None:
         if value is not None and not all(math.isfinite(v) for v in value):
             raise ValueError(f"camera.{key} must be three finite numbers, got {list(value)}")
     for i, e in enumerate(d.events):
-        if d.exhibit != "cyclotron":
+        if "kick" not in fields_of:
             raise ValueError(f"events[{i}].action: the {d.exhibit} has no scripted events")
         if not 0.0 <= e.t <= d.simulated_time:
             raise ValueError(

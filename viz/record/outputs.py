@@ -27,6 +27,7 @@ import numpy as np
 
 import dynamics
 from dynamics import cyclotron, disk, hoop, measure
+from dynamics.systems import CYCLOTRON, DISK
 
 from ..model import MODELS
 from ..model.plot import Curve, Samples, draw_xy
@@ -165,7 +166,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
     ax4.axis("off")
     S = tr.states[main]
     colours = ["tab:blue", "tab:red", "tab:green"]
-    if d.exhibit == "cyclotron":
+    if d.exhibit == CYCLOTRON.name:
         T = cyclotron.period(p)
         for lbl, c in zip(tr.states, colours, strict=False):
             X = tr.states[lbl]
@@ -196,7 +197,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
                     label="predicted x range after the kick" if yv == cx - r else None,
                 )
         ax1.set_ylabel("x [m]")
-    elif d.exhibit == "disk" and d.motion == "driven":
+    elif d.exhibit == DISK.name and d.motion == "driven":
         F = measure.bearing_force(p, t, S[:, 0, 0], S[:, 0, 1])
         ax1.plot(t, F[:, 0], color="tab:blue", label="F_B,x (from dL/dt)")
         ax1.plot(t, F[:, 2], color="tab:red", label="F_B,z (from dL/dt)")
@@ -210,7 +211,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
                 label="predicted amplitude 5/8 M R omega^2" if yv > 0 else None,
             )
         ax1.set_ylabel("bearing force at B [N]")
-    elif d.exhibit == "disk":
+    elif d.exhibit == DISK.name:
         w = S[:, 0, :3]
         perp = np.hypot(w[:, 0], w[:, 2])
         ax1.semilogy(t, np.maximum(perp, 1e-16), color="tab:blue", label="|w_perp| (wobble)")

@@ -27,6 +27,7 @@ import numpy as np
 
 import dynamics
 from dynamics import analysis
+from dynamics.systems import CYCLOTRON, HOOP
 
 from ..model import MODELS
 
@@ -92,9 +93,9 @@ def _blamed(d: Demo, params: dict, defaults: dict, bad) -> list[str]:
 def _shortest_period(d: Demo, result: dict, extra_spin: bool = True) -> float | None:
     """The motion's shortest period [s] from the analytic results, None if nothing moves;
     ``extra_spin``: count the disk's extra spin at release (else leave it out)."""
-    if d.exhibit == "cyclotron":
+    if d.exhibit == CYCLOTRON.name:
         return result["period"]
-    if d.exhibit == "hoop":
+    if d.exhibit == HOOP.name:
         return min(result["mode_periods"])
     spin = abs(result["parameters"]["omega"])
     if extra_spin and d.motion == "released" and d.initial.extra_spin is not None:
@@ -115,7 +116,7 @@ def check_scales(d: Demo) -> None:
     cfg = d.config()
     defaults = MODELS[d.exhibit].Config().params
     params = dict(cfg.params)
-    speed = d.initial.speed if d.exhibit == "cyclotron" else None
+    speed = d.initial.speed if d.exhibit == CYCLOTRON.name else None
     problem = _problem(d.exhibit, params, speed)
     if problem is not None:
         names = _blamed(d, params, defaults, lambda p: _problem(d.exhibit, p, speed) is not None)
@@ -200,7 +201,7 @@ def _check_start(d: Demo, cfg, span: float) -> None:
     """The start and what the scripted kicks add: energy, orbit radius and distance covered in
     the recording all finite (the cyclotron), the initial energy finite (the hoop)."""
     p = cfg.physics()
-    if d.exhibit == "cyclotron":
+    if d.exhibit == CYCLOTRON.name:
         speeds = _speeds(d, cfg)
 
         def bad(v: dict[str, float]) -> str | None:
@@ -220,11 +221,11 @@ def _check_start(d: Demo, cfg, span: float) -> None:
         blamed = [k for k in keys if bad({**speeds, k: 1.0}) is None] or keys
         shown = ", ".join(f"{k} = {_value(d, k)}" for k in blamed) or "the start"
         raise ValueError(f"{shown}: {what} would be beyond the largest double")
-    if d.exhibit == "hoop" and d.initial.modes is not None:
+    if d.exhibit == HOOP.name and d.initial.modes is not None:
         for i, a in enumerate(d.initial.modes):
             if not abs(a) < 3.0:  # as the exhibit's own amplitude: the modes are small swings
                 raise ValueError(f"initial.modes[{i}] must be an angle below 3 rad, got {a!r}")
-    if d.exhibit == "hoop" and d.initial.state is not None:
+    if d.exhibit == HOOP.name and d.initial.state is not None:
         with np.errstate(all="ignore"):
             energy = float(np.ravel(dynamics.Hoop(p).energy(np.asarray(d.initial.state)))[0])
         if not math.isfinite(energy):

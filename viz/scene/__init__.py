@@ -1,25 +1,14 @@
-"""The three scenes, one module each: its settings (``Config``), its exhibit (drawing, readouts,
-measurements) and its GUI panel. :data:`EXHIBITS` is the one registry of exhibits, in the order
-the viewer lays them out and shows their tabs."""
+"""The three scenes, one module each: its exhibit drawn with viser over the headless model of
+:mod:`viz.model` (whose ``Config`` holds the settings), and its GUI panel. :data:`EXHIBITS` is
+the one registry of exhibits, in the order the viewer lays them out and shows their tabs."""
 
-from .base import Exhibit, ExhibitConfig
-from .cyclotron import CyclotronConfig, CyclotronExhibit
-from .disk import DiskConfig, DiskExhibit
-from .hoop import HoopConfig, HoopExhibit
+from .base import Exhibit
+from .cyclotron import CyclotronExhibit
+from .disk import DiskExhibit
+from .hoop import HoopExhibit
 
 EXHIBITS: dict[str, type[Exhibit]] = {
     cls.key: cls for cls in (CyclotronExhibit, DiskExhibit, HoopExhibit)
 }
 
-
-__all__ = [
-    "EXHIBITS",
-    "CyclotronConfig",
-    "CyclotronExhibit",
-    "DiskConfig",
-    "DiskExhibit",
-    "Exhibit",
-    "ExhibitConfig",
-    "HoopConfig",
-    "HoopExhibit",
-]
+__all__ = ["EXHIBITS", "CyclotronExhibit", "DiskExhibit", "Exhibit", "HoopExhibit"]

@@ -250,7 +250,7 @@ class Panel:
     def integrator_inputs(self, *, compare: bool) -> None:
         gui, ex = self.gui, self.exhibit
         system_name = ex.Config.system_name
-        names = [m.name for m in dynamics.methods_for(system_name)]
+        names = [m.name for m in dynamics.methods_for(dynamics.SYSTEMS[system_name])]
         with gui.add_folder("Integrator"):
             method = self.put(
                 "method", gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
