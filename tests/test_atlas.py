@@ -241,7 +241,6 @@ def test_maps_have_labelled_axes_and_colour_bars(tmp_path):
         assert label in text
 
 
-@pytest.mark.slow
 def test_resume_of_another_run_is_refused_in_one_line_and_changes_nothing(tmp_path, capsys):
     spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
     out = tmp_path / "atlas"

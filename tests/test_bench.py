@@ -203,7 +203,6 @@ def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
         lambda t: t + "<!-- bench:speed -->\n<!-- /bench:speed -->\n",  # one unknown
     ],
 )
-@pytest.mark.slow
 def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, capsys, damage):
     import shutil
 

@@ -30,7 +30,6 @@ def mechviz(*args: str) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())
 
 
-@pytest.mark.slow
 def test_analyze_cyclotron_json_gives_the_seed_results():
     out = mechviz(
         "analyze",
@@ -53,7 +52,6 @@ def test_analyze_cyclotron_json_gives_the_seed_results():
     assert r["radial_oscillation_frequency"] == pytest.approx(1.0)
 
 
-@pytest.mark.slow
 def test_analyze_disk_json_gives_the_seed_results():
     out = mechviz("analyze", "disk", "--omega", "1", "--json")
     assert out.returncode == 0, out.stderr
@@ -69,7 +67,6 @@ def test_analyze_disk_json_gives_the_seed_results():
     assert json.loads(out.stdout)["axle_force_amplitude"] == pytest.approx(5 / 8 * 4 * 4 * 0.5)
 
 
-@pytest.mark.slow
 def test_analyze_hoop_json_gives_the_seed_modes():
     out = mechviz(
         "analyze",
@@ -90,13 +87,11 @@ def test_analyze_hoop_json_gives_the_seed_modes():
     assert r["mode_shapes"][1][0] / r["mode_shapes"][1][1] == pytest.approx(-1 / 3)
 
 
-@pytest.mark.slow
 def test_analyze_prints_a_readable_table_without_json():
     out = mechviz("analyze", "hoop")
     assert out.returncode == 0 and "mode_frequencies" in out.stdout and "{" not in out.stdout
 
 
-@pytest.mark.slow
 def test_simulate_hoop_json_reports_state_drift_work_and_exact_error():
     out = mechviz(
         "simulate",
@@ -121,7 +116,6 @@ def test_simulate_hoop_json_reports_state_drift_work_and_exact_error():
     assert r["error_vs_exact"] < 1e-7  # mode 1 has a closed form at any amplitude
 
 
-@pytest.mark.slow
 def test_simulate_cyclotron_and_disk():
     r = json.loads(
         mechviz(
@@ -163,7 +157,6 @@ def test_simulate_cyclotron_and_disk():
     assert r["error_vs_reference"] < 1e-3 and r["steps"] == 500
 
 
-@pytest.mark.slow
 def test_list_methods_shows_every_method_with_its_properties():
     out = mechviz("simulate", "--list-methods")
     assert out.returncode == 0
@@ -209,7 +202,6 @@ def test_list_methods_shows_every_method_with_its_properties():
         (["simulate", "disk", "--t-end", "1", "--wx", "0.1"], "--wx"),  # the disk is driven
     ],
 )
-@pytest.mark.slow
 def test_bad_input_exits_nonzero_with_one_line_naming_the_flag(args, needle):
     out = mechviz(*args)
     assert out.returncode == 2
@@ -259,7 +251,6 @@ def test_bad_input_exits_nonzero_with_one_line_naming_the_flag(args, needle):
         ),
     ],
 )
-@pytest.mark.slow
 def test_inputs_whose_consequences_do_not_fit_a_double_are_bad_input(args, needle):
     out = mechviz(*args)
     assert out.returncode == 2, out.stdout
@@ -337,7 +328,6 @@ def test_a_long_run_shows_progress_on_a_terminal_and_ctrl_c_ends_it_within_a_sec
     )
 
 
-@pytest.mark.slow
 def test_json_is_valid_even_when_a_result_is_not_finite():
     # Valid input whose derived numbers all fit: strict JSON, no NaN or Infinity tokens.
     out = mechviz("analyze", "cyclotron", "--charge", "1e-3", "--json")
@@ -347,7 +337,6 @@ def test_json_is_valid_even_when_a_result_is_not_finite():
     assert out.returncode == 2 and "NaN" not in out.stdout and "Infinity" not in out.stdout
 
 
-@pytest.mark.slow
 def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
     out = mechviz(
         "simulate",
@@ -370,7 +359,6 @@ def test_the_error_against_the_reference_is_measured_against_a_tighter_run():
     assert "3e-15" in r["reference"]
 
 
-@pytest.mark.slow
 def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
     # Mode 2 at 0.01 rad with rk4, dt = 0.05 to t = 10 s loses 1.4e-4 of its oscillation energy
     # (RK4 damps by about (w dt)^6 / 144 per step); divided by the total energy with the

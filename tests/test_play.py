@@ -245,7 +245,6 @@ def test_file_names_with_terminal_escapes_are_printed_escaped(tmp_path, capsys):
     assert server_started.is_set() and "\x1b" not in out and "\\x1b]0;pwned" in out
 
 
-@pytest.mark.slow
 def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
     from viz.cli import main
 

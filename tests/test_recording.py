@@ -295,7 +295,6 @@ def test_a_readout_and_the_manifest_report_the_same_number_for_one_motion(name, 
 
 
 # --------------------------------------------------------------------------- command line
-@pytest.mark.slow
 def test_record_list_names_every_demo_with_a_description(capsys):
     assert main(["record", "--list"]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -357,7 +356,6 @@ def test_bad_arguments_give_a_one_line_error_and_exit_status_2(argv, message, ca
     ("extra", "named"),
     [("dt = 1e-9\n", "dt = 1e-09"), ("dt = 0.01\nspeed = 1e9\n", "speed x duration")],
 )
-@pytest.mark.slow
 def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys, extra, named):
     demo_file = tmp_path / "huge.toml"
     demo_file.write_text(
@@ -370,7 +368,6 @@ def test_a_demo_beyond_the_step_limit_is_refused_before_it_runs(tmp_path, capsys
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.slow
 def test_record_command_reports_a_blow_up_in_one_line_with_status_1(tmp_path, capsys):
     demo_file = tmp_path / "blowup.toml"
     demo_file.write_text(
