@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import pytest
+from faults import disk_full_at_nth_fsync
 
 from dynamics import files
 
@@ -26,16 +27,7 @@ def test_json_is_written_whole_and_replaces_the_old_file(tmp_path):
 def test_a_full_disk_midway_keeps_every_old_file_and_leaves_no_partial_one(tmp_path, monkeypatch):
     old = {"tables.md": b"old tables\n", "results.json": b'{"old": true}\n'}
     files.write_files_atomically(tmp_path, old)
-    calls = []
-    real_fsync = os.fsync
-
-    def failing_fsync(fd):
-        calls.append(fd)
-        if len(calls) == 2:  # the second file: the first is already written in full
-            raise OSError(28, "No space left on device")
-        real_fsync(fd)
-
-    monkeypatch.setattr(files.os, "fsync", failing_fsync)
+    disk_full_at_nth_fsync(monkeypatch, 2)  # the second file: the first is written in full
     with pytest.raises(OSError, match="No space left"):
         files.write_files_atomically(
             tmp_path, {"tables.md": b"new tables\n", "results.json": b'{"new": true}\n'}

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from killing import killed_after_nth_call
+from faults import disk_full_at_nth_fsync, killed_after_nth_call
 
 from dynamics import fileset
 from dynamics.files import WriteInterrupted
@@ -141,16 +141,7 @@ def test_a_set_replaces_the_earlier_layout_and_readers_see_the_names(tmp_path):
 def test_an_io_error_before_the_switch_keeps_the_old_set(tmp_path, monkeypatch):
     fileset.write_set(tmp_path, "a", OLD)
     before = tree(tmp_path)
-    real_fsync = os.fsync
-    calls = []
-
-    def failing(fd):
-        calls.append(fd)
-        if len(calls) == 2:
-            raise OSError(28, "No space left on device")
-        real_fsync(fd)
-
-    monkeypatch.setattr(os, "fsync", failing)
+    disk_full_at_nth_fsync(monkeypatch, 2)
     with pytest.raises(OSError, match=r"No space left.*unchanged") as info:
         fileset.write_set(tmp_path, "a", NEW)
     assert info.value.unchanged

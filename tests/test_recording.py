@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from faults import disk_full_at_nth_fsync
 from recordings import decode_recording, frame_times
 
 import dynamics
@@ -205,16 +206,7 @@ def test_interrupted_recording_keeps_the_previous_files_unchanged(tmp_path):
 def test_full_disk_while_writing_leaves_no_partial_file(tmp_path, monkeypatch):
     rec.record(_short(), tmp_path)
     before = _files(tmp_path)
-    calls = []
-    real_fsync = os.fsync
-
-    def failing_fsync(fd):
-        calls.append(fd)
-        if len(calls) == 3:
-            raise OSError(28, "No space left on device")
-        real_fsync(fd)
-
-    monkeypatch.setattr(os, "fsync", failing_fsync)
+    disk_full_at_nth_fsync(monkeypatch, 3)
     with pytest.raises(rec.RecordingFailed, match=r"No space left on device; .* is unchanged"):
         rec.record(_short(), tmp_path)
     assert _files(tmp_path) == before  # no .partial file left behind, old files intact

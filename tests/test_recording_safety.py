@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
-from killing import killed_after_nth_call
+from faults import killed_after_nth_call
 
 from dynamics import fileset
 from viz import record as rec

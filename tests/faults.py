@@ -1,7 +1,27 @@
-"""A child Python process killed (SIGKILL) right after its n-th call of chosen ``os`` functions:
-how the tests stop a write at every step of its commit, as a power cut or ``kill -9`` would."""
+"""Faults the tests inject into a write: a child process killed (SIGKILL) right after its n-th
+call of chosen ``os`` functions, as a power cut or ``kill -9`` would stop it at every step of its
+commit; a disk that fills at the n-th ``fsync``."""
 
 from __future__ import annotations
+
+import errno
+import os
+
+
+def disk_full_at_nth_fsync(monkeypatch, n: int) -> None:
+    """The n-th ``os.fsync`` from now raises ENOSPC ("No space left on device"), the earlier ones
+    sync as usual: the disk fills during the write."""
+    real = os.fsync
+    calls = 0
+
+    def fsync(fd: int) -> None:
+        nonlocal calls
+        calls += 1
+        if calls == n:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
 
 
 def killed_after_nth_call(names: tuple[str, ...], body: str) -> str:
