@@ -206,7 +206,8 @@ class Motion:
 
 # =========================================================================== the exhibit
 class ExhibitModel:
-    """Base class: subclasses define ``Config``, ``key``, ``title``, ``name`` and the hooks
+    """Base class: subclasses define ``Config`` (``key`` and ``chart_series`` follow from it),
+    ``title``, ``name`` and the hooks
     ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
     advance), ``measured`` and ``_apply_op`` (own operations). A view learns of a new start from
     ``_started()``, called at the end of every ``_start``."""
@@ -221,6 +222,14 @@ class ExhibitModel:
     # settings that only choose the start: applied as a jump of the running simulations to the
     # new start, so the clock and the work counters go on (``_jump_to_start``)
     start_fields: ClassVar[frozenset[str]] = frozenset()
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "Config" in cls.__dict__:
+            # an exhibit is known by its system's name; one with a comparison run charts it too
+            cls.key = cls.Config.spec.name
+            if any(f.name == "compare_method" for f in dataclasses.fields(cls.Config)):
+                cls.chart_series = ("energy", "error", "energy_compare", "error_compare")
 
     def __init__(self, config=None, *, history_len: int = 600, start: bool = True) -> None:
         self.config = config if config is not None else self.Config()

@@ -99,11 +99,9 @@ class CyclotronConfig(ExhibitConfig):
 class CyclotronModel(ExhibitModel):
     """The charge, its theory circle, optional comparison method and optional beam."""
 
-    key = "cyclotron"
     title = "Cyclotron"
     name = "Cyclotron"
     Config = CyclotronConfig
-    chart_series = ("energy", "error", "energy_compare", "error_compare")
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:

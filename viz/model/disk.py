@@ -66,7 +66,6 @@ def principal_axes_for(p: dk.DiskParams, mode: str) -> tuple[np.ndarray, np.ndar
 
 
 class DiskModel(ExhibitModel):
-    key = "disk"
     title = "Spinning disk"
     name = "Disk"
     Config = DiskConfig

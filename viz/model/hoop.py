@@ -82,11 +82,9 @@ class HoopConfig(ExhibitConfig):
 
 
 class HoopModel(ExhibitModel):
-    key = "hoop"
     title = "Hoop with bead"
     name = "Hoop"
     Config = HoopConfig
-    chart_series = ("energy", "error", "energy_compare", "error_compare")
     start_fields = frozenset({"mode", "amplitude", "angles", "state"})
 
     # ------------------------------------------------------------------ simulations
