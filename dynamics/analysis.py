@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .params import TINY, SettingError
+from .params import TINY, SettingError, blamed
 from .systems import SPECS
 
 # Derived quantities that are nonzero for every valid input: 0 means they underflowed.
@@ -86,14 +86,8 @@ def check_representable(
     found = problem(given)  # a bad setting raises its own SettingError here
     if found is None:
         return
-    blamed = []
-    for k in given:
-        try:
-            if problem({n: v for n, v in given.items() if n != k}) is None:
-                blamed.append(k)
-        except SettingError:
-            pass
-    fields = tuple(blamed or given) or ("parameters",)
+    alone = blamed(given, lambda k: problem({n: v for n, v in given.items() if n != k}) is None)
+    fields = tuple(alone or given) or ("parameters",)
     raise SettingError(fields[0], found, fields=fields)
 
 

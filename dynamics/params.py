@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import fields
 from typing import Any
 
@@ -72,6 +72,26 @@ def guarded(fn: Callable[[], Any], fallback: Any = math.nan) -> Any:
             return fn()
     except (OverflowError, ZeroDivisionError, ValueError, np.linalg.LinAlgError):
         return fallback  # ValueError: math domain, or a helper's finite-input check
+
+
+def blamed(
+    names: Iterable[str],
+    fixed_without: Callable[[str], bool],
+    errors: tuple[type[BaseException], ...] = (ValueError, ArithmeticError),
+) -> list[str]:
+    """Of the settings ``names`` a person gave, those whose default alone clears a problem their
+    combination causes (``fixed_without(name)`` true): what a refusal of a consequence of several
+    settings names. A trial that raises one of ``errors`` (a setting that cannot stand without
+    the other) clears nothing. Empty when no one setting alone is to blame."""
+    out = []
+    for name in names:
+        try:
+            with np.errstate(all="ignore"):
+                if fixed_without(name):
+                    out.append(name)
+        except errors:
+            pass
+    return out
 
 
 def finite(name: str, value: Any) -> float:

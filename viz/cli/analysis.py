@@ -15,7 +15,6 @@ says why.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import copy
 import dataclasses
 import json
@@ -30,7 +29,7 @@ import numpy as np
 from dynamics import analysis
 from dynamics.files import json_safe
 from dynamics.integrators import METHODS, IntegrationError
-from dynamics.params import TINY, SettingError
+from dynamics.params import TINY, SettingError, blamed
 from dynamics.simulation import (
     MIN_COMPARED_TOL,
     REFERENCE_ACCURACY,
@@ -192,18 +191,18 @@ def _blame(spec: SystemSpec, args: argparse.Namespace, bad) -> str:
     """The flags given (with their values) whose default alone makes ``bad(setup)`` false, else
     every one given: what a refusal of a consequence of several flags names."""
     given = [n for n in _start_flags(spec) if getattr(args, n, None) is not None]
-    blamed = []
-    for name in given:
+
+    def fixed_without(name: str) -> bool:
         trial = copy.copy(args)
         setattr(trial, name, None)
-        with contextlib.suppress(CliError, ValueError, ArithmeticError), np.errstate(all="ignore"):
-            if not bad(_setup(spec, trial)):
-                blamed.append(name)
+        return not bad(_setup(spec, trial))
+
+    alone = blamed(given, fixed_without, (CliError, ValueError, ArithmeticError))
     shown = [
         f"{flag_for(n)} {getattr(args, n):g}"
         if isinstance(getattr(args, n), float)
         else flag_for(n)
-        for n in (blamed or given)
+        for n in (alone or given)
     ]
     return ", ".join(shown)
 

@@ -27,6 +27,7 @@ import numpy as np
 
 import dynamics
 from dynamics import analysis
+from dynamics.params import blamed
 from dynamics.systems import CYCLOTRON, HOOP
 
 from ..model import MODELS
@@ -82,12 +83,9 @@ def _problem(system: str, params: dict[str, float], speed: float | None) -> str 
 
 def _blamed(d: Demo, params: dict, defaults: dict, bad) -> list[str]:
     """The demo's parameter keys whose default alone makes ``bad(params)`` false."""
-    out = []
-    for key in d.parameters:
-        if key in defaults and params.get(key) != defaults[key]:
-            if not bad({**params, key: defaults[key]}):
-                out.append(f"parameters.{key} = {d.parameters[key]:g}")
-    return out
+    changed = [k for k in d.parameters if k in defaults and params.get(k) != defaults[k]]
+    alone = blamed(changed, lambda k: not bad({**params, k: defaults[k]}))
+    return [f"parameters.{k} = {d.parameters[k]:g}" for k in alone]
 
 
 def _shortest_period(d: Demo, result: dict, extra_spin: bool = True) -> float | None:
