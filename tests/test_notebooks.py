@@ -41,6 +41,25 @@ def test_committed_notebook_has_no_outputs(path):
     assert path.stat().st_size < 20_000
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_an_example_uses_only_the_documented_api(path):
+    """mechviz reached only through dynamics.api and viz.notebook (the surface the README
+    documents), never a module behind them."""
+    import ast
+
+    nb = json.loads(path.read_text())
+    used = set()
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "code":
+            for node in ast.walk(ast.parse("".join(cell["source"]))):
+                if isinstance(node, ast.ImportFrom):
+                    used |= {f"{node.module}.{a.name}" for a in node.names}
+                elif isinstance(node, ast.Import):
+                    used |= {a.name for a in node.names}
+    ours = {u for u in used if u.split(".")[0] in ("dynamics", "viz", "mechviz_bench")}
+    assert ours <= {"dynamics.api", "viz.notebook"}, ours
+
+
 _executed: dict[Path, Path] = {}
 
 
