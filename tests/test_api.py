@@ -188,7 +188,7 @@ def test_summary_says_what_mechviz_simulate_json_says(system, settings, flags):
     under error_vs_exact or error_vs_reference, the reference in words, the work counted)."""
     import json
 
-    from tests.test_cli import mechviz
+    from test_cli import mechviz
 
     # samples 0.5 s apart: a whole number of either step, so neither is shortened
     run = api.simulate(system, t_end=2.0, samples=5, **settings)

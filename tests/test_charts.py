@@ -80,7 +80,7 @@ def test_the_chart_is_written_as_svg_and_pdf_when_asked(tmp_path):
 
 
 def test_record_refuses_an_unknown_plot_format_in_one_line(tmp_path):
-    from tests.test_cli import mechviz
+    from test_cli import mechviz
 
     r = mechviz("record", "helix", "--out", str(tmp_path), "--plots", "svg,eps")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--plots" in r.stderr

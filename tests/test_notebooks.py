@@ -17,9 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from tests.browser import require_browser
-from tests.waiting import scaled, wait_until
+from browser import require_browser
+from waiting import scaled, wait_until
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 NOTEBOOKS = sorted(EXAMPLES.glob("*.ipynb"))
