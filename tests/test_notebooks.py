@@ -10,8 +10,10 @@ import contextlib
 import io
 import json
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import urllib.request
 from pathlib import Path
 
@@ -117,6 +119,20 @@ def test_notebook_runs_and_shows_its_demo_once_small_with_a_still(path, tmp_path
         assert _colours(picture) > 200  # a drawn scene, not a blank canvas
 
 
+@pytest.mark.slow
+def test_an_executed_example_rendered_as_a_static_page_keeps_its_still(tmp_path_factory):
+    """nbconvert's HTML, as nbviewer renders a notebook: the still and the player; with its
+    HTML outputs sanitized, as GitHub renders them: the still without the player."""
+    nbformat = pytest.importorskip("nbformat")
+    nbconvert = pytest.importorskip("nbconvert")
+    nb = nbformat.read(executed(EXAMPLES / "01-cyclotron.ipynb", tmp_path_factory), 4)
+    still = "".join(_show_cells(nb)[0]["outputs"][0]["data"]["image/png"]).replace("\n", "")
+    for sanitized in (False, True):
+        page, _ = nbconvert.HTMLExporter(sanitize_html=sanitized).from_notebook_node(nb)
+        assert f"data:image/png;base64,{still}" in page.replace("\n", "")
+        assert ("<iframe" in page) is not sanitized
+
+
 def _png(data: bytes) -> np.ndarray:
     from PIL import Image
 
@@ -143,8 +159,11 @@ def test_an_executed_example_opened_untrusted_in_jupyterlab_shows_its_scene(
     nb_path = executed(EXAMPLES / "01-cyclotron.ipynb", tmp_path_factory)
     with _jupyterlab(nb_path.parent, tmp_path) as (url, token, env):
         page_url = f"{url}lab/tree/{nb_path.name}?token={token}"
-        with sync_playwright() as pw:
-            ctx = launch(pw, str(tmp_path / "profile"), find_chromium(), 1280, 2400)
+        # a short profile path: Chromium's socket inside it must fit a Unix socket's 108 bytes
+        profile = tempfile.mkdtemp(prefix="mechviz-chromium-")
+        with sync_playwright() as pw, contextlib.ExitStack() as clean:
+            clean.callback(shutil.rmtree, profile, ignore_errors=True)
+            ctx = launch(pw, profile, find_chromium(), 1280, 2400)
             ctx.set_default_timeout(scaled(60) * 1000)
             try:
                 page = first_page(ctx)
