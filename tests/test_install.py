@@ -135,8 +135,12 @@ def test_the_installed_quick_benchmark_runs(installed, tmp_path):
         env=_env(),
         cwd=tmp_path,
     )
-    assert bench.returncode == 0, bench.stderr[-3000:]
-    assert (tmp_path / "bench" / "results.json").is_file(), sorted(os.listdir(tmp_path / "bench"))
+    # exit status 1 is a speed target missed (each printed with its figure): the benchmark's
+    # verdict on this machine's load, not the installation's
+    missed = bench.returncode == 1 and "targets missed" in bench.stdout
+    assert bench.returncode == 0 or missed, bench.stdout[-2000:] + bench.stderr[-3000:]
+    results = json.loads((tmp_path / "bench" / "results.json").read_text())
+    assert results["viewer"]["record_speed"]["frames"] > 0  # the viewer's part ran too
 
 
 def test_pipx_installs_the_command_that_records_a_built_in_demo(installed, source, tmp_path):
