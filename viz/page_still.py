@@ -36,7 +36,9 @@ def page_still(
     try:
         import playwright.sync_api  # noqa: F401
     except ImportError:
-        raise StillUnavailable("playwright is not installed (pip install playwright)") from None
+        raise StillUnavailable(
+            "playwright is not installed (pip install 'mechviz[notebook]')"
+        ) from None
     # playwright's sync API refuses to run in a thread with a running event loop (a Jupyter
     # kernel's): it gets a thread of its own.
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
