@@ -90,8 +90,10 @@ def _show_cells(nb: dict) -> list[dict]:
 
 
 @pytest.mark.slow
+@pytest.mark.browser  # the still is taken by Chromium
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
 def test_notebook_runs_and_shows_its_demo_once_small_with_a_still(path, tmp_path_factory):
+    require_browser()
     nb = json.loads(executed(path, tmp_path_factory).read_text())
     errors = [
         o
@@ -120,9 +122,11 @@ def test_notebook_runs_and_shows_its_demo_once_small_with_a_still(path, tmp_path
 
 
 @pytest.mark.slow
+@pytest.mark.browser
 def test_an_executed_example_rendered_as_a_static_page_keeps_its_still(tmp_path_factory):
     """nbconvert's HTML, as nbviewer renders a notebook: the still and the player; with its
     HTML outputs sanitized, as GitHub renders them: the still without the player."""
+    require_browser()
     nbformat = pytest.importorskip("nbformat")
     nbconvert = pytest.importorskip("nbconvert")
     nb = nbformat.read(executed(EXAMPLES / "01-cyclotron.ipynb", tmp_path_factory), 4)
