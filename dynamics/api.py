@@ -1,10 +1,11 @@
 """The dynamics from Python (a notebook, a script): simulate a system, get its time series as
-arrays or a pandas DataFrame, and the seed's analytic results as a dict.
+arrays or a pandas DataFrame, the seed's analytic results as a dict, and the estimators that
+measure a figure from samples, as the viewer and the recordings do.
 
 This is the stable surface over :class:`dynamics.Simulation`, :data:`dynamics.SYSTEMS`, the
-system modules' analytic functions and :mod:`dynamics.measure`; it adds no physics of its own.
-Units are SI and the conventions are those of each system's module (:mod:`dynamics.cyclotron`,
-:mod:`dynamics.disk`, :mod:`dynamics.hoop`).
+system modules' analytic functions, :mod:`dynamics.measure` and :mod:`dynamics.stability`; it
+adds no physics of its own. Units are SI and the conventions are those of each system's module
+(:mod:`dynamics.cyclotron`, :mod:`dynamics.disk`, :mod:`dynamics.hoop`).
 
 >>> from dynamics import api
 >>> run = api.simulate("hoop", method="rk4", dt=0.01, t_end=10.0, modes=(0.1, 0.0))
@@ -12,16 +13,23 @@ Units are SI and the conventions are those of each system's module (:mod:`dynami
 (501, 4)
 >>> run.columns
 ('theta1', 'theta2', 'omega1', 'omega2')
+>>> list(run.quantities)                # the system's own quantities beyond the state
+['q1', 'q2']
 >>> api.analyze("hoop")["mode_frequencies"]            # doctest: +ELLIPSIS
 [2.21..., 3.83...]
->>> df = run.to_dataframe()             # needs pandas: t, the state, energy, errors
+>>> api.crossing_frequency(run.t, run.column("q1")).value   # doctest: +ELLIPSIS
+2.21...
+>>> df = run.to_dataframe()             # needs pandas: t, the state, energy, errors, quantities
 
 Systems: :data:`SYSTEM_NAMES` (the disk with ``motion="driven"``, the exact uniform rotation
 about the axle, or ``"released"``, the free body after the axle is removed). Every default
 (parameters, start, method, step) is the one the command line, the viewer and the demo files
-use. Methods: :func:`methods` (``mechviz simulate --list-methods``). Bad input raises
-:class:`dynamics.params.SettingError` (a ``ValueError``) whose ``field`` names the argument; a
-run that blows up raises :class:`dynamics.IntegrationError`.
+use. Methods: :func:`methods` (``mechviz simulate --list-methods``); the largest stable step of
+one: :func:`stability_limit`. Estimators (each returns an :class:`Estimate`, a value or the
+reason there is none): :func:`gyrofrequency`, :func:`fit_circle`, :func:`crossing_frequency`,
+:func:`wobble_growth_rate`. Bad input raises :class:`dynamics.params.SettingError` (a
+``ValueError``) whose ``field`` names the argument; a run that blows up raises
+:class:`dynamics.IntegrationError`.
 """
 
 from __future__ import annotations
@@ -35,52 +43,80 @@ import numpy as np
 
 from . import analysis
 from . import params as _v
+from . import stability as _stability
+from .measure import Estimate, crossing_frequency, fit_circle, gyrofrequency, wobble_growth_rate
 from .params import SettingError
-from .simulation import Simulation
+from .simulation import Simulation, reference_description
 from .steps import Fixed
 from .systems import SPECS
 
 #: The systems by the names the API, the command line and the demo files use.
 SYSTEM_NAMES = tuple(SPECS)
 
-__all__ = ["SYSTEM_NAMES", "Run", "analyze", "methods", "parameters", "simulate"]
+__all__ = [
+    "SYSTEM_NAMES",
+    "Estimate",
+    "Run",
+    "analyze",
+    "crossing_frequency",
+    "fit_circle",
+    "gyrofrequency",
+    "methods",
+    "parameters",
+    "simulate",
+    "stability_limit",
+    "wobble_growth_rate",
+]
 
 
 @dataclass(frozen=True)
 class Run:
-    """A finished run sampled at ``len(t)`` times.
+    """A finished run sampled at ``len(t)`` times, under the names of ``mechviz simulate
+    --json`` (:meth:`summary` gives that dict).
 
     ``states`` is ``(K, d)`` for one initial state and ``(K, N, d)`` for an ensemble of ``N``;
-    ``energy`` [J], ``energy_error`` (relative to the energy that moves,
-    ``(E - E0) / (E0 - E_floor)``, as in :class:`dynamics.Simulation`) and ``error`` (relative,
-    against the exact solution, or a DOP853 reference at ``rtol = 3e-15``, ``atol = 1e-17``
-    where there is none; ``None`` if not measured) drop the last axis likewise."""
+    ``energy`` [J], ``energy_error`` (signed, relative to the energy that moves,
+    ``(E - E0) / (E0 - E_floor)``, as in :class:`dynamics.Simulation`), ``error`` (relative,
+    against what ``error_vs`` names: ``"exact"``, the exact solution, or ``"reference"``, a
+    DOP853 run at ``rtol = 3e-15``, ``atol = 1e-17`` where there is none; ``None`` if not
+    measured) and each of ``quantities`` (the system's own quantities beyond the state, as the
+    recordings' CSV has them: the cyclotron's ``r``, ``p_r``, ``p_phi``, ``V_eff``; the hoop's
+    ``q1``, ``q2``; the disk's ``Lx``, ``Ly``, ``Lz``; labels with units in
+    ``quantity_labels``) drop the last axis likewise."""
 
     system: str
     method: str
     step: str
-    params: dict[str, float]
+    parameters: dict[str, float]
     columns: tuple[str, ...]
     t: np.ndarray
     states: np.ndarray
     energy: np.ndarray
     energy_error: np.ndarray
     error: np.ndarray | None
-    reference: str | None  # "exact", "reference" or None: what ``error`` is measured against
+    error_vs: Literal["exact", "reference"] | None
     steps: int
-    rhs_evaluations: int  # what is counted depends on the method: ``Method.counts``
+    rhs_evaluations: int
+    rhs_evaluations_count: str  # what ``rhs_evaluations`` counts for this method
     invariants: dict[str, np.ndarray] = field(default_factory=dict)
     start: dict[str, Any] = field(default_factory=dict)  # the start settings, defaults filled in
+    quantities: dict[str, np.ndarray] = field(default_factory=dict)
+    quantity_labels: dict[str, str] = field(default_factory=dict)
+    report: dict[str, Any] = field(default_factory=dict)  # the system's figures at the end
 
     def column(self, name: str) -> np.ndarray:
-        """One state variable over time, e.g. ``run.column("theta1")``."""
+        """One state variable or quantity over time, e.g. ``run.column("theta1")``."""
+        if name in self.quantities:
+            return self.quantities[name]
         if name not in self.columns:
-            raise ValueError(f"name must be one of {', '.join(self.columns)}; got {name!r}")
+            names = ", ".join((*self.columns, *self.quantities))
+            raise SettingError("name", f"name must be one of {names}; got {name!r}")
         return self.states[..., self.columns.index(name)]
 
     def to_dataframe(self):
         """A pandas DataFrame, one row per sample (and ensemble member, column ``member``):
-        ``t``, the state variables, ``energy``, ``energy_error`` and ``error``."""
+        ``t``, the state variables, ``energy``, ``energy_error``, ``error`` and the
+        quantities."""
         try:
             import pandas as pd
         except ImportError:
@@ -101,26 +137,42 @@ class Run:
         data["energy"] = flat(self.energy)
         data["energy_error"] = flat(self.energy_error)
         data["error"] = flat(self.error) if self.error is not None else np.nan
+        for name, values in self.quantities.items():
+            data[name] = flat(values)
         return pd.DataFrame(data)
 
     def summary(self) -> dict[str, Any]:
-        """Method, step, work and final errors as a JSON-ready dict, under the names and signs
-        of ``mechviz simulate --json``: ``energy_drift`` the signed relative energy error at the
-        end (of the member that drifted most, for an ensemble), ``max_energy_error`` the largest
-        magnitude, ``error_vs_exact`` or ``error_vs_reference`` at the end."""
+        """What ``mechviz simulate --json`` prints for this run, JSON-ready, under its names and
+        signs: ``energy_drift`` the signed relative energy error at the end (of the member that
+        drifted most, for an ensemble, whose ``initial_state`` and ``final_state`` are lists),
+        ``max_energy_error`` the largest magnitude, ``error_vs_exact`` or
+        ``error_vs_reference`` at the end (the largest of the members) and ``reference`` what
+        it is measured against."""
         end = np.atleast_1d(self.energy_error[-1])
+
+        def states(row):
+            rows = [dict(zip(self.columns, map(float, x), strict=True)) for x in np.atleast_2d(row)]
+            return rows[0] if np.ndim(row) == 1 else rows
+
         out: dict[str, Any] = {
             "system": self.system,
+            **({"motion": self.start["motion"]} if "motion" in self.start else {}),
             "method": self.method,
             "step": self.step,
+            "parameters": dict(self.parameters),
             "t_end": float(self.t[-1]),
-            "steps": self.steps,
-            "rhs_evaluations": self.rhs_evaluations,
+            "initial_state": states(self.states[0]),
+            "final_state": states(self.states[-1]),
             "energy_drift": float(end[np.argmax(np.abs(end))]),
             "max_energy_error": float(np.max(np.abs(self.energy_error))),
+            "rhs_evaluations": self.rhs_evaluations,
+            "rhs_evaluations_count": self.rhs_evaluations_count,
+            "steps": self.steps,
         }
         if self.error is not None:
-            out[f"error_vs_{self.reference}"] = float(np.max(self.error[-1]))
+            out[f"error_vs_{self.error_vs}"] = float(np.max(self.error[-1]))
+            out["reference"] = reference_description(self.error_vs)
+        out.update(self.report)
         return out
 
 
@@ -181,6 +233,10 @@ def simulate(
     start_names = {s.name for s in spec.start}
     start = {k: v for k, v in settings.items() if k in start_names}
     params = {k: v for k, v in settings.items() if k not in start_names}
+    if reference not in ("auto", "exact", None):
+        raise SettingError(
+            "reference", f"reference must be 'auto', 'exact' or None; got {reference!r}"
+        )
     if state is not None and start:
         raise SettingError(
             next(iter(start)), "state gives the whole start; leave out " + ", ".join(start)
@@ -208,23 +264,46 @@ def simulate(
     def member(a):
         return a[:, 0] if single else a
 
+    states = member(traj.states)
     return Run(
         system=spec.name,
         method=sim.method.name,
         step=sim.step_label(),
-        params=dataclasses.asdict(setup.params),
+        parameters=dataclasses.asdict(setup.params),
         columns=tuple(setup.system.state_names),
         t=traj.t,
-        states=member(traj.states),
+        states=states,
         energy=member(traj.energy),
         energy_error=member(traj.energy_error),
         error=None if traj.error is None else member(traj.error),
-        reference=sim.reference_kind,
+        error_vs=sim.reference_kind,
         steps=sim.steps,
         rhs_evaluations=sim.nfev,
+        rhs_evaluations_count=sim.method.counts,
         invariants={n: member(v) for n, v in traj.invariants.items()},
         start=dict(setup.start),
+        quantities=setup.system.quantities(states),
+        quantity_labels=dict(setup.system.quantity_labels),
+        report=setup.system.report(float(traj.t[-1])),
     )
+
+
+def stability_limit(system: str, method: str, **settings: Any) -> float | None:
+    """The largest stable fixed step [s] of ``method`` on ``system`` for ``settings`` (its
+    parameters and start, as :func:`simulate` takes them; the disk's methods other than
+    ``exact`` need ``motion="released"``), from the method's stability region and the motion's
+    fastest frequency (:mod:`dynamics.stability`). ``None``: stable at any step (or adaptive,
+    or exact); ``0.0``: stable at none (explicit Euler on an oscillation)."""
+    spec = _spec(system)
+    start_names = {s.name for s in spec.start}
+    start = {k: v for k, v in settings.items() if k in start_names}
+    params = {k: v for k, v in settings.items() if k not in start_names}
+    try:
+        setup = spec.setup(params, start, method=method)
+    except SettingError as exc:
+        field = exc.field.removeprefix("initial.")
+        raise SettingError(field, str(exc), fields=(field,)) from None
+    return _stability.stability_limit(setup.method.name, setup.system, setup.state)
 
 
 def _spec(system: str):

@@ -515,6 +515,14 @@ def splitting_step(y, p, h):
     return 5
 
 
+def wobble_growth_rate(moments: np.ndarray, w0: np.ndarray) -> float:
+    """Linear growth rate [1/s] of a wobble about the intermediate axis of principal moments
+    ``I1 < I2 < I3`` for body angular velocity ``w0`` [rad/s]:
+    ``|w2| sqrt((I2 - I1)(I3 - I2) / (I1 I3))``."""
+    i1, i2, i3 = (float(m) for m in moments)
+    return abs(float(w0[1])) * math.sqrt((i2 - i1) * (i3 - i2) / (i1 * i3))
+
+
 def analysis(p: DiskParams) -> dict:
     """The seed's results, JSON-ready: inertia tensors about A (disk, bead, both), principal
     moments and axes about A and about the centre of mass, the angular momentum and torque of the
@@ -544,4 +552,7 @@ def analysis(p: DiskParams) -> dict:
         "net_bearing_force_amplitude": g(lambda: float(np.linalg.norm(net_bearing_force(p)))),
         "principal_moments_cm": moments_cm.tolist(),
         "principal_axes_cm": axes_cm.tolist(),
+        "wobble_growth_rate": g(
+            lambda: wobble_growth_rate(moments_cm, released_initial_state(p)[:3])
+        ),
     }

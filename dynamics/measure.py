@@ -438,7 +438,7 @@ def wobble_growth_rate(
 
 
 def wobble_growth_rate_theory(moments: np.ndarray, w0: np.ndarray) -> float:
-    """Linear growth rate [1/s] of a wobble about the intermediate axis of principal moments
-    ``I1 < I2 < I3``: ``|w2| sqrt((I2 - I1)(I3 - I2) / (I1 I3))``."""
-    i1, i2, i3 = (float(m) for m in moments)
-    return abs(float(w0[1])) * math.sqrt((i2 - i1) * (i3 - i2) / (i1 * i3))
+    """Linear growth rate [1/s] of a wobble about the intermediate axis
+    (:func:`dynamics.disk.wobble_growth_rate`), the figure :func:`wobble_growth_rate` is
+    compared with."""
+    return disk.wobble_growth_rate(moments, w0)

@@ -64,6 +64,21 @@ REFERENCE_TOL = 3e-15
 REFERENCE_ATOL = 1e-17
 #: The reference run's own relative error, an upper bound measured over 100 s.
 REFERENCE_ACCURACY = 5e-13
+
+
+def reference_description(kind: str | None) -> str | None:
+    """What a run's ``error`` is measured against, in words (``kind``: ``"exact"``,
+    ``"reference"`` or ``None``, as :attr:`Simulation.reference_kind`)."""
+    if kind is None:
+        return None
+    if kind == "exact":
+        return "exact solution (round-off only)"
+    return (
+        f"DOP853 at rtol = {REFERENCE_TOL:g}, atol = {REFERENCE_ATOL:g}, its own relative error "
+        f"below {REFERENCE_ACCURACY:g}"
+    )
+
+
 #: An adaptive run is compared with the reference only if its rtol and atol are at least this
 #: (over 100 times REFERENCE_TOL).
 MIN_COMPARED_TOL = 1e-12

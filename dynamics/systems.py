@@ -10,6 +10,12 @@ difference, which would cancel at small motions), so that the relative energy er
 ``(E - E0) / (E0 - floor)`` measures the energy that moves, to round-off at any amplitude, and
 not an arbitrary zero of the potential; and ``time_scale(states)``, the shortest period of the
 motion [s], from which the driver estimates the steps of an adaptive run.
+
+Each adapter also names the quantities its theory is told in, beyond the state
+(``quantity_labels``: name -> label with the unit; ``quantities(states)``): the charge's distance
+from the axis, radial and canonical angular momentum and effective potential, the hoop's modal
+coordinates, the disk's angular momentum in space. The API's runs, the recordings' CSV and the
+viewer's plots all take them from here.
 """
 
 from __future__ import annotations
@@ -19,7 +25,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from . import cyclotron, disk, hoop
+from . import cyclotron, disk, hoop, measure
 from . import params as _v
 from .integrators import kernels
 from .spec import Setting, SystemSpec, param
@@ -53,6 +59,14 @@ class _Adapter:
     #: The one-amplitude family of starts the stability atlas sweeps: its unit, its axis label
     #: and the default range of amplitudes (see :meth:`amplitude_state`).
     amplitude: ClassVar[tuple[str, str, tuple[float, float]] | None] = None
+
+    #: The quantities beyond the state, by name (a column of the API's runs and of a recording's
+    #: CSV): the label with its unit, as a plot's axis shows it.
+    quantity_labels: ClassVar[dict[str, str]] = {}
+
+    def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """Each of :attr:`quantity_labels` for states ``(..., d)``, shaped ``(...)``."""
+        return {}
 
     def report(self, t: float) -> dict[str, list[float]]:
         """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
@@ -114,6 +128,22 @@ class Cyclotron(_Adapter):
             "canonical_angular_momentum": cyclotron.canonical_angular_momentum(self.params, states),
         }
 
+    quantity_labels: ClassVar[dict[str, str]] = {
+        "r": "distance from the axis r [m]",
+        "p_r": "radial momentum p_r [kg m/s]",
+        "p_phi": "canonical ang. momentum p_φ [kg m²/s]",
+        "V_eff": "V_eff(r) [J]",
+    }
+
+    def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """The radial motion of the seed's argument: ``r``, ``p_r``, ``p_phi`` and
+        ``V_eff(r)`` for each state's own ``p_phi`` (infinite on the axis, ``r = 0``)."""
+        r, p_r = cyclotron.radial_coordinates(self.params, states)
+        p_phi = cyclotron.canonical_angular_momentum(self.params, states)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v_eff = cyclotron.effective_potential(self.params, r, p_phi)
+        return {"r": r, "p_r": p_r, "p_phi": p_phi, "V_eff": v_eff}
+
     def has_exact(self, state0: np.ndarray) -> bool:
         """Always: the helix is closed form from any state."""
         return True
@@ -173,6 +203,18 @@ class Hoop(_Adapter):
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
+
+    quantity_labels: ClassVar[dict[str, str]] = {
+        "q1": "mode-1 coordinate q1 [rad]",
+        "q2": "mode-2 coordinate q2 [rad]",
+    }
+
+    def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """The angles on the two normal-mode shapes (:func:`dynamics.measure.modal_coordinates`)."""
+        angles = np.asarray(states, dtype=float)[..., :2]
+        shapes = hoop.normal_modes(self.params)[1]
+        q = measure.modal_coordinates(angles.reshape(-1, 2), shapes).reshape(angles.shape)
+        return {"q1": q[..., 0], "q2": q[..., 1]}
 
     def has_exact(self, state0: np.ndarray) -> bool:
         """Whether :meth:`exact` has a closed form from ``state0``."""
@@ -259,6 +301,15 @@ class ReleasedDisk(_Adapter):
             "angular_momentum_norm": np.linalg.norm(L, axis=-1),
         }
 
+    quantity_labels: ClassVar[dict[str, str]] = {
+        f"L{a}": f"L_{a} about CM [kg m²/s]" for a in "xyz"
+    }
+
+    def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """The angular momentum about the centre of mass in space (conserved)."""
+        L = disk.free_angular_momentum_space(self.kernel_params(), states)
+        return {f"L{a}": L[..., k] for k, a in enumerate("xyz")}
+
     def has_exact(self, state0: np.ndarray) -> bool:
         return False
 
@@ -307,6 +358,15 @@ class DrivenDisk(_Adapter):
 
     def invariants(self, states: np.ndarray) -> dict[str, np.ndarray]:
         return {"energy": self.energy(states)}
+
+    quantity_labels: ClassVar[dict[str, str]] = {f"L{a}": f"L_{a} about A [kg m²/s]" for a in "xyz"}
+
+    def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """The angular momentum about A in space: its tip circles the axle."""
+        s = np.asarray(states, dtype=float)
+        L = disk.rotation_about_axle(s[..., 0]) @ (disk.inertia_tensor(self.params) @ disk.AXLE)
+        L = L * s[..., 1, None]
+        return {f"L{a}": L[..., k] for k, a in enumerate("xyz")}
 
     def has_exact(self, state0: np.ndarray) -> bool:
         return True

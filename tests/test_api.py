@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dynamics
-from dynamics import api, measure
+from dynamics import api
 
 
 def test_cyclotron_run_goes_round_at_the_gyrofrequency_of_the_analysis():
@@ -25,19 +25,19 @@ def test_cyclotron_run_goes_round_at_the_gyrofrequency_of_the_analysis():
         speed=1.5,
     )
     assert run.states.shape == (400, 6) and run.columns[:2] == ("x", "y")
-    w = measure.gyrofrequency(run.t, run.states[:, 3:5], xy=run.states[:, :2]).value
+    w = api.gyrofrequency(run.t, run.states[:, 3:5], xy=run.states[:, :2]).value
     assert w == pytest.approx(info["gyrofrequency"], rel=1e-5)
-    _centre, radius = measure.fit_circle(run.states[:, :2]).value
+    _centre, radius = api.fit_circle(run.states[:, :2]).value
     assert radius == pytest.approx(info["radius"], rel=1e-6)
     assert np.max(np.abs(run.energy_error)) < 1e-12  # Boris keeps |v|
-    assert run.reference == "exact" and run.error is not None
+    assert run.error_vs == "exact" and run.error is not None
 
 
 def test_hoop_mode1_frequency_matches_the_normal_mode_analysis():
     freqs = api.analyze("hoop", bead_mass=0.5)["mode_frequencies"]
     run = api.simulate("hoop", method="dop853", rtol=1e-10, t_end=20.0, modes=(0.01, 0.0))
     q = run.column("theta1")
-    assert measure.crossing_frequency(run.t, q).value == pytest.approx(freqs[0], rel=1e-3)
+    assert api.crossing_frequency(run.t, q).value == pytest.approx(freqs[0], rel=1e-3)
     assert np.allclose(run.column("theta1"), run.column("theta2"), atol=1e-9)  # in phase, equal
 
 
@@ -62,7 +62,14 @@ def test_dataframe_has_one_row_per_sample_and_member():
     pytest.importorskip("pandas")
     one = api.simulate("hoop", method="rk4", dt=0.01, t_end=1.0, samples=11, modes=(0.1, 0.0))
     df = one.to_dataframe()
-    assert list(df.columns) == ["t", *one.columns, "energy", "energy_error", "error"]
+    assert list(df.columns) == [
+        "t",
+        *one.columns,
+        "energy",
+        "energy_error",
+        "error",
+        *one.quantities,
+    ]
     assert len(df) == 11 and df["t"].iloc[-1] == pytest.approx(1.0)
     beam = api.simulate(
         "cyclotron",
@@ -119,3 +126,126 @@ def test_a_start_setting_that_cannot_apply_is_refused_naming_it():
     with pytest.raises(dynamics.SettingError) as err:
         api.simulate("disk", t_end=1.0, extra_spin=(1e-3, 0.0, 0.0))
     assert err.value.field == "extra_spin" and "released" in str(err.value)
+
+
+def test_the_cyclotrons_radial_quantities_are_columns_and_move_on_the_effective_potential():
+    """r, p_r, p_phi, V_eff as the CSV has them: p_phi is conserved (the field is uniform about
+    the axis), and the transverse energy splits as p_r^2 / 2m + V_eff(r)."""
+    run = api.simulate("cyclotron", method="exact", t_end=5.0, samples=101, centre=(0.7, 0.2))
+    assert list(run.quantities) == ["r", "p_r", "p_phi", "V_eff"]
+    assert "[m]" in run.quantity_labels["r"] and "[J]" in run.quantity_labels["V_eff"]
+    p_phi, r = run.column("p_phi"), run.column("r")
+    np.testing.assert_allclose(p_phi, p_phi[0], rtol=1e-12)
+    np.testing.assert_allclose(r, np.hypot(run.column("x"), run.column("y")), rtol=1e-14)
+    m = run.parameters["mass"]
+    e_perp = 0.5 * m * (run.column("vx") ** 2 + run.column("vy") ** 2)
+    np.testing.assert_allclose(run.column("p_r") ** 2 / (2 * m) + run.column("V_eff"), e_perp)
+
+
+def test_the_hoops_modal_coordinates_split_the_two_modes():
+    """Started on mode 2 alone, q1 stays 0 in linear motion and q2 swings at mode 2's frequency."""
+    run = api.simulate("hoop", method="dop853", rtol=1e-11, t_end=10.0, modes=(0.0, 1e-3))
+    assert np.max(np.abs(run.column("q1"))) < 1e-6 * np.max(np.abs(run.column("q2")))
+    w2 = api.crossing_frequency(run.t, run.column("q2")).value
+    assert w2 == pytest.approx(api.analyze("hoop")["mode_frequencies"][1], rel=1e-3)
+
+
+def test_the_disks_angular_momentum_is_a_column_conserved_once_released_and_turning_driven():
+    free = api.simulate("disk", motion="released", method="rk4", dt=0.01, t_end=3.0)
+    L = np.stack([free.column(f"L{a}") for a in "xyz"], axis=-1)
+    np.testing.assert_allclose(L, free.invariants["angular_momentum"])
+    assert np.max(np.abs(L - L[0])) < 1e-8 * np.linalg.norm(L[0])
+    driven = api.simulate("disk", t_end=math.pi, samples=5, omega=2.0)  # one turn
+    L = np.stack([driven.column(f"L{a}") for a in "xyz"], axis=-1)
+    norm = np.linalg.norm(api.analyze("disk", omega=2.0)["angular_momentum"])
+    np.testing.assert_allclose(np.linalg.norm(L, axis=1), norm, rtol=1e-12)
+    np.testing.assert_allclose(L[-1], L[0], atol=1e-12 * norm)  # back after a whole turn
+    assert driven.summary()["bearing_force_b"]  # the CLI's figures of the driven disk, too
+
+
+def test_an_ensembles_quantities_are_per_member():
+    beam = api.simulate(
+        "cyclotron",
+        method="exact",
+        t_end=1.0,
+        samples=5,
+        state=[[1, 0, 0, 0, 1, 0], [2, 0, 0, 0, 2, 0]],
+    )
+    assert beam.column("r").shape == (5, 2)
+    np.testing.assert_allclose(beam.column("r")[0], [1.0, 2.0])
+
+
+@pytest.mark.parametrize(
+    ("system", "settings", "flags"),
+    [
+        ("hoop", {"method": "verlet", "dt": 0.05}, ["--method", "verlet", "--dt", "0.05"]),
+        ("cyclotron", {"method": "rk4", "dt": 0.1}, ["--method", "rk4", "--dt", "0.1"]),
+        ("disk", {"omega": 2.0}, ["--omega", "2"]),
+    ],
+)
+def test_summary_says_what_mechviz_simulate_json_says(system, settings, flags):
+    """The same names, signs and values as the command line (energy_drift signed, the error
+    under error_vs_exact or error_vs_reference, the reference in words, the work counted)."""
+    import json
+
+    from test_cli import mechviz
+
+    # samples 0.5 s apart: a whole number of either step, so neither is shortened
+    run = api.simulate(system, t_end=2.0, samples=5, **settings)
+    cli = mechviz("simulate", system, "--t-end", "2", "--samples", "5", "--json", *flags)
+    assert cli.returncode == 0, cli.stderr
+    want = json.loads(cli.stdout)
+    got = json.loads(json.dumps(run.summary()))
+    assert list(got) == list(want)
+    for key, value in want.items():
+        if isinstance(value, float):
+            assert got[key] == pytest.approx(value, rel=1e-9, abs=1e-15), key
+        elif isinstance(value, dict | list):
+            assert got[key] == pytest.approx(value, rel=1e-9, abs=1e-15), key
+        else:
+            assert got[key] == value, key
+
+
+@pytest.mark.parametrize(
+    ("call", "field"),
+    [
+        (lambda: api.simulate("hoop", t_end=-1), "t_end"),
+        (lambda: api.simulate("hoop", t_end=float("nan")), "t_end"),
+        (lambda: api.simulate("hoop", t_end=1.0, samples=1), "samples"),
+        (lambda: api.simulate("hoop", t_end=1.0, reference="tight"), "reference"),
+        (lambda: api.simulate("hoop", t_end=1.0, modes=(5.0, 0.0)), "modes"),
+        (lambda: api.simulate("hoop", t_end=1.0, state=[1.0, 2.0]), "state"),
+        (lambda: api.stability_limit("hoop", "boris"), "method"),
+        (lambda: api.stability_limit("disk", "rk4", extra_spin=(0, 0, 1)), "extra_spin"),
+        (lambda: api.simulate("hoop", t_end=1.0, samples=3).column("speed"), "name"),
+    ],
+)
+def test_an_error_is_one_line_naming_its_argument(call, field):
+    with pytest.raises(dynamics.SettingError) as err:
+        call()
+    assert err.value.field == field and field in str(err.value) and "\n" not in str(err.value)
+
+
+def test_stability_limit_of_the_api_is_the_methods_region_over_the_fastest_frequency():
+    """Explicit Euler is stable at no step on an oscillation; the symplectic Verlet up to
+    omega dt = 2 on the hoop's faster mode; RK4 up to 2 sqrt(2) on the gyration."""
+    w = api.analyze("hoop")["mode_frequencies"][1]
+    assert api.stability_limit("hoop", "verlet") == pytest.approx(2.0 / w, rel=1e-6)
+    assert api.stability_limit("hoop", "euler") == 0.0
+    assert api.stability_limit("cyclotron", "rk4") == pytest.approx(2 * math.sqrt(2), rel=1e-3)
+    assert api.stability_limit("cyclotron", "exact") is None
+    assert api.stability_limit("disk", "rk4", motion="released") > 0
+
+
+def test_the_released_disks_wobble_grows_at_the_analysis_rate():
+    run = api.simulate(
+        "disk",
+        motion="released",
+        method="rk4",
+        dt=0.01,
+        t_end=30.0,
+        samples=1501,
+        extra_spin=(1e-3, 0, 0),
+    )
+    growth = api.wobble_growth_rate(run.t, run.states[:, :3])
+    assert growth.value == pytest.approx(api.analyze("disk")["wobble_growth_rate"], rel=1e-3)

@@ -68,7 +68,7 @@ def test_every_front_end_starts_a_system_from_the_same_default(system, app, serv
     from_cli = (np.array(list(r["initial_state"].values())), r["parameters"], r["method"])
 
     run = api.simulate(system, t_end=T_END, samples=2)
-    from_api = (run.states[0], run.params, run.method)
+    from_api = (run.states[0], run.parameters, run.method)
 
     from_viewer = _start(app.exhibits[system])
 

@@ -32,10 +32,9 @@ from dynamics.integrators import METHODS, IntegrationError
 from dynamics.params import TINY, SettingError, blamed
 from dynamics.simulation import (
     MIN_COMPARED_TOL,
-    REFERENCE_ACCURACY,
-    REFERENCE_ATOL,
     REFERENCE_TOL,
     Simulation,
+    reference_description,
 )
 from dynamics.spec import Setup, SystemSpec, checked_state
 from dynamics.steps import Fixed
@@ -310,12 +309,7 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
     if traj.error is not None:
         key = "error_vs_exact" if sim.reference_kind == "exact" else "error_vs_reference"
         out[key] = float(traj.error[-1, 0])
-        out["reference"] = (
-            "exact solution (round-off only)"
-            if sim.reference_kind == "exact"
-            else f"DOP853 at rtol = {REFERENCE_TOL:g}, atol = {REFERENCE_ATOL:g}, its own "
-            f"relative error below {REFERENCE_ACCURACY:g}"
-        )
+        out["reference"] = reference_description(sim.reference_kind)
     out.update(sysm.report(traj.t[-1]))
     return out
 

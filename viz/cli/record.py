@@ -37,6 +37,12 @@ def add_commands(sub) -> None:
     )
     p.add_argument("--dt", type=number, metavar="DT", help="step size [s] for fixed-step methods")
     p.add_argument(
+        "--plots",
+        metavar="FORMATS",
+        default="",
+        help="the chart also as svg, pdf or svg,pdf (DEMO.svg, DEMO.pdf; PNG is always written)",
+    )
+    p.add_argument(
         "--theme",
         choices=("light", "dark"),
         default="light",
@@ -64,6 +70,7 @@ def run_record(args: argparse.Namespace) -> int:
 
     with ctrl_c_within_a_second():  # a Ctrl-C that an import swallows (trimesh's) still counts
         from .. import record as rec
+        from ..record import charts
 
     if args.list:
         demos = rec.list_demos()
@@ -90,12 +97,17 @@ def run_record(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise _option_error(exc, args) from None
+    try:
+        plots = charts.check_formats(args.plots)
+    except ValueError as exc:
+        raise CliError(f"--plots: {exc}") from None
     out = Path(args.out)
     try:
         if out.exists() and not out.is_dir():
             raise CliError(f"--out: {printable(str(out))} exists and is not a folder")
         for demo in demos:  # the deepest path the recording makes must be possible
-            check_room(out, demo.name, [f"{demo.name}{s}" for s in rec.SUFFIXES])
+            suffixes = (*rec.SUFFIXES, *(f".{f}" for f in plots))
+            check_room(out, demo.name, [f"{demo.name}{s}" for s in suffixes])
         _check_writable(out)
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
@@ -112,6 +124,7 @@ def run_record(args: argparse.Namespace) -> int:
                 theme=args.theme,
                 on_wait=_say_waiting,
                 interruptible=ctrl_c_within_a_second,
+                plots=plots,
             )
         except rec.RecordingFailed as exc:
             if sys.stderr.isatty():

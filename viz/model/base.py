@@ -521,7 +521,17 @@ class ExhibitModel:
         """The quantities the exhibit can plot for ``config``, by name (:mod:`viz.model.plot`):
         at least time, the state, energy and the errors."""
         system = dynamics.SYSTEMS[cls.system_for(config)]
-        return common_variables({n: n for n in system.state_names})
+        return {**common_variables({n: n for n in system.state_names}), **cls.quantities(config)}
+
+    @classmethod
+    def quantities(cls, config) -> dict[str, Variable]:
+        """The system's own quantities beyond the state, as its description names them
+        (:attr:`dynamics.systems.Cyclotron.quantity_labels` and the like)."""
+        system = dynamics.SYSTEMS[cls.system_for(config)](config.physics())
+        return {
+            name: Variable(label, lambda s, name=name: system.quantities(s.states)[name])
+            for name, label in system.quantity_labels.items()
+        }
 
     @classmethod
     def system_for(cls, config) -> str:

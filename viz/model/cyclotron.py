@@ -215,27 +215,9 @@ class CyclotronModel(ExhibitModel):
     def plot_variables(cls, config) -> dict[str, Variable]:
         """The state, and the radial motion of the seed's argument: ``r``, ``p_r``, ``p_phi``
         and ``V_eff(r)`` for the sample's own ``p_phi``."""
-        p = config.physics()
         units = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s"}
         out = common_variables({n: f"{n} [{u}]" for n, u in units.items()})
-
-        def r(s):
-            return cy.radial_coordinates(p, s.states)[0]
-
-        def p_phi(s):
-            return cy.canonical_angular_momentum(p, s.states)
-
-        def v_eff(s):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                return cy.effective_potential(p, r(s), p_phi(s))
-
-        out["r"] = Variable("distance from the axis r [m]", r)
-        out["p_r"] = Variable(
-            "radial momentum p_r [kg m/s]", lambda s: cy.radial_coordinates(p, s.states)[1]
-        )
-        out["p_phi"] = Variable("canonical ang. momentum p_φ [kg m²/s]", p_phi)
-        out["V_eff"] = Variable("V_eff(r) [J]", v_eff)
-        return out
+        return {**out, **cls.quantities(config)}
 
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:

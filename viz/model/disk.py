@@ -176,18 +176,10 @@ class DiskModel(ExhibitModel):
         """Driven: the angle and rate, and L about A in space (its tip circles the axle).
         Released: the body-frame angular velocity about the centre of mass, the quaternion, and
         L in space (conserved)."""
-        p = config.physics()
         if config.mode == "driven":
             out = common_variables(
                 {"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"}
             )
-
-            def L(s):
-                return dk.rotation_about_axle(s.states[:, 0]) @ (
-                    dk.inertia_tensor(p) @ (p.omega * dk.AXLE)
-                )
-
-            about = "A"
         else:
             out = common_variables(
                 {
@@ -198,17 +190,7 @@ class DiskModel(ExhibitModel):
                     **{f"q{k}": f"quaternion q{k}" for k in range(4)},
                 }
             )
-            moments = dk.free_kernel_params(p)
-
-            def L(s):
-                return dk.free_angular_momentum_space(moments, s.states)
-
-            about = "CM"
-        for k, axis in enumerate("xyz"):
-            out[f"L{axis}"] = Variable(
-                f"L_{axis} about {about} [kg m²/s]", lambda s, k=k: L(s)[:, k]
-            )
-        return out
+        return {**out, **cls.quantities(config)}
 
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:

@@ -151,7 +151,6 @@ class HoopModel(ExhibitModel):
     def plot_variables(cls, config) -> dict[str, Variable]:
         """The angles, their rates and the two normal-mode coordinates (the angles on the mode
         shapes, :func:`dynamics.measure.modal_coordinates`)."""
-        _, shapes = hp.normal_modes(config.physics())
         out = common_variables(
             {
                 "theta1": "hoop angle θ1 [rad]",
@@ -160,12 +159,7 @@ class HoopModel(ExhibitModel):
                 "omega2": "bead rate θ2' [rad/s]",
             }
         )
-        for k in (0, 1):
-            out[f"q{k + 1}"] = Variable(
-                f"mode-{k + 1} coordinate q{k + 1} [rad]",
-                lambda s, k=k: measure.modal_coordinates(s.states[:, :2], shapes)[:, k],
-            )
-        return out
+        return {**out, **cls.quantities(config)}
 
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:

@@ -31,6 +31,7 @@ from dynamics.systems import CYCLOTRON, DISK
 
 from ..model import MODELS
 from ..model.plot import Curve, Samples, draw_xy
+from . import charts
 from .demo import Demo
 from .run import Traces
 
@@ -140,12 +141,19 @@ def draw_pictures(d: Demo, tr: Traces, axes) -> None:
                     )
                 )
         draw_xy(ax, variables, x, y, main, curves, path_label=tr.main)
+        if charts.shared_unit(variables[x].label, variables[y].label):
+            charts.equal_aspect(ax)
         ax.xaxis.label.set_fontsize(8)
         ax.yaxis.label.set_fontsize(8)
         ax.tick_params(labelsize=7)
 
 
 def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
+    """:func:`chart_figure` as PNG (:mod:`viz.record.charts` saves it in other formats too)."""
+    return charts.save(chart_figure(d, tr, figs))[".png"]
+
+
+def chart_figure(d: Demo, tr: Traces, figs: list[dict[str, Any]]):
     """Three panels: the motion with the predictions marked, the energy error, the error."""
     import matplotlib
 
@@ -299,9 +307,7 @@ def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
             va="top",
             family="monospace",
         )
-    out = io.BytesIO()
-    fig.savefig(out, format="png")
-    return out.getvalue()
+    return fig
 
 
 #: Period marks drawn at most on the chart: a recording that spans more periods marks every

@@ -27,9 +27,10 @@ import dynamics
 from dynamics.files import WriteFailed, WriteInterrupted, json_safe
 from dynamics.fileset import WaitFn, check_room, write_set
 
+from . import charts
 from .demo import Demo, load_demo
 from .figures import figures
-from .outputs import chart_png, manifest, traces_csv
+from .outputs import chart_figure, manifest, traces_csv
 from .run import ProgressFn, run_demo
 
 SUFFIXES = (".viser", ".html", ".csv", ".png", ".json")
@@ -73,8 +74,10 @@ def record(
     theme: str = "light",
     on_wait: WaitFn | None = None,
     interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
+    plots: tuple[str, ...] | str = (),
 ) -> RecordResult:
-    """Record ``demo`` into ``out_dir`` (the five files of the module docstring).
+    """Record ``demo`` into ``out_dir`` (the five files of the module docstring, and the chart
+    in each of ``plots`` as well: ``"svg"``, ``"pdf"``, :mod:`viz.record.charts`).
 
     ``progress(frame, frames)`` is called after each frame. Raises :class:`RecordingFailed`
     (the cause chained) if a run blows up or anything fails before the files are in place;
@@ -86,18 +89,21 @@ def record(
     Ctrl-C even where numba's compiler swallows it)."""
     d = load_demo(demo) if isinstance(demo, str) else demo
     out = Path(out_dir)
+    vector = tuple(f".{f}" for f in charts.check_formats(plots))
+    suffixes = (*SUFFIXES, *vector)
     t_start = time.perf_counter()
     try:
-        check_room(out, d.name, [f"{d.name}{s}" for s in SUFFIXES])
+        check_room(out, d.name, [f"{d.name}{s}" for s in suffixes])
         with interruptible():
             rec = run_demo(d, progress, theme=theme)
             tr = rec.traces
             figs = figures(d, tr)
+            drawn = charts.save(chart_figure(d, tr, figs), ("png", *(s[1:] for s in vector)))
             files = {
                 f"{d.name}.viser": rec.viser,
                 f"{d.name}.html": rec.html,
                 f"{d.name}.csv": traces_csv(d, tr),
-                f"{d.name}.png": chart_png(d, tr, figs),
+                **{f"{d.name}{s}": b for s, b in drawn.items()},
             }
             man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
         man["files"] = {
@@ -130,8 +136,19 @@ def record(
             isinstance(exc, ValueError) or getattr(exc, "errno", 0) == errno.ENAMETOOLONG
         )
         raise err from exc
+    _forget_vector_charts(out, d.name, vector)
     wall = time.perf_counter() - t_start
-    return RecordResult(d, {s: out / f"{d.name}{s}" for s in SUFFIXES}, man, wall, d.frames)
+    return RecordResult(d, {s: out / f"{d.name}{s}" for s in suffixes}, man, wall, d.frames)
+
+
+def _forget_vector_charts(out: Path, name: str, kept: tuple[str, ...]) -> None:
+    """Remove the names of an earlier recording's SVG or PDF chart that this one did not
+    write: they are links into the set just replaced, and lead nowhere now."""
+    for s in charts.VECTOR_FORMATS:
+        link = out / f"{name}.{s}"
+        if f".{s}" not in kept and link.is_symlink() and not link.exists():
+            with contextlib.suppress(OSError):
+                link.unlink()
 
 
 def measure_record_speed(demo: str = "helix", duration: float = 30.0, fps: int = 30) -> dict:
