@@ -199,6 +199,10 @@ def analyze(system: str, **settings: float) -> dict[str, Any]:
     return analysis.analyze(system, settings)
 
 
+#: The samples of a run when none are asked for (about that many with a fixed step).
+SAMPLES = 501
+
+
 def simulate(
     system: str,
     *,
@@ -207,15 +211,18 @@ def simulate(
     dt: float | None = None,
     rtol: float | None = None,
     atol: float | None = None,
-    samples: int = 501,
+    samples: int | None = None,
     state: Any = None,
     reference: Literal["auto", "exact"] | None = "auto",
     **settings: Any,
 ) -> Run:
     """Run ``system`` with ``method`` to ``t_end`` [s] and sample it ``samples`` times, equally
-    spaced, first and last included, each at exactly its time (a fixed step that does not divide
-    the interval between samples is shortened to the largest step that does, as the command
-    line does for ``--t-end``; :attr:`Run.step` says which).
+    spaced, first and last included, each at exactly its time. By default about
+    :data:`SAMPLES` samples; with a fixed step they are a whole number of steps apart and the step
+    is shortened only to land on ``t_end`` (the fewest steps that do, as the command line lands on
+    ``--t-end``, rounded up to a whole number per sample: under 1/:data:`SAMPLES` more).
+    Given ``samples``, a fixed step that does not divide the interval between them is shortened
+    to the largest step that does (:attr:`Run.step` says which step ran).
 
     ``settings`` are the system's physical parameters (:func:`parameters`) and the settings of
     its start, each defaulting as everywhere else in mechviz (``mechviz simulate SYSTEM --help``
@@ -247,12 +254,21 @@ def simulate(
         field = exc.field.removeprefix("initial.")
         raise SettingError(field, str(exc), fields=(field,)) from None
     t_end = _v.positive("t_end", t_end)
+    step = setup.step
+    if samples is None and isinstance(step, Fixed):
+        # the step kept: the fewest steps that land on t_end, rounded up to a multiple of k,
+        # k steps between samples and at most SAMPLES - 1 intervals
+        n = max(1, math.ceil(t_end / step.dt - 1e-9))
+        k = math.ceil(n / (SAMPLES - 1))
+        n = k * math.ceil(n / k)
+        samples, step = n // k + 1, Fixed(t_end / n)
+    elif samples is None:
+        samples = SAMPLES
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
         raise SettingError(
             "samples", f"samples must be a whole number of at least 2, got {samples!r}"
         )
-    step = setup.step
-    if isinstance(step, Fixed):
+    if isinstance(step, Fixed) and step is setup.step:
         # Samples at exactly the times asked: the largest step <= dt that divides the interval
         # between samples (as the command line lands on --t-end).
         interval = t_end / (samples - 1)

@@ -121,6 +121,21 @@ def test_fixed_step_samples_fall_at_exactly_the_times_asked():
     assert np.max(np.abs(rate - run.column("omega1")[1:-1])) < bound
 
 
+@pytest.mark.parametrize(("dt", "t_end"), [(0.1, 60.0), (0.03, 1.0), (1 / 60, 20.0)])
+def test_without_samples_asked_a_fixed_step_is_kept_and_samples_fall_on_steps(dt, t_end):
+    """Left to itself the API keeps the step asked for, shortened only to land on t_end (the
+    fewest steps that do, rounded up to a whole number per sample), and samples a whole number
+    of steps apart: the run is the method at that step."""
+    run = api.simulate("hoop", method="rk4", dt=dt, t_end=t_end, modes=(0.05, 0.0))
+    h = t_end / run.steps
+    per_sample = np.diff(run.t) / h
+    k = round(per_sample[0])
+    np.testing.assert_allclose(per_sample, k, rtol=0, atol=1e-6)
+    fewest = math.ceil(t_end / dt - 1e-9)
+    assert fewest <= run.steps < fewest + k and h <= dt * (1 + 1e-12)
+    assert 2 <= len(run.t) <= api.SAMPLES and run.t[-1] == t_end
+
+
 def test_a_start_setting_that_cannot_apply_is_refused_naming_it():
     """The disk is driven unless released: an extra spin at release would be silently ignored."""
     with pytest.raises(dynamics.SettingError) as err:
