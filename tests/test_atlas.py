@@ -34,6 +34,9 @@ from dynamics.atlas.grid import AtlasSpec, Axis
 from dynamics.atlas.kernels import VARIABLES
 from viz.cli import main
 
+# every test here starts a Dask cluster or an interpreter, or runs the maps for seconds
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parent.parent
 OMEGA2 = float(hoop.normal_modes(hoop.HoopParams())[0][1])
 

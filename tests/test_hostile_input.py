@@ -28,6 +28,9 @@ import pytest
 
 from viz.cli import build_parser, main
 
+# every test here runs the command line or records over hundreds of hostile inputs
+pytestmark = pytest.mark.slow
+
 TIMEOUT = 120 * float(os.environ.get("MECHVIZ_TIMEOUT_FACTOR", "1"))
 EDGES = ["0", "5e-324", "-5e-324", "1e-308", "-1e-308", "1e308", "-1e308", "inf", "-inf", "nan"]
 OUT_OF_RANGE = ["-1", "1e400", "1.7e308", str(10**100)]

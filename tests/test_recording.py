@@ -50,6 +50,7 @@ def recorded(tmp_path_factory):
     return out, results
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(SHORT))
 def test_builtin_demo_records_five_complete_files(recorded, name):
     out, results = recorded

@@ -35,6 +35,9 @@ from viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
 from viz.scene.disk import LIFT, P  # noqa: E402
 from viz.scene.panel import Panel  # noqa: E402
 
+# every test here starts the viewer's server
+pytestmark = pytest.mark.slow
+
 FRAME = 1.0 / 60.0
 
 
