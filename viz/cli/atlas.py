@@ -62,6 +62,8 @@ _FIELDS = (
     "amplitude",
     "theta1",
     "theta2",
+    "omega1",
+    "omega2",
     "periods",
     "threshold",
     "duration",
@@ -115,8 +117,19 @@ def build_spec(args: argparse.Namespace):
     amp = Axis("amplitude", *(args.amplitude or (lo, hi, 48, "linear")))
     extra = {}
     if args.kind == "chaos":
-        y = Axis("theta2", *(args.theta2 or (-math.pi, math.pi, 128, "linear")))
-        x = Axis("theta1", *(args.theta1 or (-math.pi, math.pi, 128, "linear")))
+        from dynamics.atlas.grid import CHAOS_SECTIONS
+        from dynamics.hoop import normal_modes
+
+        # rates up to 1.5 times the top of the mode-1 pendulum's separatrix, 2 omega_1
+        top = 3.0 * float(normal_modes(system.params)[0][0])
+        defaults = {
+            "theta": (-math.pi, math.pi, 128, "linear"),
+            "omega": (-top, top, 128, "linear"),
+        }
+        y, x = (
+            Axis(name, *(getattr(args, name) or defaults[name[:5]]))
+            for name in CHAOS_SECTIONS[args.section]
+        )
         extra = {
             "duration": args.duration or 60.0,
             "step": args.step,
@@ -308,6 +321,22 @@ def add_commands(sub) -> None:
         type=_axis_text,
         metavar="START:STOP:N",
         help="chaos: bead angle axis [rad] (as --theta2=-3.14:3.14:64)",
+    )
+    for name, what in (("omega1", "hoop"), ("omega2", "bead")):
+        p.add_argument(
+            f"--{name}",
+            type=_axis_text,
+            metavar="START:STOP:N",
+            help=f"chaos: {what} rate axis [rad/s] of the --section {what} "
+            f"(as --{name}=-6:6:64; default +-3 omega_1)",
+        )
+    p.add_argument(
+        "--section",
+        choices=("rest", "hoop", "bead"),
+        default="rest",
+        help="chaos: the starts mapped; rest: theta1 x theta2, both rates zero (default); "
+        "hoop: theta1 x theta1', with theta2 = theta2' = 0 (the bead straight below the "
+        "hoop's centre, not turning); bead: theta2 x theta2', the hoop hanging at rest",
     )
     p.add_argument(
         "--periods",
