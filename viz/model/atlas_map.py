@@ -49,6 +49,9 @@ STABILITY_OMEGA_DT = (0.02, 4.0)
 STABILITY_ROWS, STABILITY_AMPLITUDES = 40, (0.05, 2.5, 20)
 STABILITY_PERIODS = 50.0
 SHIPPED = ("atlas", "hoop-chaos.npz")
+#: The chaos map's colours, from dark blue (regular) to yellow (chaotic): no colour of it is one
+#: the scene gives a body or a trail, so the map never passes for one.
+COLOURMAP = "cividis"
 
 
 def _params(p: hoop.HoopParams) -> tuple[tuple[str, float], ...]:
@@ -168,13 +171,13 @@ class ChaosMap:
         return max(0.5, float(np.percentile(finite, 99))) if finite.size else 1.0
 
     def rgb(self) -> np.ndarray:
-        """The map as an (rows, columns, 3) uint8 picture, top row the largest theta2 (viridis
-        from 0 to :meth:`colour_scale`; grey where a run was lost)."""
+        """The map as an (rows, columns, 3) uint8 picture, top row the largest theta2
+        (:data:`COLOURMAP` from 0 to :meth:`colour_scale`; grey where a run was lost)."""
         import matplotlib
 
         top = self.colour_scale()
         lyap = self.lyapunov[::-1]
-        rgba = matplotlib.colormaps["viridis"](np.clip(np.nan_to_num(lyap) / top, 0.0, 1.0))
+        rgba = matplotlib.colormaps[COLOURMAP](np.clip(np.nan_to_num(lyap) / top, 0.0, 1.0))
         out = (255 * rgba[..., :3]).round().astype(np.uint8)
         out[~np.isfinite(lyap)] = 128
         return out

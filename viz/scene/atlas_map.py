@@ -17,7 +17,7 @@ import atexit
 
 import numpy as np
 
-from ..model.atlas_map import ChaosMap, HoopMaps, StabilityMap, start_amplitude
+from ..model.atlas_map import COLOURMAP, ChaosMap, HoopMaps, StabilityMap, start_amplitude
 
 MAP_SIZE = 1.0  # m, the side of the map in the scene
 MAP_CENTRE = np.array([-2.3, 0.0, 2.1])  # m from the exhibit origin (x times the hoop radius)
@@ -84,7 +84,7 @@ def draw_chaos(pic: MapPicture, m: ChaosMap, start, dark: bool) -> np.ndarray:
     spec = m.spec
     top = m.colour_scale()
     xs, ys = spec.x.values(), spec.y.values()
-    mesh = ax.pcolormesh(xs, ys, m.lyapunov, shading="nearest", cmap="viridis", vmin=0, vmax=top)
+    mesh = ax.pcolormesh(xs, ys, m.lyapunov, shading="nearest", cmap=COLOURMAP, vmin=0, vmax=top)
     bar = pic.fig.colorbar(mesh, ax=ax, shrink=0.85)
     bar.set_label("largest Lyapunov exponent [1/s]", fontsize=6, color=pic.ink)
     bar.ax.tick_params(labelsize=6, colors=pic.ink)
