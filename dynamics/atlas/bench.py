@@ -11,7 +11,9 @@ Measures, on the chaos map of the hoop (the map that outgrows one machine):
   the workers' time not spent inside a task (scheduling, transfer, writing the store);
 - *CPU share*: the CPU seconds the tasks' threads got over their wall seconds; 1 when each
   worker had a core to itself, lower when other processes took part of it. A speed-up short of
-  two with a high share is overhead; with a share that falls from one worker to two, it is load;
+  two with a high share is overhead; with a share that falls from one worker to two, it is load.
+  The speed-up at equal shares, ``T1 / T2 x share_1 / share_2``, is what the two workers would
+  give with a core each: two times what scheduling leaves of their time;
 - *cells per second per core* from the tasks' CPU seconds (what a core does when it is given),
   and the projected wall time of a 1024 x 1024 map over 60 s on 1, 8 and 64 cores: at the
   measured two-worker efficiency, and at the scheduling overhead alone (cores not shared).
@@ -133,6 +135,7 @@ def run_bench(out: Path, *, quick: bool = False, progress: bool = True) -> dict:
     one = distributed_run(spec, 1)
     two = distributed_run(spec, 2)
     speedup = one["wall_s"] / two["wall_s"]
+    speedup_equal_share = speedup * one["cpu_share"] / two["cpu_share"]
     cells = n * n
     per_core = cells / one["task_cpu_s"]
     efficiency = speedup / 2.0
@@ -155,6 +158,7 @@ def run_bench(out: Path, *, quick: bool = False, progress: bool = True) -> dict:
         "one_worker": one,
         "two_workers": two,
         "speedup_1_to_2": speedup,
+        "speedup_1_to_2_at_equal_cpu_share": speedup_equal_share,
         "parallel_efficiency_2": efficiency,
         "scheduling_overhead": overhead,
         "cpu_share_1": one["cpu_share"],
@@ -190,7 +194,8 @@ def format_summary(r: dict) -> str:
         f" speed-up {r['speedup_1_to_2']:.2f}x (efficiency {100 * r['parallel_efficiency_2']:.0f} %)",
         f"  scheduling overhead {100 * r['scheduling_overhead']:.1f} %; CPU share of the "
         f"tasks {100 * r['cpu_share_1']:.0f} % on 1 worker, {100 * r['cpu_share_2']:.0f} % on 2"
-        " (below 100 %: other processes took the cores)",
+        " (below 100 %: other processes took the cores); speed-up at equal shares "
+        f"{r['speedup_1_to_2_at_equal_cpu_share']:.2f}x",
         f"  {r['cells_per_s_per_core']:.0f} cells/s/core; 1024x1024 over 60 s: "
         + ", ".join(f"{k} cores {_hms(v)}" for k, v in r["projected_1024x1024_wall_s"].items())
         + " (cores not shared: "

@@ -17,7 +17,16 @@ import atexit
 
 import numpy as np
 
-from ..model.atlas_map import COLOURMAP, ChaosMap, HoopMaps, StabilityMap, start_amplitude
+from ..model.atlas_map import (
+    CHAOS_DURATION,
+    CHAOS_METHOD,
+    COLOURMAP,
+    STABILITY_PERIODS,
+    ChaosMap,
+    HoopMaps,
+    StabilityMap,
+    start_amplitude,
+)
 
 MAP_SIZE = 1.0  # m, the side of the map in the scene
 MAP_CENTRE = np.array([-2.3, 0.0, 2.1])  # m from the exhibit origin (x times the hoop radius)
@@ -145,10 +154,11 @@ class HoopMapsView:
                 "chaos_note",
                 gui.add_markdown(
                     "<small>Each start at rest (θ1, θ2) coloured by its largest Lyapunov "
-                    "exponent (renormalised twin runs 1e-9 apart, RK4, 30 s): dark, regular; "
-                    "bright, chaotic. White: the two normal-mode lines; red +: the current "
-                    "start. **Click the map standing above the configuration square in the "
-                    "scene to start the hoop there.**</small>"
+                    f"exponent (renormalised twin runs 1e-9 apart, {CHAOS_METHOD}, "
+                    f"{CHAOS_DURATION:g} s): dark, regular; bright, chaotic. White: the two "
+                    "normal-mode lines; red +: the current start. **Click the map standing "
+                    "above the configuration square in the scene to start the hoop "
+                    "there.**</small>"
                 ),
             )
             look = gui.add_button("Look at the map", icon=viser.Icon.MAP)
@@ -158,8 +168,8 @@ class HoopMapsView:
         with gui.add_folder("Stability map", expand_by_default=False):
             gui.add_markdown(
                 "<small>Where the chosen method stays bounded on this hoop: pale, bounded after "
-                "50 periods of the fastest mode; dark, not. Dashed: linear theory's limit. "
-                "Magenta: the current step (line) at the start's amplitude (dot).</small>"
+                f"{STABILITY_PERIODS:g} periods of the fastest mode; dark, not. Dashed: linear "
+                "theory's limit. Magenta: the current step (line) at the start's amplitude (dot).</small>"
             )
             self.stability_image = panel.put(
                 "stability_map", gui.add_image(self._blank(), format="png")
