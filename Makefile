@@ -66,7 +66,7 @@ readme-gif: $(VENV)/.installed-test
 
 # The README's atlas maps: the hoop's chaos map (128 x 128 starts, 60 s each) at rest and over
 # (theta1, theta1'), its stability and accuracy maps for every fixed-step method, on a
-# LocalCluster of this machine's cores; and the viewer's chaos map of the default hoop.
+# LocalCluster of this machine's cores; and the viewer's maps of the default hoop.
 ATLAS_IMG := docs/img/atlas
 atlas-docs: $(VENV)/.installed-test
 	$(BIN)/python -m pip install -q -e '.[atlas]'

@@ -14,7 +14,14 @@ from waiting import wait_until
 from dynamics import hoop
 from dynamics.atlas.grid import AtlasSpec, Axis
 from dynamics.atlas.kernels import compute_chunk
-from viz.model.atlas_map import MapWorker, chaos_spec, compute, load_shipped
+from viz.model.atlas_map import (
+    MapWorker,
+    chaos_spec,
+    compute,
+    load_shipped,
+    load_shipped_stability,
+    shipped_specs,
+)
 
 
 def test_shipped_chaos_map_is_the_default_hoops_map():
@@ -22,7 +29,7 @@ def test_shipped_chaos_map_is_the_default_hoops_map():
     give the shipped exponents (stored as float32)."""
     p = hoop.HoopParams()
     shipped = load_shipped(p)
-    assert shipped is not None, "assets/atlas/hoop-chaos.npz: run python -m viz.model.atlas_map"
+    assert shipped is not None, "assets/atlas/hoop-maps.npz: run python -m viz.model.atlas_map"
     spec = chaos_spec(p)
     one = AtlasSpec(**{**spec.__dict__, "chunk": (1, 1)})
     for i, j in ((32, 32), (5, 60), (50, 10)):
@@ -35,8 +42,29 @@ def test_shipped_chaos_map_is_the_default_hoops_map():
     assert np.median(shipped.lyapunov[reach > 2.5]) > 0.4
 
 
-def test_other_masses_are_not_served_the_shipped_map():
+def test_shipped_stability_maps_are_the_default_hoops_maps():
+    """Each fixed-step method's map, a few cells run again one at a time; and RK4's boundary at
+    small amplitude on its linear limit, one row of the log-spaced steps either way."""
+    p = hoop.HoopParams()
+    methods = [name for name in shipped_specs() if name != "chaos"]
+    assert {"euler", "rk4", "verlet", "yoshida4", "midpoint"} <= set(methods)
+    for name in methods:
+        shipped = load_shipped_stability(p, name)
+        one = AtlasSpec(**{**shipped.spec.__dict__, "chunk": (1, 1)})
+        for i, j in ((0, 0), (20, 7), (39, 19)):
+            fresh = compute_chunk(one, (0, i, j))
+            assert fresh["bounded"][0, 0] == shipped.bounded[i, j], (name, i, j)
+            assert fresh["energy_error"][0, 0] == shipped.energy_error[i, j], (name, i, j)
+    rk4 = load_shipped_stability(p, "rk4")
+    dts = rk4.spec.y.values()
+    edge = int(np.argmin(rk4.bounded[:, 0]))  # the first unbounded step at the smallest swing
+    assert rk4.bounded[:edge, 0].all()
+    assert dts[edge - 1] <= rk4.linear_limit()[0] <= dts[edge + 1]
+
+
+def test_other_masses_are_not_served_the_shipped_maps():
     assert load_shipped(hoop.HoopParams(bead_mass=0.2)) is None
+    assert load_shipped_stability(hoop.HoopParams(bead_mass=0.2), "rk4") is None
 
 
 @pytest.mark.slow

@@ -17,9 +17,10 @@ from the top, so a picture of any size (the panel's figure, the scene's texture)
 Both are computed by the atlas's own kernel (:func:`dynamics.atlas.kernels.compute_chunk`, the
 whole grid one chunk) in a background process (:class:`MapWorker`): the compiled loops hold
 the interpreter's lock for their whole call, which in a thread would stall the viewer's frames.
-The default hoop's chaos map is shipped (``assets/atlas/hoop-chaos.npz``, written by
-``python -m viz.model.atlas_map``) and loaded at once, so the viewer starts with its map; other
-parameters compute theirs in the background (a few seconds). Needs neither Dask nor xarray.
+The default hoop's maps are shipped (``assets/atlas/hoop-maps.npz``: the chaos map and each
+fixed-step method's stability map, written by ``python -m viz.model.atlas_map``) and loaded at
+once, so the viewer starts with them; other parameters compute theirs in the background (a few
+seconds each). Needs neither Dask nor xarray.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dynamics import assets, hoop
+from dynamics import assets, hoop, methods_for
 from dynamics.atlas.grid import AtlasSpec, Axis
 
 #: The chaos map's angles [rad]: both axes, inside the viewer's start range (-pi, pi).
@@ -48,7 +49,7 @@ CHAOS_METHOD, CHAOS_STEP = "rk4", 0.01
 STABILITY_OMEGA_DT = (0.02, 4.0)
 STABILITY_ROWS, STABILITY_AMPLITUDES = 40, (0.05, 2.5, 20)
 STABILITY_PERIODS = 50.0
-SHIPPED = ("atlas", "hoop-chaos.npz")
+SHIPPED = ("atlas", "hoop-maps.npz")
 #: The chaos map's colours, from dark blue (regular) to yellow (chaotic): no colour of it is one
 #: the scene gives a body or a trail, so the map never passes for one.
 COLOURMAP = "cividis"
@@ -219,28 +220,62 @@ def start_amplitude(p: hoop.HoopParams, angles) -> float:
 
 def load_shipped(p: hoop.HoopParams) -> ChaosMap | None:
     """The shipped chaos map if it is the one :func:`chaos_spec` asks for ``p``, else None."""
+    arrays = _shipped(chaos_spec(p), "chaos")
+    if arrays is None:
+        return None
+    return ChaosMap(chaos_spec(p), arrays["lyapunov"].astype(np.float64))
+
+
+def load_shipped_stability(p: hoop.HoopParams, method: str) -> StabilityMap | None:
+    """The shipped stability map of ``method`` if it is the one :func:`stability_spec` asks
+    for, else None."""
+    spec = stability_spec(p, method)
+    arrays = None if spec is None else _shipped(spec, method)
+    if arrays is None:
+        return None
+    return StabilityMap(spec, arrays["bounded"], arrays["energy_error"])
+
+
+def _shipped(spec: AtlasSpec, name: str) -> dict[str, np.ndarray] | None:
+    """The arrays stored under ``name`` in the shipped file if they are of ``spec``."""
     path = assets.asset(*SHIPPED)
     if not path.is_file():
         return None
     with np.load(path) as data:
-        stored = json.loads(str(data["spec"]))
-        lyapunov = np.array(data["lyapunov"], dtype=np.float64)
-    if stored != chaos_spec(p).as_dict():
-        return None
-    return ChaosMap(chaos_spec(p), lyapunov)
+        if f"{name}.spec" not in data.files:
+            return None
+        if json.loads(str(data[f"{name}.spec"])) != spec.as_dict():
+            return None
+        prefix = f"{name}."
+        return {k[len(prefix) :]: np.array(data[k]) for k in data.files if k.startswith(prefix)}
+
+
+def shipped_specs() -> dict[str, AtlasSpec]:
+    """What the shipped file holds, by name: the default hoop's chaos map and the stability
+    map of each of its fixed-step compiled methods."""
+    p = hoop.HoopParams()
+    out = {"chaos": chaos_spec(p)}
+    for m in methods_for("hoop"):
+        spec = stability_spec(p, m.name)
+        if spec is not None:
+            out[m.name] = spec
+    return out
 
 
 def write_shipped(path: Path | None = None) -> Path:
-    """Compute the default hoop's chaos map here and write it where :func:`load_shipped` looks."""
-    p = hoop.HoopParams()
-    spec = chaos_spec(p)
-    out = compute(json.dumps(spec.as_dict()))
+    """Compute the maps of :func:`shipped_specs` here and write them where :func:`load_shipped`
+    looks (the exponents as float32)."""
+    arrays = {}
+    for name, spec in shipped_specs().items():
+        arrays[f"{name}.spec"] = np.array(json.dumps(spec.as_dict()))
+        for key, value in compute(json.dumps(spec.as_dict())).items():
+            if key == "lyapunov":
+                value = value.astype(np.float32)
+            arrays[f"{name}.{key}"] = value
     path = Path(path) if path is not None else assets.asset(*SHIPPED)
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(path.name + ".partial.npz")
-    np.savez_compressed(
-        partial, spec=json.dumps(spec.as_dict()), lyapunov=out["lyapunov"].astype(np.float32)
-    )
+    np.savez_compressed(partial, **arrays)
     partial.replace(path)
     return path
 
@@ -335,8 +370,9 @@ class HoopMaps:
                 self.worker.request("chaos", want)
         want_s = stability_spec(p, method)
         if self._wanted["stability"] != want_s:
-            self._wanted["stability"], self.stability, changed = want_s, None, True
-            if want_s is not None:
+            self._wanted["stability"], changed = want_s, True
+            self.stability = load_shipped_stability(p, method)
+            if want_s is not None and self.stability is None:
                 self.worker.request("stability", want_s)
         for slot in ("chaos", "stability"):
             try:
@@ -369,5 +405,5 @@ class HoopMaps:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--compute"]:  # a background request (MapWorker)
         _compute_to(sys.argv[2], sys.argv[3])
-    else:  # python -m viz.model.atlas_map [PATH]: the shipped chaos map
+    else:  # python -m viz.model.atlas_map [PATH]: the shipped maps
         print(write_shipped(Path(sys.argv[1]) if len(sys.argv) > 1 else None))
