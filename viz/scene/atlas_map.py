@@ -208,12 +208,6 @@ class HoopMapsView:
             thickness=3.0,
             thickness_units="screen",
         )
-        self.scene_label = s.add_label(
-            f"{r}/chaos_map_label",
-            "chaos map: click a start",
-            position=self.centre_local + (0.0, 0.0, 0.5 * MAP_SIZE + 0.06),
-            anchor="bottom-center",
-        )
 
     def world_of(self, u: float, v: float) -> np.ndarray:
         """The world point [m] at the place ``(u, v)`` of the scene's map."""
