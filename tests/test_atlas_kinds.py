@@ -119,3 +119,19 @@ def test_adaptive_error_follows_the_tolerance():
     )
     ds = compute_serial(spec)
     assert np.abs(slopes(ds, 0, "rtol") - 1.0).max() < 0.25
+
+
+@pytest.mark.parametrize(
+    "args, flag",
+    [
+        (["stability", "--section", "hoop"], "--section"),
+        (["chaos", "--section", "hoop", "--theta2=-1:1:3"], "--theta2"),
+        (["chaos", "--omega1=-1:1:3"], "--omega1"),
+        (["accuracy", "--theta1=-1:1:3"], "--theta1"),
+    ],
+)
+def test_an_axis_the_map_does_not_have_is_refused_in_one_line(tmp_path, capsys, args, flag):
+    assert main(["atlas", *args, "--out", str(tmp_path / "a"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"mechviz: error: {flag}"), err
+    assert not (tmp_path / "a").exists()

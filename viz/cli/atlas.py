@@ -64,6 +64,7 @@ _FIELDS = (
     "theta2",
     "omega1",
     "omega2",
+    "section",
     "periods",
     "threshold",
     "duration",
@@ -116,8 +117,20 @@ def build_spec(args: argparse.Namespace):
     lo, hi = DEFAULT_AMPLITUDES[system_name]
     amp = Axis("amplitude", *(args.amplitude or (lo, hi, 48, "linear")))
     extra = {}
+    from dynamics.atlas.grid import CHAOS_SECTIONS
+
+    section = args.section or "rest"
+    if args.section and args.kind != "chaos":
+        raise ValueError("section: the chaos map's option (stability and accuracy have none)")
+    y_name, x_name = CHAOS_SECTIONS[section]
+    for name in ("theta1", "theta2", "omega1", "omega2"):
+        if not getattr(args, name):
+            continue
+        if args.kind != "chaos":
+            raise ValueError(f"{name}: an axis of the chaos map only")
+        if name not in (y_name, x_name):
+            raise ValueError(f"{name}: the section {section} has the axes {x_name} and {y_name}")
     if args.kind == "chaos":
-        from dynamics.atlas.grid import CHAOS_SECTIONS
         from dynamics.hoop import normal_modes
 
         # rates up to 1.5 times the top of the mode-1 pendulum's separatrix, 2 omega_1
@@ -128,7 +141,7 @@ def build_spec(args: argparse.Namespace):
         }
         y, x = (
             Axis(name, *(getattr(args, name) or defaults[name[:5]]))
-            for name in CHAOS_SECTIONS[args.section]
+            for name in CHAOS_SECTIONS[section]
         )
         extra = {
             "duration": args.duration or 60.0,
@@ -333,7 +346,6 @@ def add_commands(sub) -> None:
     p.add_argument(
         "--section",
         choices=("rest", "hoop", "bead"),
-        default="rest",
         help="chaos: the starts mapped; rest: theta1 x theta2, both rates zero (default); "
         "hoop: theta1 x theta1', with theta2 = theta2' = 0 (the bead straight below the "
         "hoop's centre, not turning); bead: theta2 x theta2', the hoop hanging at rest",
