@@ -174,6 +174,7 @@ class HoopMapsView:
             self.stability_image = panel.put(
                 "stability_map", gui.add_image(self._blank(), format="png")
             )
+            self.stability_note = panel.put("stability_note", gui.add_markdown(""))
         self._build_scene()
         self._frames = 0
         self.app.frame_hooks.append(self._on_frame)
@@ -281,8 +282,15 @@ class HoopMapsView:
             dt = float(ex.config.dt)
             self.stability_image.image = draw_stability(self.stability_picture, stab, amp, dt, dark)
             self.step_drawn = (amp, dt, self.stability_picture.place_of(amp, dt))
-        elif self.maps.stability is None and not self.maps.worker.busy("stability"):
+        elif not self.maps.worker.busy("stability"):
             self.stability_image.image = self._blank()
+        fixed = not ex.sim.method.adaptive
+        self.stability_note.content = (
+            ""
+            if fixed
+            else f"<small>{ex.config.method} is adaptive: its step follows the tolerance, "
+            "so there is no fixed step to mark.</small>"
+        )
 
     def _mark(self, chaos: ChaosMap, start) -> None:
         u, v = chaos.place_of(*start)
