@@ -64,18 +64,24 @@ readme-gif: $(VENV)/.installed-test
 	$(BIN)/mechviz record radial-kick --out "$$tmp" --duration 8 --fps 10 --video gif --size 640x360 && \
 	cp "$$tmp/radial-kick.gif" $(README_GIF).partial && mv $(README_GIF).partial $(README_GIF)
 
-# The README's atlas maps: the hoop's chaos map (128 x 128 starts, 60 s each) and its stability
-# map for every fixed-step method, on a LocalCluster of this machine's cores.
+# The README's atlas maps: the hoop's chaos map (128 x 128 starts, 60 s each) at rest and over
+# (theta1, theta1'), its stability and accuracy maps for every fixed-step method, on a
+# LocalCluster of this machine's cores; and the viewer's maps of the default hoop.
 ATLAS_IMG := docs/img/atlas
 atlas-docs: $(VENV)/.installed-test
 	$(BIN)/python -m pip install -q -e '.[atlas]'
 	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	$(BIN)/mechviz atlas chaos --out "$$tmp/chaos" --no-progress && \
+	$(BIN)/mechviz atlas chaos --section theta1 --out "$$tmp/chaos-hoop" --no-progress && \
 	$(BIN)/mechviz atlas stability --out "$$tmp/stability" --no-progress && \
+	$(BIN)/mechviz atlas accuracy --out "$$tmp/accuracy" --no-progress && \
 	mkdir -p $(ATLAS_IMG) && \
-	for m in chaos stability; do \
+	for m in chaos stability accuracy; do \
 	  cp "$$tmp/$$m/$$m.png" $(ATLAS_IMG)/$$m.png.partial && mv $(ATLAS_IMG)/$$m.png.partial $(ATLAS_IMG)/$$m.png; \
-	done
+	done && \
+	cp "$$tmp/chaos-hoop/chaos.png" $(ATLAS_IMG)/chaos-hoop.png.partial && \
+	mv $(ATLAS_IMG)/chaos-hoop.png.partial $(ATLAS_IMG)/chaos-hoop.png
+	$(BIN)/python -m viz.model.atlas_map
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

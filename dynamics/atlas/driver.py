@@ -50,6 +50,7 @@ class RunReport:
     workers: int = 0
     wall_seconds: float = 0.0
     task_seconds: float = 0.0  # the tasks' own time, summed
+    task_cpu_seconds: float = 0.0  # the CPU time the tasks' threads got, summed
     interrupted: bool = False
 
     @property
@@ -181,6 +182,7 @@ def _run_tasks(client, spec, path, todo, report, bar, on_chunk) -> None:
                 _store.write_chunk(path, spec, c, cells, report.session)
                 report.computed.append(c)
                 report.task_seconds += float(cells["seconds"])
+                report.task_cpu_seconds += float(cells.get("cpu_seconds", 0.0))
                 bar.update(1)
                 if on_chunk is not None:
                     on_chunk(c, report)

@@ -7,8 +7,11 @@ kind         y (rows)                         x (columns)
 ============ ================================ ================================
 stability    ``dt`` [s], the step              ``amplitude`` (see :mod:`.theory`)
 accuracy     ``dt`` [s] or ``rtol``            ``amplitude``
-chaos        ``theta2`` [rad] at rest          ``theta1`` [rad] at rest (hoop only)
+chaos        a section of the hoop's starts (:data:`CHAOS_SECTIONS`; hoop only)
 ============ ================================ ================================
+
+A chaos map is a section of the hoop's start space ``(theta1, theta2, omega1, omega2)`` (angles
+[rad], rates [rad/s]): its two axes name the coordinates that vary, the other two are zero.
 
 The grid is cut into rectangular chunks of ``chunk = (rows, columns)`` cells of one method, each
 one task. The chunk shape is part of the run (it is hashed into :meth:`AtlasSpec.run_key`), so a
@@ -32,6 +35,16 @@ from ..integrators import get_method, methods_for
 from ..systems import SYSTEMS, Hoop
 
 Kind = Literal["stability", "chaos", "accuracy"]
+#: The chaos map's sections by name: (y, x) axes. ``rest``: both angles, at rest; ``theta1``:
+#: the hoop's angle and rate with ``theta2 = omega2 = 0`` (the bead straight below the hoop's
+#: centre, not turning); ``theta2``: the bead's angle and rate on the hoop hanging at rest.
+CHAOS_SECTIONS = {
+    "rest": ("theta2", "theta1"),
+    "theta1": ("omega1", "theta1"),
+    "theta2": ("omega2", "theta2"),
+}
+#: Where each coordinate sits in the hoop's state.
+HOOP_COORDINATES = {"theta1": 0, "theta2": 1, "omega1": 2, "omega2": 3}
 KINDS: tuple[str, ...] = ("stability", "chaos", "accuracy")
 #: The systems an atlas can map: those with a compiled right-hand side, the hoop first.
 SYSTEM_NAMES = tuple(
@@ -162,7 +175,7 @@ class AtlasSpec:
                 raise ValueError("rtol: must lie between 0 and 1")
         expected = {
             "stability": ("dt", "amplitude"),
-            "chaos": ("theta2", "theta1"),
+            "chaos": CHAOS_SECTIONS.get(self.section, ("theta2", "theta1")),
             "accuracy": (self.y.name, "amplitude"),
         }[self.kind]
         if (self.y.name, self.x.name) != expected:
@@ -188,6 +201,12 @@ class AtlasSpec:
         return make_system(self.system, dict(self.params))
 
     # ---------------------------------------------------------------- the grid
+    @property
+    def section(self) -> str | None:
+        """The chaos map's section (:data:`CHAOS_SECTIONS`) its axes name, else None."""
+        pair = (self.y.name, self.x.name)
+        return next((k for k, v in CHAOS_SECTIONS.items() if v == pair), None)
+
     @property
     def shape(self) -> tuple[int, int, int]:
         return (len(self.methods), self.y.n, self.x.n)

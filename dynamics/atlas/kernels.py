@@ -24,7 +24,7 @@ import numpy as np
 
 from ..integrators import IntegrationError, get_method
 from ..simulation import REFERENCE_ATOL, REFERENCE_TOL, Simulation
-from .grid import AtlasSpec
+from .grid import HOOP_COORDINATES, AtlasSpec
 from .theory import fastest_period, start_states
 
 #: What each kind of map stores per cell: name -> (dtype, fill for a cell not computed).
@@ -144,13 +144,15 @@ def stability_cells(spec: AtlasSpec, method: str, dts: np.ndarray, amps: np.ndar
     return {"energy_error": err, "escape_time": escape, "bounded": bounded}
 
 
-def chaos_cells(spec: AtlasSpec, method: str, theta2: np.ndarray, theta1: np.ndarray) -> dict:
-    """Per start ``(theta1, theta2)`` at rest: the largest Lyapunov exponent [1/s] (module
-    docstring) and the relative energy error of the start's own run at the end."""
+def chaos_cells(spec: AtlasSpec, method: str, ys: np.ndarray, xs: np.ndarray) -> dict:
+    """Per start of the section (:data:`.grid.CHAOS_SECTIONS`: the two coordinates the axes
+    name, the others zero): the largest Lyapunov exponent [1/s] (module docstring) and the
+    relative energy error of the start's own run at the end."""
     system = spec.make_system()
-    t1, t2 = np.meshgrid(theta1, theta2)
-    base = np.zeros((t1.size, 4))
-    base[:, 0], base[:, 1] = t1.ravel(), t2.ravel()
+    gx, gy = np.meshgrid(xs, ys)
+    base = np.zeros((gx.size, 4))
+    base[:, HOOP_COORDINATES[spec.x.name]] = gx.ravel()
+    base[:, HOOP_COORDINATES[spec.y.name]] = gy.ravel()
     twin = base.copy()
     twin[:, 0] += spec.separation
     n = len(base)
@@ -173,14 +175,17 @@ def chaos_cells(spec: AtlasSpec, method: str, theta2: np.ndarray, theta1: np.nda
     lyap[lost] = np.nan
     energy = relative_energy_error(system, ens.states[:n], e0)
     energy[lost] = np.inf
-    shape = (len(theta2), len(theta1))
+    shape = (len(ys), len(xs))
     return {"lyapunov": lyap.reshape(shape), "energy_error": energy.reshape(shape)}
 
 
 def accuracy_cells(spec: AtlasSpec, method: str, steps: np.ndarray, amps: np.ndarray) -> dict:
     """Per (step or tolerance, amplitude): the error after ``spec.duration`` seconds against the
     exact solution where the system has one, else a tight DOP853 run (as :class:`Simulation`
-    measures it); infinite where the run blew up."""
+    measures it); infinite where the run blew up. A fixed step ``dt`` is shortened to
+    ``T / ceil(T / dt)`` so the run ends at ``T`` itself: a run that stopped short of it would
+    add the motion over the remainder to the error, an error of order ``dt`` whatever the
+    method's order."""
     system = spec.make_system()
     s0 = start_states(system, amps)
     if system.has_exact(s0):
@@ -197,8 +202,9 @@ def accuracy_cells(spec: AtlasSpec, method: str, steps: np.ndarray, amps: np.nda
         if m.adaptive:
             end, ok = _adaptive_run(system, method, float(value), s0, spec.duration)
         else:
-            ens = Ensemble(system, method, float(value), s0)
-            ens.advance(int(math.floor(spec.duration / float(value) + 1e-9)))
+            n = max(1, math.ceil(spec.duration / float(value) - 1e-9))
+            ens = Ensemble(system, method, spec.duration / n, s0)
+            ens.advance(n)
             end, ok = ens.states, ens.alive
         with np.errstate(over="ignore", invalid="ignore"):
             e = system.error(end, ref)
@@ -228,11 +234,14 @@ CELLS = {"stability": stability_cells, "chaos": chaos_cells, "accuracy": accurac
 
 
 def compute_chunk(spec: AtlasSpec, index: tuple[int, int, int]) -> dict:
-    """The arrays of chunk ``index`` (each (rows, columns)) and the seconds it took
-    (``"seconds"``). What a Dask task runs; pure, so a lost task is simply run again."""
-    t0 = time.perf_counter()
+    """The arrays of chunk ``index`` (each (rows, columns)), the seconds it took (``"seconds"``)
+    and the CPU seconds its thread got meanwhile (``"cpu_seconds"``: below ``seconds`` when
+    other processes share the core). What a Dask task runs; pure, so a lost task is simply run
+    again."""
+    t0, c0 = time.perf_counter(), time.thread_time()
     k, rows, cols = spec.cells(index)
     ys, xs = spec.y.values()[rows], spec.x.values()[cols]
     out = CELLS[spec.kind](spec, spec.methods[k], ys, xs)
     out["seconds"] = time.perf_counter() - t0
+    out["cpu_seconds"] = time.thread_time() - c0
     return out

@@ -3,8 +3,9 @@
 - stability: ``log10 |energy error|`` over (amplitude, dt), the measured boundary (the contour
   between bounded and unbounded cells) in white and the linear theory's limit ``dt = x_max /
   omega_fast`` dashed in black;
-- chaos: the largest Lyapunov exponent over the hoop's start plane at rest, the two normal-mode
-  lines, and the mode-1 line drawn thick where the nonlinear mode 1 is unstable;
+- chaos: the largest Lyapunov exponent over a section of the hoop's starts; on the plane at rest
+  also the two normal-mode lines, and the mode-1 line drawn thick where the nonlinear mode 1 is
+  unstable;
 - accuracy: ``log10`` of the error after the run over (amplitude, step or tolerance).
 
 Cells not computed (an interrupted run) are left blank. matplotlib's Agg backend: no display.
@@ -26,6 +27,11 @@ AXIS_LABELS = {
     "rtol": "tolerance rtol",
     "theta1": "hoop angle theta1 at rest [rad]",
     "theta2": "bead angle theta2 at rest [rad]",
+}
+#: Other sections of the chaos map: the axes' labels, and what the other coordinates are.
+SECTION_LABELS = {
+    "theta1": ("hoop angle theta1 [rad]", "hoop rate theta1' [rad/s]", "theta2 = theta2' = 0"),
+    "theta2": ("bead angle theta2 [rad]", "bead rate theta2' [rad/s]", "theta1 = theta1' = 0"),
 }
 
 
@@ -55,7 +61,10 @@ def figure(ds: xr.Dataset):
     for ax in axes[n:]:
         ax.set_visible(False)
     xs, ys = ds[x].values, ds[y].values
-    xlabel = amplitude_label(spec.system) if x == "amplitude" else AXIS_LABELS[x]
+    xlabel = amplitude_label(spec.system) if x == "amplitude" else AXIS_LABELS.get(x)
+    ylabel, note = AXIS_LABELS.get(y), ""
+    if spec.kind == "chaos" and spec.section in SECTION_LABELS:
+        xlabel, ylabel, note = SECTION_LABELS[spec.section]
     for k, (ax, method) in enumerate(zip(axes[:n], methods, strict=True)):
         if spec.kind == "stability":
             values = _log10_abs(ds["energy_error"].values[k])
@@ -80,7 +89,10 @@ def figure(ds: xr.Dataset):
             top = max(0.5, float(np.nanpercentile(lyap, 99))) if np.isfinite(lyap).any() else 1.0
             mesh = ax.pcolormesh(xs, ys, lyap, shading="nearest", cmap="viridis", vmin=0, vmax=top)
             label = f"largest Lyapunov exponent [1/s] ({method}, dt = {spec.step:g} s)"
-            _chaos_lines(ax, spec, ds, xs)
+            if spec.section == "rest":
+                _chaos_lines(ax, spec, ds, xs)
+            else:
+                ax.set_title(f"{method}, {note}", fontsize=9)
         else:
             values = _log10_abs(ds["error"].values[k])
             shown = np.clip(np.where(np.isinf(values), 1.0, values), -16, 1)
@@ -88,9 +100,10 @@ def figure(ds: xr.Dataset):
             label = f"log10 error after {spec.duration:g} s (1: blew up)"
         if y in ("dt", "rtol") and spec.y.scale == "log":
             ax.set_yscale("log")
-        ax.set_title(method)
+        if not ax.get_title():
+            ax.set_title(method)
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(AXIS_LABELS[y])
+        ax.set_ylabel(ylabel)
         fig.colorbar(mesh, ax=ax, label=label, shrink=0.9)
     fig.suptitle(ds.attrs.get("title", "mechviz atlas"))
     return fig

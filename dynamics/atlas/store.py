@@ -33,6 +33,7 @@ from .theory import linear_limit_dt, mode1_unstable_intervals
 
 BOOKKEEPING = ("chunk_done", "chunk_seconds", "chunk_session")
 UNITS = {"dt": "s", "rtol": "1", "amplitude": None, "theta1": "rad", "theta2": "rad"}
+UNITS |= {"omega1": "rad/s", "omega2": "rad/s"}
 DESCRIPTIONS = {
     "energy_error": "relative energy error (E - E0) / (E0 - E_floor) at the end or at escape",
     "escape_time": "time [s] the energy error first exceeded the threshold (NaN: never)",

@@ -64,6 +64,9 @@ _FIELDS = (
     "amplitude",
     "theta1",
     "theta2",
+    "omega1",
+    "omega2",
+    "section",
     "periods",
     "threshold",
     "duration",
@@ -113,9 +116,32 @@ def build_spec(args: argparse.Namespace):
     lo, hi = SYSTEMS[system_name].amplitude[2]
     amp = Axis("amplitude", *(args.amplitude or (lo, hi, 48, "linear")))
     extra = {}
+    from dynamics.atlas.grid import CHAOS_SECTIONS
+
+    section = args.section or "rest"
+    if args.section and args.kind != "chaos":
+        raise ValueError("section: the chaos map's option (stability and accuracy have none)")
+    y_name, x_name = CHAOS_SECTIONS[section]
+    for name in ("theta1", "theta2", "omega1", "omega2"):
+        if not getattr(args, name):
+            continue
+        if args.kind != "chaos":
+            raise ValueError(f"{name}: an axis of the chaos map only")
+        if name not in (y_name, x_name):
+            raise ValueError(f"{name}: the section {section} has the axes {x_name} and {y_name}")
     if args.kind == "chaos":
-        y = Axis("theta2", *(args.theta2 or (-math.pi, math.pi, 128, "linear")))
-        x = Axis("theta1", *(args.theta1 or (-math.pi, math.pi, 128, "linear")))
+        from dynamics.hoop import normal_modes
+
+        # rates up to 1.5 times the top of the mode-1 pendulum's separatrix, 2 omega_1
+        top = 3.0 * float(normal_modes(system.params)[0][0])
+        defaults = {
+            "theta": (-math.pi, math.pi, 128, "linear"),
+            "omega": (-top, top, 128, "linear"),
+        }
+        y, x = (
+            Axis(name, *(getattr(args, name) or defaults[name[:5]]))
+            for name in CHAOS_SECTIONS[section]
+        )
         extra = {
             "duration": args.duration or 60.0,
             "step": args.step,
@@ -310,6 +336,24 @@ def add_commands(sub) -> None:
         type=_axis_text,
         metavar="START:STOP:N",
         help="chaos: bead angle axis [rad] (as --theta2=-3.14:3.14:64)",
+    )
+    for name, what, angle in (
+        ("omega1", "the hoop's", "theta1"),
+        ("omega2", "the bead's", "theta2"),
+    ):
+        p.add_argument(
+            f"--{name}",
+            type=_axis_text,
+            metavar="START:STOP:N",
+            help=f"chaos: {what} rate axis [rad/s] of the --section {angle} "
+            f"(as --{name}=-6:6:64; default +-3 omega_1)",
+        )
+    p.add_argument(
+        "--section",
+        choices=("rest", "theta1", "theta2"),
+        help="chaos: the starts mapped; rest: theta1 x theta2, both rates zero (default); "
+        "theta1: theta1 x theta1', with theta2 = theta2' = 0 (the bead straight below the "
+        "hoop's centre, not turning); theta2: theta2 x theta2', the hoop hanging at rest",
     )
     p.add_argument(
         "--periods",

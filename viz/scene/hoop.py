@@ -19,6 +19,7 @@ from dynamics import hoop as hp
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
+from .atlas_map import add_maps
 from .base import Exhibit, fmt
 from .panel import number_text
 
@@ -344,6 +345,7 @@ class HoopExhibit(HoopModel, Exhibit):
             )
         panel.param_inputs()
         panel.integrator_inputs(compare=True)
+        self.maps_view = add_maps(panel, self)  # the chaos and stability maps
 
     def sync_panel(self, panel) -> None:
         w = panel.w
