@@ -305,6 +305,7 @@ class DiskModel(ExhibitModel):
                 0.0,
                 "",
                 "torque-free: |L| is conserved",
+                since=float(t[-1]),
             )
         )
         return figs
