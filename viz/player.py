@@ -8,7 +8,8 @@ machine's speed), running one animation frame of the fake clock (one WebGL rende
 the canvas into an image inside the page (JPEG for video frames, PNG for stills), which is the
 only thing that crosses to Python. The player draws a frame on the animation frame *after* the
 one that applies a seek, so a video's frames are pipelined: each animation frame draws frame
-``k - 1`` and applies the seek to frame ``k``, one WebGL render per frame.
+``k`` and applies the seek to frame ``k + 1``, one WebGL render per frame, and one call to the
+page per frame both takes the picture and queues the next seek.
 
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
@@ -73,6 +74,12 @@ _INIT = """
     ctx.fillRect(0, 0, width, height);
     ctx.drawImage(src, 0, 0, width, height);
     return out.toDataURL(type, quality);
+  };
+  // one call per frame: the picture the last animation frame drew, then the next seek
+  window.__mechvizPictureThenSeek = (type, quality, width, height, t) => {
+    const picture = window.__mechvizPicture(type, quality, width, height);
+    if (t !== null) window.__mechvizSeek(t);
+    return picture;
   };
 })();
 """
@@ -172,6 +179,9 @@ class Player:
                 raise PlayerError("the recording's page did not load in Chromium (no player)")
             page.clock.run_for(TICK_MS)
         time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
+        # The playback bar is never in a picture (only the canvas is copied): hidden, it costs
+        # no layout or paint when a seek re-renders it.
+        page.add_style_tag(content=".mantine-Paper-root { visibility: hidden !important; }")
         self._seek(1e-9)  # seeking pauses the player: from now on only our seeks move it
         while not canvas.count():
             if time.monotonic() > deadline:
@@ -199,13 +209,23 @@ class Player:
         WebGL render each (see the module docstring)."""
         from playwright.sync_api import Error as PlaywrightError
 
+        W, H = self.size
         try:
-            for k in range(len(times) + 1):
-                if k < len(times):
-                    self._seek(times[k])
-                self._tick()  # draws what the previous seek applied, applies this one
-                if k > 0:
-                    yield self._picture("image/jpeg")
+            if not len(times):
+                return
+            self._seek(times[0])
+            self._tick()  # applies the seek to frame 0
+            if len(times) > 1:
+                self._seek(times[1])
+            for k in range(len(times)):
+                # draws frame k (applied one animation frame ago), applies the seek to k + 1;
+                # then the picture of frame k is taken and the seek to k + 2 queued
+                self._tick()
+                t = repr(float(times[k + 2])) if k + 2 < len(times) else "null"
+                url = self._page.evaluate(
+                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t})"
+                )
+                yield base64.b64decode(url.split(",", 1)[1])
         except PlaywrightError as exc:
             raise PlayerError(f"Chromium failed while drawing the frames: {exc}") from None
 
