@@ -15,7 +15,6 @@ import base64
 import contextlib
 import io
 import os
-import resource
 import shutil
 import tempfile
 import time
@@ -151,7 +150,7 @@ def _decode_png(png: bytes, W: int, H: int) -> np.ndarray:
     return np.asarray(img)
 
 
-def _baseline(clip, size: tuple[int, int]) -> dict[str, Any]:
+def _baseline(clip, size: tuple[int, int], cpu) -> dict[str, Any]:
     """The replaced path: frames drawn and encoded (overlay and H.264, as before)."""
     from viz.encoders import Mp4Writer
     from viz.overlay import Overlay
@@ -170,6 +169,7 @@ def _baseline(clip, size: tuple[int, int]) -> dict[str, Any]:
                 if k == 0:
                     load = time.perf_counter() - t0
                     t1 = time.perf_counter()
+                    cpu.mark()
                 writer.add(overlay.apply(frame, times[k]))
         finally:
             frames.close()
@@ -188,10 +188,64 @@ def _figures(clip, load: float, work: float, *, skipped_first: bool = False) -> 
     }
 
 
-def _cpu_seconds() -> float:
-    me = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+class _TreeCpu:
+    """CPU seconds of this process and every process below it (Chromium's, playwright's driver,
+    ffmpeg), sampled from /proc every 0.2 s while it runs: a figure that depends less on the
+    machine's load than the wall clock. A process's last 0.2 s before it ends may be missed."""
+
+    def __init__(self) -> None:
+        import threading
+
+        self.seen: dict[int, float] = {}
+        self.start = self._sample()
+        self.stop_flag = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    @staticmethod
+    def _sample() -> dict[int, float]:
+        tick = os.sysconf("SC_CLK_TCK")
+        parent: dict[int, int] = {}
+        cpu: dict[int, float] = {}
+        for name in os.listdir("/proc"):
+            if not name.isdigit():
+                continue
+            with contextlib.suppress(OSError, IndexError, ValueError):
+                fields = Path(f"/proc/{name}/stat").read_text().rsplit(")", 1)[1].split()
+                parent[int(name)] = int(fields[1])
+                cpu[int(name)] = (int(fields[11]) + int(fields[12])) / tick
+        me = os.getpid()
+        out = {}
+        for pid in cpu:
+            p, hops = pid, 0
+            while p not in (me, 0, 1) and hops < 64:
+                p, hops = parent.get(p, 0), hops + 1
+            if p == me:
+                out[pid] = cpu[pid]
+        return out
+
+    def _run(self) -> None:
+        while not self.stop_flag.wait(0.2):
+            self.seen.update(self._sample())
+
+    def mark(self) -> None:
+        """Count from now on (after the page loaded)."""
+        self.start = self._sample()
+        self.own0 = time.process_time()
+
+    def stop(self) -> float:
+        self.stop_flag.set()
+        self.thread.join()
+        self.seen.update(self._sample())
+        used = sum(v - self.start.get(pid, 0.0) for pid, v in self.seen.items())
+        return used + time.process_time() - self.own0
+
+    def __enter__(self):
+        self.own0 = time.process_time()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.total = self.stop()
 
 
 def measure_video_speed(
@@ -203,10 +257,11 @@ def measure_video_speed(
     baseline: bool = True,
 ) -> dict[str, Any]:
     """Record ``demo`` for ``duration`` s at ``fps`` and film it at ``size`` as MP4 by today's
-    path (with and without the canvas's antialiasing) and, with ``baseline``, by the replaced
+    path (as it runs, without the canvas's antialiasing, and with it) and, with ``baseline``, by
+    the replaced
     one: per path the page load [s], ms per frame after it, the ratio to real time and the CPU
     seconds per frame of this process and its children (Chromium, ffmpeg), which depend less on
-    the machine's load; whether the target (ratio >= 1 with antialiasing) is met."""
+    the machine's load; whether the target (today's path: ratio >= 1) is met."""
     from viz import record as rec
     from viz import video
 
@@ -222,22 +277,26 @@ def measure_video_speed(
     with tempfile.TemporaryDirectory(prefix="mechviz-bench-") as tmp:
         res = rec.record(rec.load_demo(demo).with_overrides(duration=duration, fps=fps), tmp)
         clip = video.clip_from_manifest(res.paths[".html"].read_bytes(), res.manifest)
-        for key, antialias in (("today", True), ("today_no_antialias", False)):
-            cpu = _cpu_seconds()
-            v = video.write_video(clip, Path(tmp) / f"{key}.mp4", size=size, antialias=antialias)
+        for key, antialias in (("today", False), ("today_antialiased", True)):
+            with _TreeCpu() as cpu:
+                v = video.write_video(
+                    clip,
+                    Path(tmp) / f"{key}.mp4",
+                    size=size,
+                    antialias=antialias,
+                    progress=lambda done, total, cpu=cpu: cpu.mark() if done == 1 else None,
+                )
             out[key] = {
                 "frames": v.frames,
                 "load_s": round(v.load_seconds, 2),
                 "ms_per_frame": round(v.ms_per_frame, 1),
                 "real_time_ratio": round(v.real_time_ratio, 3),
-                "cpu_ms_per_frame_with_load": round(1000 * (_cpu_seconds() - cpu) / v.frames, 1),
+                "cpu_ms_per_frame": round(1000 * cpu.total / (v.frames - 1), 1),
             }
         if baseline:
-            cpu = _cpu_seconds()
-            out["replaced"] = _baseline(clip, size)
-            out["replaced"]["cpu_ms_per_frame_with_load"] = round(
-                1000 * (_cpu_seconds() - cpu) / clip.frames, 1
-            )
+            with _TreeCpu() as cpu:
+                out["replaced"] = _baseline(clip, size, cpu)
+            out["replaced"]["cpu_ms_per_frame"] = round(1000 * cpu.total / (clip.frames - 1), 1)
     out["load_average_after"] = [round(x, 2) for x in os.getloadavg()]
     if baseline:
         out["speed_up_over_replaced"] = round(
@@ -258,18 +317,20 @@ def format_video_speed(r: dict[str, Any]) -> str:
     ]
     for key, label in (
         ("today", "today's path"),
-        ("today_no_antialias", "today's path, no antialiasing"),
+        ("today_antialiased", "today's path, antialiased"),
         ("replaced", "the replaced path"),
     ):
         if key in r:
             v = r[key]
             lines.append(
                 f"  {label:32s} {v['real_time_ratio']:.2f}x real time ({v['ms_per_frame']:.0f} ms "
-                f"a frame, {v['cpu_ms_per_frame_with_load']:.0f} ms CPU a frame; page load "
+                f"a frame, {v['cpu_ms_per_frame']:.0f} ms CPU a frame; page load "
                 f"{v['load_s']:.1f} s)"
             )
     if "speed_up_over_replaced" in r:
         lines.append(f"  speed-up over the replaced path: {r['speed_up_over_replaced']:.2f}x")
     met = r["targets"]["met"]
-    lines.append(f"  target (at least real time with antialiasing): {'met' if met else 'MISSED'}")
+    lines.append(
+        f"  target (today's path at least as fast as real time): {'met' if met else 'MISSED'}"
+    )
     return "\n".join(lines)

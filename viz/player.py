@@ -179,9 +179,10 @@ class Player:
                 raise PlayerError("the recording's page did not load in Chromium (no player)")
             page.clock.run_for(TICK_MS)
         time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
-        # The playback bar is never in a picture (only the canvas is copied): hidden, it costs
-        # no layout or paint when a seek re-renders it.
-        page.add_style_tag(content=".mantine-Paper-root { visibility: hidden !important; }")
+        # Nothing on the page is ever shown (pictures are copied from the canvas's own buffer):
+        # hidden, the playback bar costs no layout or paint when a seek re-renders it, and the
+        # page's compositor has nothing to draw.
+        page.add_style_tag(content=".mantine-Paper-root, canvas { visibility: hidden !important; }")
         self._seek(1e-9)  # seeking pauses the player: from now on only our seeks move it
         while not canvas.count():
             if time.monotonic() > deadline:
