@@ -54,7 +54,13 @@ class LiveRecorder:
         self.seconds = 0.0
         self._last = time.perf_counter()
         self._client = client
-        self._info = session_info(self.app, client)
+        self._info = {}
+        for source in (client, None):  # a client whose camera cannot be read: the initial one
+            try:
+                self._info = session_info(self.app, source)
+                break
+            except Exception:  # the recording itself must start whatever the camera says
+                continue
         self.app.notify("Recording", "The scene is being recorded; untick Record to stop.", "blue")
 
     def on_frame(self, app) -> None:
