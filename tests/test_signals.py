@@ -1,4 +1,4 @@
-"""SIGTERM mid-run: `bench`, `record` and `video` end, and leave no process and no temporary
+"""SIGTERM mid-run: `bench`, `record`, `video` and `still` end, and leave no process and no temporary
 folder behind (their compile workers, viser servers, Chromium and its profile included).
 
 Each command runs with a temporary directory of its own (``TMPDIR``); its processes are the
@@ -107,3 +107,23 @@ def test_sigterm_ends_video_while_chromium_draws(tmp_path):
     )
     terminate_and_check(proc, tmp)
     assert not video.exists()
+
+
+def test_sigterm_ends_still_while_chromium_draws(tmp_path):
+    from viz.chromium import find_chromium
+
+    if find_chromium() is None:
+        pytest.skip("no Chromium (apt-get install chromium)")
+    tmp = tmp_path / "tmp"
+    still = tmp_path / "helix.png"
+    proc = start(["still", "helix", "--at", "2", "--size", "1920x1080", "--out", str(still)], tmp)
+    wait_until(
+        lambda: (
+            any("chrom" in name.lower() for name in descendants(proc.pid).values())
+            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
+        ),
+        180,
+        "Chromium to start drawing",
+    )
+    terminate_and_check(proc, tmp)
+    assert not still.exists()

@@ -34,9 +34,10 @@ def find_chromium() -> str | None:
     return shutil.which("chromium")
 
 
-def launch(pw, profile: str, executable: str, width: int, height: int):
+def launch(pw, profile: str, executable: str, width: int, height: int, scale: float = 1.0):
     """A headless Chromium context (``executable``, its profile in the empty folder ``profile``,
-    a ``width`` x ``height`` viewport) from playwright's ``pw``, with :data:`CHROMIUM_ARGS`.
+    a ``width`` x ``height`` viewport in CSS pixels, ``scale`` device pixels per CSS pixel) from
+    playwright's ``pw``, with :data:`CHROMIUM_ARGS`.
 
     Chromium's own temporary files go inside the profile too (``TMPDIR``): a browser killed
     with its parent leaves them behind, and removing the profile then removes everything."""
@@ -48,6 +49,7 @@ def launch(pw, profile: str, executable: str, width: int, height: int):
         headless=True,
         args=CHROMIUM_ARGS,
         viewport={"width": int(width), "height": int(height)},
+        device_scale_factor=float(scale),
         env={**os.environ, "TMPDIR": tmp},
     )
 

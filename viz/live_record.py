@@ -2,7 +2,9 @@
 
 Everything the scene shows is recorded (kicks, mode changes, method switches, pauses), timed by
 the wall clock; GUI panels are not part of the scene. The page is viser's own self-contained
-player (``StateSerializer.as_html``): it plays from file:// with no server and no Python.
+player (``StateSerializer.as_html``): it plays from file:// with no server and no Python. It also
+carries what a video of it needs (:func:`viz.video.with_session_info`): the camera the viewer
+had when recording started, the title of the exhibit it looked at, and that exhibit's bounds.
 """
 
 from __future__ import annotations
@@ -10,6 +12,9 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
+from typing import Any
+
+import numpy as np
 
 
 class LiveRecorder:
@@ -34,6 +39,7 @@ class LiveRecorder:
         self.finished = threading.Event()
         self._last = 0.0
         self._client = None
+        self._info: dict[str, Any] = {}
         app.frame_hooks.append(self.on_frame)
 
     @property
@@ -48,6 +54,13 @@ class LiveRecorder:
         self.seconds = 0.0
         self._last = time.perf_counter()
         self._client = client
+        self._info = {}
+        for source in (client, None):  # a client whose camera cannot be read: the initial one
+            try:
+                self._info = session_info(self.app, source)
+                break
+            except Exception:  # the recording itself must start whatever the camera says
+                continue
         self.app.notify("Recording", "The scene is being recorded; untick Record to stop.", "blue")
 
     def on_frame(self, app) -> None:
@@ -70,15 +83,17 @@ class LiveRecorder:
         target = client or self._client
         seconds = self.seconds
         worker = threading.Thread(
-            target=self._finish, args=(serializer, target, seconds), daemon=True
+            target=self._finish, args=(serializer, target, seconds, self._info), daemon=True
         )
         worker.start()
         if wait:
             worker.join()
 
-    def _finish(self, serializer, client, seconds: float) -> None:
+    def _finish(self, serializer, client, seconds: float, info: dict[str, Any]) -> None:
         try:
-            html = serializer.as_html().encode("utf-8")
+            from .video import with_session_info
+
+            html = with_session_info(serializer.as_html().encode("utf-8"), info)
             name = time.strftime("mechviz-session-%Y%m%d-%H%M%S.html", time.localtime())
             self.last_result = (name, html)
             clients = self.server.get_clients()
@@ -95,6 +110,38 @@ class LiveRecorder:
             self.app.notify("Recording failed", f"{type(exc).__name__}: {exc}")
         finally:
             self.finished.set()
+
+
+def session_info(app, client=None) -> dict[str, Any]:
+    """What a video of a session needs: the camera ``client`` has (the server's initial camera
+    without one), the exhibit it looks at (the one presented, else the one nearest the point
+    looked at): its title and world bounds, and when."""
+    cam = client.camera if client is not None else app.server.initial_camera
+    position = [float(x) for x in np.asarray(cam.position, float)]
+    look_at = [float(x) for x in np.asarray(cam.look_at, float)]
+    exhibits = app.exhibits
+    key = app.presenting
+    if key is None:
+        key = min(
+            exhibits,
+            key=lambda k: float(np.linalg.norm(np.mean(exhibits[k].bounds, axis=0) - look_at)),
+        )
+    ex = exhibits[key]
+    lo, hi = ex.bounds
+    fov = getattr(cam, "fov", None)
+    return {
+        "title": ex.title,
+        "caption": time.strftime("Recorded in the live viewer, %Y-%m-%d %H:%M", time.localtime()),
+        "camera": {
+            "position": position,
+            "look_at": look_at,
+            "fov": float(fov) if fov is not None else None,
+        },
+        "scene": {
+            "bounds": [[float(x) for x in lo], [float(x) for x in hi]],
+            "view": [[float(x) for x in v] for v in ex.camera],
+        },
+    }
 
 
 def add_record_toggle(app) -> LiveRecorder:

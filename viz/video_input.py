@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from . import video
 from .printable import printable
 
@@ -61,3 +63,25 @@ def check_clip(clip: video.Clip, name: str) -> None:
         raise ValueError(f"{name}: {clip.frames:.3g} frames to film; the limit is {MAX_FRAMES}")
     if not (isinstance(clip.speed, float | int) and math.isfinite(clip.speed)):
         raise ValueError(f"{name}: the manifest's speed must be a finite number")
+    for f in clip.figures:
+        if not (
+            isinstance(f, dict)
+            and isinstance(f.get("name"), str)
+            and all(_number_or_none(f.get(k)) for k in ("measured", "predicted", "until"))
+            and _number_or_none(f.get("since", 0.0))
+        ):
+            raise ValueError(f"{name}: the manifest's figures are not figures ({str(f)[:60]})")
+    if clip.scene is not None:
+        try:
+            for key in ("bounds", "view"):
+                box = np.asarray(clip.scene[key], dtype=float)
+                if box.shape != (2, 3) or not np.all(np.isfinite(box)):
+                    raise ValueError
+        except (KeyError, TypeError, ValueError):
+            raise ValueError(
+                f"{name}: the manifest's scene needs bounds and view, two points each"
+            ) from None
+
+
+def _number_or_none(x) -> bool:
+    return x is None or (isinstance(x, int | float) and math.isfinite(x))

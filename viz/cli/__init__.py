@@ -1,7 +1,8 @@
 """The ``mechviz`` command: one entry point, a subcommand per use.
 
 ``analyze`` and ``simulate`` come from :mod:`viz.cli.analysis` and need no viewer; ``view``,
-``record``, ``play``, ``bench``, ``video`` and ``atlas`` import what they need only when run.
+``record``, ``play``, ``bench``, ``video``, ``still`` and ``atlas`` import what they need only
+when run.
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ import sys
 from ..interrupts import hold_sigint, release_sigint
 
 # One module per command (analyze and simulate in viz.cli.analysis): view, record and play,
-# bench, video, atlas.
+# bench, video, still, atlas.
 _COMMAND_MODULES = (
     "viz.cli.view",
     "viz.cli.record",
     "viz.cli.bench",
     "viz.cli.video",
+    "viz.cli.still",
     "viz.cli.atlas",
 )
 _LIGHT_COMMANDS = ("analyze", "simulate")  # no viewer, no meshes

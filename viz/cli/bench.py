@@ -9,6 +9,11 @@ committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install -e
 least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
+``--video`` runs only the video benchmark (:mod:`mechviz_bench.video_speed`: a 10 s helix at
+960x540 and 30 fps, today's path beside the replaced one, as ratios to real time; 3 s with
+``--quick``), writes ``video.json`` to ``--out``; the exit status is 1 if videos are made slower
+than real time.
+
 ``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
 (:func:`mechviz_bench.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
 for SECONDS, frame rate per 10 s window, memory trend) and writes ``endurance.json`` to ``--out``.
@@ -77,6 +82,22 @@ def _endurance(args: argparse.Namespace) -> int:
     return 0 if result["targets"]["met"] else 1
 
 
+def _video(args: argparse.Namespace) -> int:
+    from mechviz_bench.video_speed import format_video_speed, measure_video_speed
+
+    from .errors import CliError
+
+    try:
+        result = measure_video_speed(duration=3.0 if args.quick else 10.0)
+    except RuntimeError as exc:
+        raise CliError(f"--video: {exc}") from None
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "video.json").write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps(result, indent=1) if args.json else format_video_speed(result))
+    return 0 if result["targets"]["met"] else 1
+
+
 def _run(args: argparse.Namespace) -> int:
     from .errors import CliError
 
@@ -86,6 +107,8 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.endurance is not None:
         return _endurance(args)
+    if args.video:
+        return _video(args)
     from mechviz_bench import PROBLEMS, peers, run_bench, summary
 
     from ..interrupts import ctrl_c_within_a_second
@@ -202,6 +225,13 @@ def add_commands(sub) -> None:
         help="run only the viewer endurance benchmark for SECONDS, up to a day (600 for the "
         "10-minute endurance target) with --clients headless Chromium pages; writes "
         "endurance.json; exit status 1 if a target is missed",
+    )
+    p.add_argument(
+        "--video",
+        action="store_true",
+        help="run only the video benchmark (Chromium; pip install -e '.[video]'): a 10 s "
+        "960x540 video, as a ratio to real time beside the replaced path; writes video.json; "
+        "exit status 1 if slower than real time",
     )
     p.add_argument(
         "--clients",

@@ -50,7 +50,7 @@ def add_commands(sub) -> None:
     )
     from .video import add_record_options
 
-    add_record_options(p)  # --video, --size
+    add_record_options(p)  # --video, --size, --camera, --title, --caption, --no-overlay, ...
     p.set_defaults(func=run_record)
 
     _add_play(sub)
@@ -111,10 +111,9 @@ def run_record(args: argparse.Namespace) -> int:
         _check_writable(out)
     except OSError as exc:  # a name too long for the file system, a folder we may not read
         raise CliError(f"--out: {exc.strerror or exc}") from None
-    if args.video or args.size:
-        from .video import check_record_options, film_record
+    from .video import check_record_options, film_record
 
-        check_record_options(args, demos)
+    check_record_options(args, demos)  # the video's options, before anything is recorded
     for demo in demos:
         try:
             res = rec.record(

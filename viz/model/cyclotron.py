@@ -277,15 +277,16 @@ class CyclotronModel(ExhibitModel):
         w = cy.gyrofrequency(p)
         kicks = [e["t"] for e in tr.event_log]
         pre = t < (kicks[0] if kicks else math.inf)  # before the first kick
+        first = {"until": kicks[0]} if kicks else {}  # true of the motion before the first kick
         if S.shape[1] == 1:
             w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5], xy=S[pre, 0, :2])
-            keep(figs, "gyrofrequency", w_meas, w, "rad/s")
+            keep(figs, "gyrofrequency", w_meas, w, "rad/s", **first)
             circle = measure.fit_circle(S[pre, 0, :2])
             radius = measure.Estimate(circle.value[1]) if circle else circle
-            figs.append(figure("Larmor radius", radius, cy.larmor_radius(p, S[0, 0]), "m"))
+            figs.append(figure("Larmor radius", radius, cy.larmor_radius(p, S[0, 0]), "m", **first))
             if w_meas and abs(S[0, 0, 5]) > 0:
                 pitch = measure.slope(t[pre], S[pre, 0, 2]) * 2 * math.pi / w_meas.value
-                figs.append(figure("helix pitch", pitch, S[0, 0, 5] * cy.period(p), "m"))
+                figs.append(figure("helix pitch", pitch, S[0, 0, 5] * cy.period(p), "m", **first))
         else:
             rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2])
             if rates:
@@ -314,9 +315,18 @@ class CyclotronModel(ExhibitModel):
             if not before or not after:
                 continue
             shift = float(np.linalg.norm(after.value[0] - before.value[0]))
-            figs.append(figure("circle shift after the kick", shift, eff["predicted_shift"], "m"))
+            since = {"since": entry["t"]}  # true from the kick on
             figs.append(
-                figure("radius after the kick", after.value[1], eff["predicted_radius"][0], "m")
+                figure("circle shift after the kick", shift, eff["predicted_shift"], "m", **since)
+            )
+            figs.append(
+                figure(
+                    "radius after the kick",
+                    after.value[1],
+                    eff["predicted_radius"][0],
+                    "m",
+                    **since,
+                )
             )
             keep(
                 figs,
@@ -325,6 +335,7 @@ class CyclotronModel(ExhibitModel):
                 w,
                 "rad/s",
                 "unchanged: the period does not depend on the energy",
+                **since,
             )
         if len(tr.states) > 1:
             for label, run in tr.runs.items():
@@ -332,10 +343,14 @@ class CyclotronModel(ExhibitModel):
                 pred, note = None, ""
                 if run["method"] == "euler":
                     pred = (1 + (w * run["dt"]) ** 2) ** tr.steps[label] - 1
-                    note = "explicit Euler: |v|^2 grows by 1 + (Omega dt)^2 every step"
+                    note = "explicit Euler: |v|² grows by a factor 1 + (Ω dt)² every step"
                 elif run["method"] in ("boris", "exact"):
                     pred, note = 0.0, "Boris keeps |v| to round-off"
-                figs.append(figure(f"final energy error, {label}", float(E[-1]), pred, "", note))
+                figs.append(
+                    figure(
+                        f"final energy error, {label}", float(E[-1]), pred, "", note, since=t[-1]
+                    )
+                )
         return figs
 
 

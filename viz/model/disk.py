@@ -288,6 +288,7 @@ class DiskModel(ExhibitModel):
                 0.0,
                 "",
                 "torque-free: |L| is conserved",
+                since=float(t[-1]),
             )
         )
         return figs

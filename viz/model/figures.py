@@ -15,7 +15,20 @@ from typing import Any
 from dynamics import measure
 
 
-def figure(name: str, measured, predicted, unit: str, note: str = "") -> dict[str, Any]:
+def figure(
+    name: str,
+    measured,
+    predicted,
+    unit: str,
+    note: str = "",
+    *,
+    since: float = 0.0,
+    until: float | None = None,
+    theory: str = "theory",
+) -> dict[str, Any]:
+    """One figure. ``since``/``until``: the stretch of simulated time [s] the figure is true of
+    (a kick's effects from the kick on; a final error only at the end), so that a video shows it
+    only then; ``theory``: what the predicted value comes from ("linear theory", ...)."""
     reason = ""
     if isinstance(measured, measure.Estimate):
         measured, reason = measured.value, measured.reason
@@ -28,6 +41,9 @@ def figure(name: str, measured, predicted, unit: str, note: str = "") -> dict[st
         "predicted": None if predicted is None else float(predicted),
         "unit": unit,
         "relative_difference": rel,
+        "since": float(since),
+        **({"until": float(until)} if until is not None else {}),
+        **({"theory": theory} if theory != "theory" else {}),
         **({"note": note} if note else {}),
         **({"not_resolved": reason} if reason else {}),
     }

@@ -224,24 +224,41 @@ class HoopModel(ExhibitModel):
         if len(tr.states) > 1:  # two methods: the energy drift is the point
             for label in tr.states:
                 E = tr.energy_error[label][:, 0]
-                figs.append(figure(f"final energy error, {label}", float(E[-1]), None, ""))
+                end = float(t[-1])  # true of the whole run: known at its end
                 figs.append(
-                    figure(f"largest |energy error|, {label}", float(np.abs(E).max()), None, "")
+                    figure(f"final energy error, {label}", float(E[-1]), None, "", since=end)
+                )
+                figs.append(
+                    figure(
+                        f"largest |energy error|, {label}",
+                        float(np.abs(E).max()),
+                        None,
+                        "",
+                        since=end,
+                    )
                 )
             return figs
         amps = measure.modal_coordinates(S[0, 0, :2], shapes)
         measured = measure.mode_frequencies(t, S[:, 0, :2], shapes)
         for k in (0, 1):
-            keep(figs, f"mode {k + 1} frequency (linear theory)", measured[k], freqs[k], "rad/s")
+            keep(
+                figs,
+                f"mode {k + 1} frequency",
+                measured[k],
+                freqs[k],
+                "rad/s",
+                theory="linear theory",
+            )
         a1 = abs(float(amps[0]))
         if measured[0] and abs(amps[1]) < 1e-12 and a1 > 0.2:
             figs.append(
                 figure(
-                    "mode 1 frequency (exact, finite amplitude)",
+                    "mode 1 frequency at this amplitude",
                     measured[0],
                     2 * math.pi / hp.mode1_period(p, a1),
                     "rad/s",
-                    "rigid-pendulum period 4 K(sin^2(A/2)) / omega_1",
+                    "rigid-pendulum period 4 K(sin²(A/2)) / ω₁",
+                    theory="exact pendulum period",
                 )
             )
         return figs

@@ -292,7 +292,11 @@ def chart_figure(d: Demo, tr: Traces, figs: list[dict[str, Any]]):
         )
     lines = [
         f"{f['name']}: {f['measured']:.6g}"
-        + ("" if f["predicted"] is None else f"  (predicted {f['predicted']:.6g})")
+        + (
+            ""
+            if f["predicted"] is None
+            else f"  ({f.get('theory', 'theory')} {f['predicted']:.6g})"
+        )
         for f in figs
         if f["measured"] is not None
     ]

@@ -106,6 +106,7 @@ def record(
                 **{f"{d.name}{s}": b for s, b in drawn.items()},
             }
             man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
+            man["scene"] = rec.scene  # the exhibit's bounds and camera: videos frame it
         man["files"] = {
             n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()
         }

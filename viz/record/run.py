@@ -33,11 +33,14 @@ ProgressFn = Callable[[int, int], None]
 
 @dataclass
 class Recorded:
-    """What one headless run produced: the ``.viser`` bytes, its HTML page, the traces."""
+    """What one headless run produced: the ``.viser`` bytes, its HTML page, the traces, and
+    where the exhibit stands (``scene``: its world ``bounds`` [m] and the camera ``view``
+    (position, look_at) it opens with, for framing videos and stills)."""
 
     viser: bytes
     html: bytes
     traces: Traces
+    scene: dict[str, Any] | None = None
 
 
 def labels_for(ex: ExhibitModel) -> dict[str, str]:
@@ -80,8 +83,13 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "li
         check_work(ex, demo)
         position, look_at = ex.camera
         cam = demo.camera
-        server.initial_camera.position = tuple(cam.position or position)
-        server.initial_camera.look_at = tuple(cam.look_at or look_at)
+        view = (tuple(cam.position or position), tuple(cam.look_at or look_at))
+        server.initial_camera.position, server.initial_camera.look_at = view
+        lo, hi = ex.bounds
+        scene = {
+            "bounds": [[float(x) for x in lo], [float(x) for x in hi]],
+            "view": [[float(x) for x in v] for v in view],
+        }
         serializers: list = []
 
         def draw(k: int) -> None:
@@ -100,7 +108,7 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "li
             ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
         data = serializers[0].serialize()
         html = serializers[1].as_html(dark_mode=theme == "dark").encode("utf-8")
-        return Recorded(data, html, traces)
+        return Recorded(data, html, traces, scene)
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()

@@ -1,0 +1,248 @@
+"""viser's own player in headless Chromium, driven one frame at a time: the pictures of videos
+and stills.
+
+A recording's self-contained page is opened with the page's clock faked (no timer or animation
+frame runs unless told). A picture of playback time ``t`` is made by *seeking* the player to
+``t`` (its time box: every recorded message up to ``t`` is applied, exactly, whatever the
+machine's speed), running one animation frame of the fake clock (one WebGL render), and copying
+the canvas into an image inside the page (JPEG for video frames, PNG for stills), which is the
+only thing that crosses to Python. The player draws a frame on the animation frame *after* the
+one that applies a seek, so a video's frames are pipelined: each animation frame draws frame
+``k`` and applies the seek to frame ``k + 1``, one WebGL render per frame, and one call to the
+page per frame both takes the picture and queues the next seek.
+
+The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
+``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
+keep their share of the picture: 15 px at 960x540, 60 px at 3840x2160. The camera comes from
+URL parameters of viser's client (:meth:`viz.framing.Camera.query`), which override the
+recording's initial camera.
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import io
+import shutil
+import tempfile
+import time
+import urllib.parse
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .chromium import find_chromium, first_page, launch
+from .framing import Camera
+
+LAYOUT_HEIGHT = 360  # CSS pixels: the page's height at every picture size
+LOAD_TIMEOUT_S = 180.0  # first frame of a lit scene in software WebGL, on a loaded machine
+JPEG_QUALITY = 0.92
+# One step of the fake clock: one animation frame (the player's rAF loop)
+TICK_MS = 16
+
+# Installed before the page's own scripts: the WebGL canvas keeps its picture after it is shown
+# (so it can be copied between animation frames), a seek goes through the time box's React
+# handler, and a picture is the canvas painted over the page's background.
+_INIT = """
+(() => {
+  const getContext = HTMLCanvasElement.prototype.getContext;
+  HTMLCanvasElement.prototype.getContext = function (type, attrs) {
+    if (type === "webgl2" || type === "webgl") {
+      attrs = { ...(attrs || {}), preserveDrawingBuffer: true, antialias: ANTIALIAS };
+    }
+    return getContext.call(this, type, attrs);
+  };
+  const setValue = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, "value").set;
+  window.__mechvizSeek = (t) => {
+    const box = document.querySelector("input[data-mechviz-time]");
+    // fixed-point text: the box ignores a value equal to the one it shows ("0" after "0.0")
+    setValue.call(box, t.toFixed(9));
+    box.dispatchEvent(new Event("input", { bubbles: true }));
+  };
+  let out = null;
+  window.__mechvizPicture = (type, quality, width, height) => {
+    const src = document.querySelector('canvas[data-engine^="three.js"]');
+    if (out === null || out.width !== width || out.height !== height) {
+      out = document.createElement("canvas");
+      out.width = width;
+      out.height = height;
+    }
+    const ctx = out.getContext("2d");
+    ctx.fillStyle = getComputedStyle(document.body).backgroundColor || "#ffffff";
+    if (ctx.fillStyle === "rgba(0, 0, 0, 0)") ctx.fillStyle = "#ffffff";
+    ctx.fillRect(0, 0, width, height);
+    ctx.drawImage(src, 0, 0, width, height);
+    return out.toDataURL(type, quality);
+  };
+  // one call per frame: the picture the last animation frame drew, then the next seek
+  window.__mechvizPictureThenSeek = (type, quality, width, height, t) => {
+    const picture = window.__mechvizPicture(type, quality, width, height);
+    if (t !== null) window.__mechvizSeek(t);
+    return picture;
+  };
+})();
+"""
+
+
+class PlayerError(RuntimeError):
+    """The page could not be loaded or drawn; the message says what happened."""
+
+
+def drawn(img: np.ndarray) -> bool:
+    """More than a blank background."""
+    return len(np.unique(img[::4, ::4].reshape(-1, 3), axis=0)) > 40
+
+
+def decode(data: bytes) -> np.ndarray:
+    """A JPEG or PNG as ``(H, W, 3)`` uint8."""
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(data)).convert("RGB"))
+
+
+class Player:
+    """The recording's page open in headless Chromium, at ``size = (W, H)`` device pixels, seen
+    from ``camera``. A context manager: Chromium, its profile and the page's copy live in a
+    temporary folder removed on exit, whatever ends the block (Ctrl-C and SIGTERM included).
+
+    ``antialias``: the WebGL canvas's multisampling (smoother lines; in software WebGL it costs
+    about as much as the rest of a frame)."""
+
+    def __init__(
+        self,
+        page_html: bytes,
+        size: tuple[int, int],
+        *,
+        camera: Camera | None = None,
+        antialias: bool = True,
+        executable: str | None = None,
+    ) -> None:
+        self.page_html = page_html
+        self.size = (int(size[0]), int(size[1]))
+        self.camera = camera or Camera()
+        self.antialias = antialias
+        self.executable = executable or find_chromium()
+        self.load_seconds = 0.0
+        self._stack = contextlib.ExitStack()
+        self._page = None
+
+    # ------------------------------------------------------------------ set-up
+    def __enter__(self) -> Player:
+        from playwright.sync_api import Error as PlaywrightError
+        from playwright.sync_api import sync_playwright
+
+        if self.executable is None:
+            raise PlayerError("no Chromium found")
+        t0 = time.perf_counter()
+        try:
+            tmp = tempfile.mkdtemp(prefix="mechviz-video-")
+            self._stack.callback(shutil.rmtree, tmp, ignore_errors=True)
+            html = Path(tmp) / "recording.html"
+            html.write_bytes(self.page_html)
+            pw = self._stack.enter_context(sync_playwright())
+            W, H = self.size
+            scale = H / LAYOUT_HEIGHT
+            context = launch(
+                pw, str(Path(tmp) / "profile"), self.executable, W / scale, H / scale, scale
+            )
+            self._stack.callback(_close_quietly, context)
+            page = first_page(context)
+            page.add_init_script(_INIT.replace("ANTIALIAS", "true" if self.antialias else "false"))
+            self._page = page
+            self._load(html, scale)
+        except PlaywrightError as exc:
+            self._stack.close()
+            raise PlayerError(f"Chromium failed while loading the recording: {exc}") from None
+        except BaseException:
+            self._stack.close()
+            raise
+        self.load_seconds = time.perf_counter() - t0
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stack.close()
+
+    def _load(self, html: Path, scale: float) -> None:
+        page = self._page
+        page.clock.install(time=0)
+        query = {"fixedDpr": f"{scale:.6g}", **self.camera.query()}
+        page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
+        page.clock.pause_at(page.evaluate("() => Date.now()") + 100)
+        canvas = page.locator('canvas[data-engine^="three.js"]')
+        time_box = page.get_by_role("textbox")
+        deadline = time.monotonic() + LOAD_TIMEOUT_S
+        # Short steps: the player starts playing as soon as it has the recording, and must not
+        # get past its first frame before the seek below holds it at 0.
+        while not time_box.count():
+            if time.monotonic() > deadline:
+                raise PlayerError("the recording's page did not load in Chromium (no player)")
+            page.clock.run_for(TICK_MS)
+        time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
+        # Nothing on the page is ever shown (pictures are copied from the canvas's own buffer):
+        # hidden, the playback bar costs no layout or paint when a seek re-renders it, and the
+        # page's compositor has nothing to draw.
+        page.add_style_tag(content=".mantine-Paper-root, canvas { visibility: hidden !important; }")
+        self._seek(1e-9)  # seeking pauses the player: from now on only our seeks move it
+        while not canvas.count():
+            if time.monotonic() > deadline:
+                raise PlayerError("the recording's page did not load in Chromium (no canvas)")
+            page.clock.run_for(100)
+        while not drawn(decode(self._picture("image/jpeg"))):
+            if time.monotonic() > deadline:
+                raise PlayerError("the recording's scene was never drawn in Chromium")
+            page.clock.run_for(100)
+
+    # ------------------------------------------------------------------ pictures
+    def _seek(self, t: float) -> None:
+        self._page.evaluate(f"window.__mechvizSeek({float(t)!r})")
+
+    def _tick(self) -> None:
+        self._page.clock.run_for(TICK_MS)
+
+    def _picture(self, mime: str) -> bytes:
+        W, H = self.size
+        url = self._page.evaluate(f"window.__mechvizPicture({mime!r}, {JPEG_QUALITY}, {W}, {H})")
+        return base64.b64decode(url.split(",", 1)[1])
+
+    def jpegs(self, times: Sequence[float]) -> Iterator[bytes]:
+        """JPEG pictures of the recording at each playback time in ``times`` (ascending), one
+        WebGL render each (see the module docstring)."""
+        from playwright.sync_api import Error as PlaywrightError
+
+        W, H = self.size
+        try:
+            if not len(times):
+                return
+            self._seek(times[0])
+            self._tick()  # applies the seek to frame 0
+            if len(times) > 1:
+                self._seek(times[1])
+            for k in range(len(times)):
+                # draws frame k (applied one animation frame ago), applies the seek to k + 1;
+                # then the picture of frame k is taken and the seek to k + 2 queued
+                self._tick()
+                t = repr(float(times[k + 2])) if k + 2 < len(times) else "null"
+                url = self._page.evaluate(
+                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t})"
+                )
+                yield base64.b64decode(url.split(",", 1)[1])
+        except PlaywrightError as exc:
+            raise PlayerError(f"Chromium failed while drawing the frames: {exc}") from None
+
+    def png(self, t: float) -> bytes:
+        """A lossless picture of the recording at playback time ``t``."""
+        from playwright.sync_api import Error as PlaywrightError
+
+        try:
+            self._seek(t)
+            self._tick()
+            self._tick()
+            return self._picture("image/png")
+        except PlaywrightError as exc:
+            raise PlayerError(f"Chromium failed while drawing the picture: {exc}") from None
+
+
+def _close_quietly(context) -> None:
+    with contextlib.suppress(Exception):
+        context.close()
