@@ -1,7 +1,5 @@
 """The headless command line: `mechviz analyze` and `mechviz simulate`."""
 
-import contextlib
-import io
 import json
 import math
 import os
@@ -13,21 +11,8 @@ import time
 
 import numpy as np
 import pytest
+from commands import mechviz
 from waiting import descendants, scaled, wait_until
-
-
-def mechviz(*args: str) -> subprocess.CompletedProcess:
-    """``mechviz ARGS`` run in this process (``main(argv)``, the exit status and both streams
-    captured): what a shell sees, without the start-up of a new interpreter each time."""
-    from viz.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(list(args))
-        except SystemExit as exc:  # argparse's refusals
-            code = exc.code if isinstance(exc.code, int) else 1
-    return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())
 
 
 def test_analyze_cyclotron_json_gives_the_seed_results():

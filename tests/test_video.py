@@ -13,21 +13,12 @@ import shutil
 import browser
 import numpy as np
 import pytest
+from commands import mechviz
 
-from viz import cli, video
 from viz import record as rec
+from viz import video
 
 SIZE = (320, 180)
-
-
-def _mechviz(capsys, *argv: str) -> tuple[int, str, str]:
-    """Run ``mechviz ARGV``: exit status, stdout, stderr (usage errors exit through argparse)."""
-    try:
-        status = cli.main(list(argv))
-    except SystemExit as exc:
-        status = exc.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 # --------------------------------------------------------------------------- no browser
@@ -56,7 +47,7 @@ def test_bad_video_input_is_one_line_naming_the_flag_and_exit_status_2(
 ):
     argv = [a.replace("OUT", str(tmp_path / "out")) for a in argv]
     argv = [a.replace("MISSING", str(tmp_path / "no")) for a in argv]
-    status, _, err = _mechviz(capsys, *argv)
+    status, _, err = mechviz(*argv)
     assert status == 2
     assert len(err.strip().splitlines()) == 1, err
     assert flag.replace("MISSING", "no") in err
@@ -68,7 +59,7 @@ def test_without_chromium_one_line_says_how_to_get_it_and_exit_status_is_2(
 ):
     monkeypatch.setattr(video, "find_chromium", lambda: None)
     out = tmp_path / "out"
-    status, _, err = _mechviz(capsys, "record", "helix", "--out", str(out), "--video", "mp4")
+    status, _, err = mechviz("record", "helix", "--out", str(out), "--video", "mp4")
     assert status == 2
     assert len(err.strip().splitlines()) == 1
     assert "chromium" in err.lower() and "install" in err
@@ -78,7 +69,7 @@ def test_without_chromium_one_line_says_how_to_get_it_and_exit_status_is_2(
 def test_a_file_that_is_not_a_recording_is_refused(capsys, tmp_path):
     fake = tmp_path / "fake.viser"
     fake.write_bytes(b"\x00" * 64)
-    status, _, err = _mechviz(capsys, "video", str(fake))
+    status, _, err = mechviz("video", str(fake))
     assert status == 2
     assert "not a viser recording" in err
     assert not (tmp_path / "fake.mp4").exists()
@@ -124,8 +115,7 @@ def _has_words(frame: np.ndarray) -> bool:
 @pytest.mark.parametrize("fmt", ["mp4", "gif"])
 def test_record_video_has_the_requested_frames_fps_and_duration_and_moves(capsys, tmp_path, fmt):
     browser.require_browser()
-    status, out, err = _mechviz(
-        capsys,
+    status, out, err = mechviz(
         "record",
         "helix",
         "--out",
@@ -169,8 +159,7 @@ def recording(tmp_path_factory):
 def test_video_converts_a_viser_file_and_a_bare_html_page(capsys, recording, tmp_path):
     # Beside its manifest: the demo's duration and fps.
     target = tmp_path / "clip.mp4"
-    status, _, err = _mechviz(
-        capsys,
+    status, _, err = mechviz(
         "video",
         str(recording / "helix.viser"),
         "--out",
@@ -185,8 +174,7 @@ def test_video_converts_a_viser_file_and_a_bare_html_page(capsys, recording, tmp
     # A page without a manifest (as the live viewer downloads a session): the whole recording.
     page = tmp_path / "session.html"
     shutil.copy(recording / "helix.html", page)
-    status, _, err = _mechviz(
-        capsys,
+    status, _, err = mechviz(
         "video",
         str(page),
         "--format",
@@ -253,7 +241,7 @@ def test_the_exhibit_fills_most_of_the_frames_height(capsys, recording, tmp_path
     size = (640, 360)
     target = tmp_path / "framed.mp4"
     argv = ["video", str(recording / "helix.viser"), "--out", str(target), "--size", "640x360"]
-    status, _, err = _mechviz(capsys, *argv, *([] if overlay else ["--no-overlay"]))
+    status, _, err = mechviz(*argv, *([] if overlay else ["--no-overlay"]))
     assert status == 0, err
     _, frames = _mp4_frames(target)
     top = bottom = 0
@@ -304,8 +292,7 @@ def test_the_kicks_figures_appear_on_frames_after_the_kick_only(capsys, tmp_path
     """radial-kick, filmed at 2 fps: the band of figures holds two lines (gyrofrequency and
     Larmor radius) before the kick at t = 5 s and three (its effects) after."""
     browser.require_browser()
-    status, _, err = _mechviz(
-        capsys,
+    status, _, err = mechviz(
         *("record", "radial-kick", "--out", str(tmp_path), "--duration", "7", "--fps", "2"),
         *("--video", "mp4", "--size", "640x360"),
     )
@@ -337,8 +324,8 @@ def test_still_writes_a_3840x2160_png_with_the_exhibit_in_it(capsys, tmp_path):
 
     browser.require_browser()
     out = tmp_path / "helix.png"
-    status, stdout, err = _mechviz(
-        capsys, "still", "helix", "--at", "1.5", "--size", "3840x2160", "--out", str(out)
+    status, stdout, err = mechviz(
+        "still", "helix", "--at", "1.5", "--size", "3840x2160", "--out", str(out)
     )
     assert status == 0, err
     assert str(out) in stdout

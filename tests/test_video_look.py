@@ -9,22 +9,14 @@ import types
 
 import numpy as np
 import pytest
+from commands import mechviz
 
-from viz import cli, framing, video
+from viz import framing, video
 from viz import record as rec
 from viz.overlay import Overlay, true_at
 from viz.record.run import trace_demo
 
 SIZE = (960, 540)
-
-
-def _mechviz(capsys, *argv: str) -> tuple[int, str, str]:
-    try:
-        status = cli.main(list(argv))
-    except SystemExit as exc:
-        status = exc.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 # --------------------------------------------------------------------------- framing
@@ -189,7 +181,7 @@ def test_bad_look_values_are_one_line_naming_the_flag_and_exit_status_2(
     capsys, tmp_path, argv, flag
 ):
     argv = [a.replace("OUT", str(tmp_path / "out")) for a in argv]
-    status, _, err = _mechviz(capsys, *argv)
+    status, _, err = mechviz(*argv)
     assert status == 2, err
     assert len(err.strip().splitlines()) == 1, err
     assert flag in err
