@@ -50,6 +50,7 @@ def test_hoop_section_is_regular_near_rest_and_chaotic_past_the_pendulums_separa
     assert np.median(lyap[over]) > 0.4
 
 
+@pytest.mark.slow
 def test_cli_draws_a_section_with_its_axes_labelled(tmp_path):
     out = tmp_path / "bead"
     args = ["atlas", "chaos", "--section", "theta2", "--theta2=-3:3:4", "--omega2=-5:5:3"]

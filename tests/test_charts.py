@@ -62,6 +62,7 @@ def test_equal_aspect_goes_with_a_shared_unit(labels, shared):
     assert charts.shared_unit(*labels) is shared
 
 
+@pytest.mark.slow
 def test_the_chart_is_written_as_svg_and_pdf_when_asked(tmp_path):
     d = rec.load_demo("hoop-mode1").with_overrides(duration=1.0, fps=10)
     res = rec.record(d, tmp_path, plots=("svg", "pdf"))

@@ -71,6 +71,7 @@ def test_builtin_demo_records_five_complete_files(recorded, name):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(SHORT))
 def test_viser_file_decodes_and_holds_one_frame_per_fps_tick(recorded, name):
     out, results = recorded
@@ -83,6 +84,7 @@ def test_viser_file_decodes_and_holds_one_frame_per_fps_tick(recorded, name):
     assert times == pytest.approx([k / FPS for k in range(frames)])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(SHORT))
 def test_csv_holds_every_run_member_and_frame(recorded, name):
     out, results = recorded
@@ -125,6 +127,7 @@ AGREES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "figure", "tol"), AGREES)
 def test_manifest_figure_agrees_with_analytic_prediction(recorded, name, figure, tol):
     f = _figures(recorded, name)[figure]
@@ -132,11 +135,13 @@ def test_manifest_figure_agrees_with_analytic_prediction(recorded, name, figure,
     assert f["relative_difference"] < tol, f
 
 
+@pytest.mark.slow
 def test_large_amplitude_hoop_departs_from_linear_theory(recorded):
     f = _figures(recorded, "hoop-large-amplitude")["mode 1 frequency"]
     assert f["relative_difference"] > 0.2  # 2 rad: the period is 33 % longer than linear theory
 
 
+@pytest.mark.slow
 def test_symplectic_runs_conserve_what_theory_says(recorded):
     boris = _figures(recorded, "euler-vs-boris")["final energy error, boris"]
     assert abs(boris["measured"]) < 1e-12
@@ -145,6 +150,7 @@ def test_symplectic_runs_conserve_what_theory_says(recorded):
     assert set(errs) == {"verlet", "rk4"}
 
 
+@pytest.mark.slow
 def test_beam_periods_are_equal_although_speeds_differ(recorded):
     figs = _figures(recorded, "beam")
     assert figs["speed ratio in the beam"]["measured"] == pytest.approx(6.0)
@@ -238,6 +244,7 @@ def test_method_that_blows_up_fails_the_recording_and_writes_nothing(tmp_path):
 
 
 # --------------------------------------------------------------------------- one path
+@pytest.mark.slow
 def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, server):
     """The recorder draws with the viewer's exhibit: the beam demo's first frame holds the
     states the live cyclotron exhibit's beam starts from with the same settings."""
@@ -430,6 +437,7 @@ def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatc
     assert any(title == "Recording saved" for title, _ in app.messages)
 
 
+@pytest.mark.slow
 def test_the_csv_holds_the_quantities_of_the_pictures_and_they_obey_their_physics(recorded):
     """The radial kick's rows: E_perp = p_r^2/2m + V_eff(r) for every sample (the well of the
     seed's argument, exact to round-off on Boris's rotation as on any state). The hoop's rows:
@@ -451,6 +459,7 @@ def test_the_csv_holds_the_quantities_of_the_pictures_and_they_obey_their_physic
         assert theta == pytest.approx([float(r["theta1"]), float(r["theta2"])], abs=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "nodes"),
     [
