@@ -27,6 +27,7 @@ The whole app, headless and without its loop thread::
     app = MechvizApp(port=0, start_loop=False)   # or MechvizApp(server=my_server, ...)
     app.step_frame()                 # apply queued commands, advance, draw (one frame)
     app.enqueue("hoop", {"op": "set", "method": "rk4"})   # as the GUI does
+    app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
@@ -40,7 +41,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import math
 import queue
 import threading
 import time
@@ -54,7 +54,8 @@ from .frames import FrameLog
 from .live_record import add_record_toggle
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, CyclotronExhibit, Exhibit
-from .scene.panel import Panel
+from .scene.fields import NumberField, Typing
+from .scene.panel import Panel, parse_number
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
@@ -127,6 +128,8 @@ class MechvizApp:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
+        self.typing = Typing()  # number fields holding typed text not yet read
+        self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
 
         scene = server.scene
         scene.set_up_direction("+z")
@@ -242,15 +245,13 @@ class MechvizApp:
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
-            v = cmd["value"]
             lo, hi = SPEEDS
-            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
-                if self.gui is not None:
-                    self._syncing = True
-                    self.w["speed"].value = self.speed  # the box shows the speed in force
-                    self._syncing = False
-                raise ValueError(f"Speed must lie between {lo:g}x and {hi:g}x, got {v!r}")
-            self.speed = float(v)
+            try:
+                v = parse_number("Speed [×]", cmd["value"], lo, hi)
+            finally:
+                self._show_speed()  # the box shows the speed in force (springs back if refused)
+            self.speed = v
+            self._show_speed()
             self._rtf_window.clear()
         elif op == "reset":
             for ex in self.exhibits.values():
@@ -284,6 +285,14 @@ class MechvizApp:
             )
         if self.gui is not None:
             self._sync_play_button()
+
+    def _show_speed(self) -> None:
+        if self.gui is not None:
+            self._syncing = True
+            try:
+                self.speed_field.show(self.speed)
+            finally:
+                self._syncing = False
 
     def _apply_theme(self, theme: str) -> None:
         """Page and floor for ``theme``; the scene's palette reads on both (viz.geometry)."""
@@ -451,14 +460,20 @@ class MechvizApp:
                 "Step", icon=viser.Icon.PLAYER_TRACK_NEXT, hint="Advance one frame"
             )
             w["reset"] = gui.add_button("Reset all", icon=viser.Icon.REFRESH)
-            w["speed"] = gui.add_slider(
-                "Speed",
-                min=SPEEDS[0],
-                max=SPEEDS[1],
-                step=0.1,
-                initial_value=self.speed,
-                hint="Simulated seconds per real second",
+            self.speed_field = NumberField(
+                gui,
+                "Speed [×]",
+                self.speed,
+                read=lambda text: self.enqueue("app", {"op": "speed", "value": text}),
+                current=lambda: self.speed,
+                on=self._on,
+                typing=self.typing,
+                hint="Simulated seconds per real second (type a number and press Enter)",
+                track=(SPEEDS[0], SPEEDS[1], 0.1),
+                track_apply=lambda x: self.enqueue("app", {"op": "speed", "value": x}),
             )
+            w["speed"], w["speed_track"] = self.speed_field.box, self.speed_field.track
+            self.number_fields["speed"] = self.speed_field
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["present"] = gui.add_dropdown(
@@ -492,10 +507,9 @@ class MechvizApp:
             w["chart_window"],
             lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),
         )
-        w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
-        w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
-        w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))
-        self._on(w["speed"], lambda v: self.enqueue("app", {"op": "speed", "value": v}))
+        w["play"].on_click(lambda _: self._click({"op": "toggle"}))
+        w["step"].on_click(lambda _: self._click({"op": "step"}))
+        w["reset"].on_click(lambda _: self._click({"op": "reset"}))
 
         @w["view"].on_click
         def _(event) -> None:
@@ -508,12 +522,21 @@ class MechvizApp:
                 ex.build_panel(panel)
 
     def _on(self, widget, fn: Callable[[Any], None]) -> None:
-        """on_update that ignores the loop's own widget syncs and passes the new value."""
+        """on_update that ignores the loop's own widget syncs and passes the new value. A
+        person touching a control has left any number box typed into: that text is read first
+        (the number fields' own boxes are not such a move)."""
 
         @widget.on_update
         def _(_event) -> None:
             if not self._syncing:
+                if type(widget).__name__ != "GuiTextHandle":
+                    self.typing.commit()
                 fn(widget.value)
+
+    def _click(self, command) -> None:
+        """A button of the app: pending typed numbers are read first, then ``command``."""
+        self.typing.commit()
+        self.enqueue("app", command)
 
     def _sync_play_button(self) -> None:
         b = self.w["play"]

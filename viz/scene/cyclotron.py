@@ -262,8 +262,14 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         panel.param_inputs()
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
-            strength = panel.slider(
-                "kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None
+            panel.slider(
+                "kick",
+                "Kick dv [m/s]",
+                -1.0,
+                1.0,
+                0.05,
+                c.kick,
+                lambda v: panel.send({"op": "set", "kick": float(v)}),
             )
             kick = gui.add_button(
                 "Kick", hint="Radial velocity kick: the predicted circle moves at once"
@@ -281,9 +287,17 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
                 200,
                 1,
                 c.beam_size,
-                lambda v: panel.send({"op": "set", "beam_size": int(v)}),
+                # a whole number goes as one; 2.5 is refused by the config, named
+                lambda v: panel.send(
+                    {"op": "set", "beam_size": int(v) if float(v).is_integer() else v}
+                ),
             )
-        kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
+
+        def give_kick(_event) -> None:
+            panel.app.typing.commit()  # a kick typed and not yet entered is the one meant
+            panel.send({"op": "kick"})  # dv: the kick in force when the command is applied
+
+        kick.on_click(give_kick)
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
         panel.plot(
             "p_φ is conserved, so r moves in the well V_eff(r) = (p_φ − qBr²/2)²/2mr² at the level "

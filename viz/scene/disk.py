@@ -403,7 +403,7 @@ class DiskExhibit(DiskModel, Exhibit):
 
     # ------------------------------------------------------------------ GUI
     def sync_panel(self, panel) -> None:
-        panel.w["disk.spin"].value = float(self.config.extra_spin[2])
+        panel.show("spin", float(self.config.extra_spin[2]))
 
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
@@ -420,6 +420,7 @@ class DiskExhibit(DiskModel, Exhibit):
                 0.01,
                 float(c.extra_spin[2]),
                 lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}),
+                current=lambda: float(self.config.extra_spin[2]),
                 hint="Spin about the disk normal added at release: seeds the tumble",
             )
             follow = panel.put(
