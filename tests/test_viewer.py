@@ -324,17 +324,22 @@ def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app)
     assert math.hypot(*(st[:2] - expected_centre[:2])) == pytest.approx(expected_radius, rel=1e-9)
 
 
-def test_camera_presets_point_at_each_exhibit(app):
-    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
-        position, target = app.camera_preset(view)
-        assert abs(target[0] - app.exhibits[key].origin[0]) < 2.0
-        assert np.linalg.norm(np.subtract(position, target)) > 3.0
-        # slid to the camera's right, so the exhibit shows left of centre, clear of the panel
-        own_position, own_target = app.exhibits[key].camera
-        slide = np.subtract(target, own_target)
-        assert slide @ np.cross(np.subtract(own_target, own_position), (0, 0, 1)) > 0
+def test_camera_presets_frame_each_exhibit_large_left_of_the_panel(app):
+    from viz.scene import framing
+
+    for size in ((1280, 800), (1440, 900), (1920, 1080)):
+        free = size[0] - framing.PANEL_PX
+        for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
+            position, target = app.camera_preset(view, *size)
+            share, x0, x1, y0, y1 = framing.share(
+                *app.exhibits[key].bounds, position, target, *size
+            )
+            assert share >= 0.55, (view, size, share)
+            assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= size[1], (view, size)
+            assert abs((x0 + x1) / 2 - free / 2) < 2 and abs((y0 + y1) / 2 - size[1] / 2) < 2
     position, target = app.camera_preset("Top")  # straight down on the orbit
-    assert position[2] - target[2] > 5.0 and np.hypot(*np.subtract(position, target)[:2]) < 0.1
+    down = np.subtract(target, position)
+    assert down[2] < 0 and np.hypot(*down[:2]) < 0.02 * abs(down[2])
     app.enqueue("app", {"op": "camera", "view": "Hoop"})  # no client: nothing to move, no error
     frames(app, 1)
 

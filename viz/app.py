@@ -1,7 +1,7 @@
 """The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
 
-Layout: the cyclotron at x = -4.4 m, the spinning disk at the origin, the hoop at x = +4.4 m
-(:data:`SPACING`; +z up).
+Layout: the cyclotron at x = -2.6 m, the spinning disk behind the middle (y = +3.2 m), the hoop
+at x = +2.6 m (:data:`ORIGINS`; +z up).
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -53,21 +53,23 @@ import numpy as np
 from .frames import FrameLog
 from .live_record import add_record_toggle
 from .model.base import LOG_FLOOR
-from .scene import EXHIBITS, CyclotronExhibit, Exhibit
+from .scene import EXHIBITS, CyclotronExhibit, Exhibit, framing
 from .scene.fields import NumberField, Typing
 from .scene.panel import Panel, parse_number
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
-ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
+# Where the exhibits stand [m], in the order of viz.scene.EXHIBITS: the cyclotron left, the disk
+# in the middle and behind, the hoop right. Seen from the front and above, the one behind shows
+# above the other two, so the first view fills more of the page's height than a row would.
+ORIGINS = dict(zip(EXHIBITS, ((-2.6, 0.0, 0.0), (0.0, 3.2, 0.0), (2.6, 0.0, 0.0)), strict=True))
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
 PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
-PRESENT_DISTANCE = 0.7  # presentation mode's camera distance, times the preset's
-PANEL_SHIFT = 0.3  # of the viewing distance: a preset's sideways slide clear of the GUI panel
-OVERVIEW = (
-    (1.5, -8.4, 3.9),
-    (1.5, 0.0, 1.0),
-)  # the three exhibits left of the GUI panel at 1280x800
+FIGURE_SCALE = 2.8  # presentation mode's key figures: 2.8 x 12 px text on an 800 px page
+FIGURES_SHARE = 0.38  # of the page's width kept for them, right of the presented exhibit
+PANEL_PX = framing.PANEL_PX  # px of the page's right edge the GUI panel covers
+FILL = 0.72  # of the page's height an exhibit's box takes in its own view
+PRESENT_FILL = 0.8  # the same in presentation mode (the panel collapsed)
+OVERVIEW = ((0.0, -8.4, 5.5), (0.0, 0.0, 1.0))  # the direction the first view looks in
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -80,6 +82,15 @@ GRIDS = {
     "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
     "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
 }
+
+
+def page_size(client) -> tuple[int, int]:
+    """The client's page in pixels, as its camera reports it (1280 x 800 until it has)."""
+    try:
+        w, h = client.camera.image_width, client.camera.image_height
+    except AssertionError:  # viser: the client has not reported its camera yet
+        return (1280, 800)
+    return (int(w), int(h)) if w and h else (1280, 800)
 
 
 # --------------------------------------------------------------------------- the app
@@ -124,6 +135,7 @@ class MechvizApp:
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
+        self.figures: dict[str, Any] = {}  # key -> the label of its key figures
         self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -165,18 +177,37 @@ class MechvizApp:
             for key, cls in EXHIBITS.items()
         }
         self.panels: dict[str, Panel] = {}
-        server.initial_camera.position = OVERVIEW[0]
-        server.initial_camera.look_at = OVERVIEW[1]
+        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
         with server.atomic():
             self._draw()
+        server.on_client_connect(self._frame_new_client)
         self.gui = None
         self.recorder = None  # the Record toggle's viz.live_record.LiveRecorder (with the GUI)
         if gui:
             self._build_gui()
+            self._build_figures()
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
         if start_loop:
             self.start()
+
+    def _frame_new_client(self, client) -> None:
+        """Frame the first view for the page of a client that has just connected, once it has
+        reported its size (the initial camera is framed for 1280 x 800)."""
+        deadline = time.monotonic() + 10.0
+        while page_size(client) == (1280, 800) and time.monotonic() < deadline:
+            if self._stop.wait(0.1):
+                return
+        view = "All" if self.presenting is None else self.exhibits[self.presenting].name
+        self.enqueue(
+            "app",
+            {
+                "op": "camera" if self.presenting is None else "present",
+                "view": view,
+                "value": view,
+                "client": client,
+            },
+        )
 
     # ------------------------------------------------------------------ properties
     @property
@@ -302,6 +333,7 @@ class MechvizApp:
             self.w["theme"].value = theme
             self._syncing = False
         self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        self._show_figures()
         self._configure_page()
 
     def _configure_page(self) -> None:
@@ -324,25 +356,36 @@ class MechvizApp:
             with contextlib.suppress(Exception):
                 client.add_notification(title, body, auto_close_seconds=8.0, color=color)
 
-    def camera_preset(self, view: str):
-        """``(position, look_at)`` of a preset. An exhibit's own view is slid sideways by
-        ``PANEL_SHIFT`` of its distance, so the exhibit sits in the middle of the part of the
-        page left of the GUI panel (at 1280x800 the panel covers the right quarter); *Top*
+    def camera_preset(
+        self, view: str, width: int = 1280, height: int = 800, panel_px: int = PANEL_PX
+    ):
+        """``(position, look_at)`` of a preset for a page of ``width`` x ``height`` pixels whose
+        right ``panel_px`` the GUI panel covers (:func:`viz.scene.framing.frame`): an exhibit's
+        own view frames its box to ``FILL`` of the height, in the middle of the page left of
+        the panel; *All* frames the three together (as large as the free width allows); *Top*
         looks straight down on the cyclotron's orbit."""
         if view == "All":
-            return OVERVIEW
-        if view == "Top":  # looking down (+y up on the screen, +x right), slid clear of the panel
-            o = self.exhibits[CyclotronExhibit.key].origin + (PANEL_SHIFT * 6.5, 0.0, 0.0)
-            return tuple(o + (0.0, -0.01, 6.5)), tuple(o)
-        position, target = (np.asarray(v, float) for v in self.exhibits[VIEWS[view]].camera)
-        forward = target - position
-        right = np.cross(forward, (0.0, 0.0, 1.0))  # the camera's right (+z up), in the floor
-        right *= PANEL_SHIFT * np.linalg.norm(forward) / max(np.linalg.norm(right), 1e-12)
-        return tuple(position + right), tuple(target + right)
+            boxes = [ex.bounds for ex in self.exhibits.values()]
+            lo = np.min([b[0] for b in boxes], axis=0)
+            hi = np.max([b[1] for b in boxes], axis=0)
+            direction = np.subtract(OVERVIEW[1], OVERVIEW[0])
+            return framing.frame(lo, hi, direction, width, height, fill=FILL, panel_px=panel_px)
+        if view == "Top":
+            lo, hi = self.exhibits[CyclotronExhibit.key].bounds
+            return framing.frame(
+                lo, hi, (0.0, 0.01, -1.0), width, height, fill=FILL, panel_px=panel_px
+            )
+        ex = self.exhibits[VIEWS[view]]
+        position, target = ex.camera
+        lo, hi = ex.bounds
+        return framing.frame(
+            lo, hi, np.subtract(target, position), width, height, fill=FILL, panel_px=panel_px
+        )
 
     def _present(self, view, client=None) -> None:
-        """Presentation mode: ``view`` (an exhibit's preset name) alone on the page, framed in
-        the middle of it, labels ``PRESENT_TEXT`` times larger and the panel minimized (its
+        """Presentation mode: ``view`` (an exhibit's preset name) alone on the page, framed to
+        ``PRESENT_FILL`` of its height with its key figures drawn large beside it
+        (``FIGURE_SCALE``), labels ``PRESENT_TEXT`` times larger and the panel minimized (its
         button opens it again); ``"Off"`` brings the three and the panel back."""
         if view not in ("Off", *VIEWS):
             raise ValueError(f"Present must be Off or one of {', '.join(VIEWS)}, got {view!r}")
@@ -352,22 +395,57 @@ class MechvizApp:
             ex.scene.get_handle_by_name(ex.root).visible = self.presenting in (None, key)
             for h in ex.labels():
                 h.font_screen_scale = scale
+            if key in self.figures:
+                self.figures[key].visible = self.presenting == key
+        self._show_figures()
         self._configure_page()
         if self.presenting is None:
             self._move_camera(client, "All")
         else:
-            # the exhibit in the page's middle, the camera a third closer than its preset
-            position, target = (np.asarray(v, float) for v in self.exhibits[self.presenting].camera)
-            position = tuple(target + PRESENT_DISTANCE * (position - target))
-            target = tuple(target)
-            for c in [client] if client is not None else list(self.server.get_clients().values()):
-                with c.atomic():
-                    c.camera.position, c.camera.look_at = position, target
+            self._move_camera(client, view, present=True)
 
-    def _move_camera(self, client, view: str) -> None:
-        position, target = self.camera_preset(view)
+    def _build_figures(self) -> None:
+        """Presentation mode's key figures: for each exhibit a label of large text at the top
+        right corner of its box (``FIGURE_SCALE`` times viser's 12 px screen labels), hidden
+        until the exhibit is presented."""
+        for key, ex in self.exhibits.items():
+            lo, hi = ex.bounds
+            self.figures[key] = self.server.scene.add_label(
+                f"/key_figures/{key}",
+                "",
+                font_size_mode="screen",
+                font_screen_scale=FIGURE_SCALE,
+                anchor="top-left",
+                position=(float(hi[0]), float(lo[1]), float(hi[2])),
+                visible=False,
+            )
+
+    def _show_figures(self) -> None:
+        key = self.presenting
+        if key is not None and key in self.figures:
+            lines = (f"{name} = {value}" for name, value in self.exhibits[key].key_figures())
+            self.figures[key].text = "\n".join(lines)
+
+    def _move_camera(self, client, view: str, *, present: bool = False) -> None:
+        """Move the camera of ``client`` (all clients if None) to the preset ``view``, framed
+        for its page; ``present``: the panel collapsed and room on the right for the figures."""
         clients = [client] if client is not None else list(self.server.get_clients().values())
         for c in clients:
+            size = page_size(c)
+            if present:
+                ex = self.exhibits[VIEWS[view]]
+                position, target = ex.camera
+                lo, hi = ex.bounds
+                position, target = framing.frame(
+                    lo,
+                    hi,
+                    np.subtract(target, position),
+                    *size,
+                    fill=PRESENT_FILL,
+                    panel_px=round(FIGURES_SHARE * size[0]),
+                )
+            else:
+                position, target = self.camera_preset(view, *size)
             with c.atomic():
                 c.camera.position = position
                 c.camera.look_at = target
@@ -585,6 +663,8 @@ class MechvizApp:
             if not force and shown == (ex.revision, ex.history.version):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
+            if key == self.presenting:
+                self._show_figures()
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()

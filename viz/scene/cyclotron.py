@@ -20,7 +20,7 @@ from dynamics import cyclotron as cy
 
 from .. import geometry as geo
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 
 
 class BeamTrails:
@@ -215,6 +215,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         return (tuple(o + (0.0, -5.2, 3.6)), tuple(o + (0.0, 0.0, 0.8)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        m = self.measured()
+        w_th = cy.gyrofrequency(self.params)
+        return [
+            ("ω", f"{brief(m['gyrofrequency'])} rad/s (theory {fmt(w_th, 4)})"),
+            ("r", f"{brief(m['radius'])} m (theory {fmt(self.theory_radius, 4)})"),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp = self.params, self.sample
         w_th = cy.gyrofrequency(p)

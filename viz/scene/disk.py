@@ -23,7 +23,7 @@ from dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
@@ -347,6 +347,20 @@ class DiskExhibit(DiskModel, Exhibit):
         return (tuple(o + (0.8, -5.0, 2.8)), tuple(o + (0.0, 0.0, 1.4)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        if self.config.mode == "driven":
+            meas = self.measured()["bearing_force"]
+            force = f"{brief(meas)} N (theory {fmt(self.force_amplitude, 4)})"
+            return [("|F_B|", force), ("t", f"{self.t:.1f} s")]
+        meas = self.measured()
+        return [
+            (
+                "polhode period",
+                f"{brief(meas['polhode_period'])} s (theory {fmt(self.polhode_period(), 4)})",
+            ),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp = self.params, self.sample
         about = "A" if self.config.mode == "driven" else "the centre of mass"

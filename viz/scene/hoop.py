@@ -19,7 +19,7 @@ from dynamics import hoop as hp
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 from .panel import number_text
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -245,6 +245,13 @@ class HoopExhibit(HoopModel, Exhibit):
         return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        freqs, meas = self.mode_frequencies, self.measured()["mode_frequencies"]
+        return [
+            *((f"ω{k + 1}", f"{brief(meas[k])} rad/s (theory {fmt(freqs[k], 4)})") for k in (0, 1)),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp, c = self.params, self.sample, self.config
         freqs = self.mode_frequencies
