@@ -1,0 +1,119 @@
+"""How large the exhibits are on a 1280 x 800 page in headless Chromium, as a lecture hall sees it.
+
+The camera each preset leaves the page with is read back from the browser (viser reports it to
+the server) and the exhibit's box is projected through it onto the page: in its own preset each
+exhibit fills at least 55 % of the height of the part of the page left of the panel (measured in
+the page: the panel's left edge), the first view shows all three there. Presentation mode
+collapses the panel and draws the key figures at least 28 pixels high (measured on the
+screenshot: the height of the dark ink of each line of the figures' label).
+"""
+
+from __future__ import annotations
+
+import browser
+import numpy as np
+import pytest
+from waiting import scaled, wait_until
+
+pytestmark = pytest.mark.browser
+
+PAGE = (1280, 800)
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    browser.require_browser()
+    from viz.app import MechvizApp, warm_up
+
+    warm_up("defaults")
+    app = MechvizApp(port=0, environment_map=False)
+    try:
+        with browser.open_page(app.url, width=PAGE[0], height=PAGE[1], timeout_s=60) as page:
+            browser.dismiss_webgl_alert(page)
+            yield app, page
+    finally:
+        app.stop()
+
+
+def _camera(app, target):
+    """The browser's camera once its look-at point is ``target``: (position, look_at, fov)."""
+    client = next(iter(app.server.get_clients().values()))
+
+    def arrived():
+        cam = client.camera
+        return np.allclose(cam.look_at, target, atol=1e-3) and cam
+
+    cam = wait_until(arrived, 20, f"the camera to look at {target}")
+    assert (cam.image_width, cam.image_height) == PAGE
+    return np.array(cam.position), np.array(cam.look_at), float(cam.fov)
+
+
+def _panel_left(page) -> float:
+    return page.get_by_role("button", name="Pause").bounding_box()["x"] - 20
+
+
+def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
+    from viz.scene import framing
+
+    app, page = viewer
+    free = _panel_left(page)
+    position, target, fov = _camera(app, app.camera_preset("All", *PAGE)[1])  # the first view
+    shares = []
+    for key, ex in app.exhibits.items():
+        share, x0, x1, y0, y1 = framing.share(*ex.bounds, position, target, *PAGE, fov)
+        assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], key
+        shares.append((y0, y1))
+    union = (max(y for _, y in shares) - min(y for y, _ in shares)) / PAGE[1]
+    assert union >= 0.4, f"the first view's exhibits span {union:.0%} of the height"
+    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
+        page.get_by_role("button", name=view, exact=True).click()
+        position, target, fov = _camera(app, app.camera_preset(view, *PAGE)[1])
+        share, x0, x1, y0, y1 = framing.share(
+            *app.exhibits[key].bounds, position, target, *PAGE, fov
+        )
+        assert share >= 0.55, f"{view}: {share:.0%} of the height"
+        assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], view
+
+
+def _ink_lines(img: np.ndarray) -> list[int]:
+    """Heights [px] of the runs of rows holding dark ink (the lines of a text)."""
+    rows = (img.astype(int).sum(axis=2) < 3 * 90).sum(axis=1) >= 2
+    heights, run = [], 0
+    for dark in [*rows, False]:
+        if dark:
+            run += 1
+        elif run:
+            heights.append(run)
+            run = 0
+    return heights
+
+
+def test_presentation_mode_collapses_the_panel_and_draws_the_key_figures_large(viewer):
+    from viz.scene import framing
+
+    app, page = viewer
+    page.get_by_role("combobox", name="Present").click()
+    page.get_by_role("option", name="Hoop", exact=True).click()
+    wait_until(lambda: app.presenting == "hoop", 15, "presentation mode")
+    page.get_by_role("button", name="Pause").wait_for(state="hidden", timeout=scaled(15) * 1000)
+    label = app.figures["hoop"]
+    wait_until(lambda: "ω1 =" in label.text, 15, "the key figures")
+    client = next(iter(app.server.get_clients().values()))
+    wait_until(lambda: client.camera.position[1] < -0.5, 15, "the presentation camera")
+    position, target, fov = _camera(app, client.camera.look_at)
+    share, *_ = framing.share(*app.exhibits["hoop"].bounds, position, target, *PAGE, fov)
+    assert share >= 0.55, f"presented: {share:.0%} of the height"
+    x, y = framing.project([label.position], position, target, *PAGE, fov)[0]
+    lines = len(label.text.split("\n"))
+
+    def drawn():
+        img = browser.screenshot_array(page)[int(y) : int(y) + 60 * lines, int(x) : int(x) + 700]
+        heights = _ink_lines(img)
+        return len(heights) >= lines and heights
+
+    heights = wait_until(drawn, 30, "the key figures on the page", poll_s=0.5)
+    # the tallest ink of a line ("(", "ω", digits) is about the font's size
+    assert max(heights) >= 28, heights
+    print(f"key figures: ink heights {heights} px; presented exhibit {share:.0%} of the height")
+    app.enqueue("app", {"op": "present", "value": "Off"})
+    page.get_by_role("button", name="Pause").wait_for(timeout=scaled(15) * 1000)
