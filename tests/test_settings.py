@@ -107,10 +107,9 @@ def _named(spec, field: str) -> dict[str, str]:
 
 
 @pytest.mark.parametrize(("field", "method", "typed"), BAD)
-def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(
-    field, method, typed, app
-):
+def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, method, typed, app):
     from viz.record.demo import parse_demo
+
     system = "hoop"
     spec = dynamics.SPECS[system]
     named = _named(spec, field)

@@ -1,7 +1,7 @@
 """The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
 
-Layout: the cyclotron at x = -2.6 m, the spinning disk behind the middle (y = +3.2 m), the hoop
-at x = +2.6 m (:data:`ORIGINS`; +z up).
+Layout: the cyclotron at x = -4.4 m, the spinning disk at the origin, the hoop at x = +4.4 m
+(:data:`SPACING`; +z up).
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -58,10 +58,8 @@ from .scene.fields import NumberField, Typing
 from .scene.panel import Panel, parse_number
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-# Where the exhibits stand [m], in the order of viz.scene.EXHIBITS: the cyclotron left, the disk
-# in the middle and behind, the hoop right. Seen from the front and above, the one behind shows
-# above the other two, so the first view fills more of the page's height than a row would.
-ORIGINS = dict(zip(EXHIBITS, ((-2.6, 0.0, 0.0), (0.0, 3.2, 0.0), (2.6, 0.0, 0.0)), strict=True))
+SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
+ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
 PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
 FIGURE_SCALE = 2.8  # presentation mode's key figures: 2.8 x 12 px text on an 800 px page
@@ -69,7 +67,7 @@ FIGURES_SHARE = 0.38  # of the page's width kept for them, right of the presente
 PANEL_PX = framing.PANEL_PX  # px of the page's right edge the GUI panel covers
 FILL = 0.72  # of the page's height an exhibit's box takes in its own view
 PRESENT_FILL = 0.8  # the same in presentation mode (the panel collapsed)
-OVERVIEW = ((0.0, -8.4, 5.5), (0.0, 0.0, 1.0))  # the direction the first view looks in
+OVERVIEW = ((-2.9, -7.9, 5.5), (0.0, 0.0, 1.0))  # the direction the first view looks in
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -84,13 +82,24 @@ GRIDS = {
 }
 
 
+def camera_reported(client) -> bool:
+    try:
+        return client.camera.update_timestamp > 0
+    except AssertionError:  # viser: not yet
+        return False
+
+
 def page_size(client) -> tuple[int, int]:
-    """The client's page in pixels, as its camera reports it (1280 x 800 until it has)."""
+    """The client's page as the framing takes it: its shape, scaled to 800 pixels high (1280 x
+    800 until the client has reported its camera). viser reports the size the page is drawn at,
+    which the browser lowers when frames are slow and raises on a dense screen, while the GUI
+    panel keeps its width in CSS pixels; a page is rarely less than 800 CSS pixels high, so the
+    panel's share of the width is taken no smaller than it is."""
     try:
         w, h = client.camera.image_width, client.camera.image_height
     except AssertionError:  # viser: the client has not reported its camera yet
         return (1280, 800)
-    return (int(w), int(h)) if w and h else (1280, 800)
+    return (round(800 * w / h), 800) if w and h else (1280, 800)
 
 
 # --------------------------------------------------------------------------- the app
@@ -195,7 +204,7 @@ class MechvizApp:
         """Frame the first view for the page of a client that has just connected, once it has
         reported its size (the initial camera is framed for 1280 x 800)."""
         deadline = time.monotonic() + 10.0
-        while page_size(client) == (1280, 800) and time.monotonic() < deadline:
+        while time.monotonic() < deadline and not camera_reported(client):
             if self._stop.wait(0.1):
                 return
         view = "All" if self.presenting is None else self.exhibits[self.presenting].name

@@ -75,8 +75,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         s.add_frame(r, show_axes=False, position=self.origin)
         self.label = s.add_label(
             f"{r}/label",
-            "Cyclotron: charge in a uniform field B",
-            position=(0.0, 0.0, H + 0.5),
+            "Cyclotron: charge in a field B",
+            # above the back edge: seen from the top it lies beyond the orbit, not across it
+            position=(0.0, 1.7, H + 0.5),
             anchor="bottom-center",
         )
         self.field_arrows = s.add_arrows(
@@ -87,7 +88,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             head_radius=0.045,
             head_length=0.12,
         )
-        self.field_label = s.add_label(f"{r}/field_label", "B", position=(1.6, 1.6, H + 0.1))
+        self.field_label = s.add_label(f"{r}/field_label", "field B", position=(-1.6, 1.6, H + 0.1))
         # one batched node: instance 0 the charge, 1 the comparison run (scale 0 while there
         # is none), 2 the guiding centre
         ball = geo.sphere_mesh(0.07)

@@ -55,6 +55,19 @@ class ConfigurationSpace:
             thickness=2.0,
             thickness_units="screen",
         )
+        # its names: the title (naming the axes) under the square, each mode line at its upper
+        # end (placed in start(): they depend on the masses), mode 1 right, mode 2 left of it
+        c0 = centre.astype(float)
+        scene.add_label(
+            f"{root}/label_title",
+            "configuration space:\nθ1 → (across), θ2 ↑ (up)",
+            position=c0 + (-half, 0, -half - 0.03),
+            anchor="top-left",
+        )
+        self.mode_labels = [
+            scene.add_label(f"{root}/label_mode1", "mode 1", anchor="bottom-left"),
+            scene.add_label(f"{root}/label_mode2", "mode 2", anchor="bottom-right"),
+        ]
         self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
         self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
         self.scale = 1.0
@@ -69,6 +82,10 @@ class ConfigurationSpace:
             u = np.asarray(shape, float) / np.abs(shape).max()  # reaches the square's edge
             lines.append([self.point(-reach * u), self.point(reach * u)])
         self.modes.points = np.asarray(lines, np.float32)
+        # mode 1 at its upper right end; mode 2 at its upper end, reaching left (clear of mode 1)
+        for label, (a, b) in zip(self.mode_labels, lines, strict=True):
+            top = a if a[2] > b[2] else b
+            label.position = top + (0.0, 0.0, 0.02)
         self.path.clear()
         self.ghost.clear()
         self.ghost.visible = ghost
