@@ -156,3 +156,34 @@ def test_presentation_mode_collapses_the_panel_and_draws_the_key_figures_large(v
     print(f"key figures: ink heights {heights} px; presented exhibit {share:.0%} of the height")
     app.enqueue("app", {"op": "present", "value": "Off"})
     page.get_by_role("button", name="Pause").wait_for(timeout=scaled(15) * 1000)
+
+
+def _red_pixels(page) -> int:
+    """Pixels of the energy-error line (red) in the visible tab's chart."""
+    import io
+
+    from PIL import Image
+
+    chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
+    chart.evaluate("e => e.scrollIntoView({block: 'center'})")
+    img = np.asarray(Image.open(io.BytesIO(page.screenshot(clip=chart.bounding_box()))))
+    img = img[..., :3].astype(int)
+    return int(((img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)).sum())
+
+
+def test_a_chart_keeps_its_history_when_the_window_changes(viewer):
+    app, page = viewer
+    hoop = app.exhibits["hoop"]
+    page.get_by_role("tab", name="Hoop").click()
+    wait_until(lambda: np.ptp(hoop.chart_data()[0]) >= 8.0, 60, "ten seconds of chart")
+    wait_until(lambda: _red_pixels(page) > 50, 30, "the error line", poll_s=0.5)
+    first = hoop.chart_data()[0][0]
+    page.get_by_role("combobox", name="Chart window").click()
+    page.get_by_role("option", name="10 min", exact=True).click()
+    wait_until(lambda: app.chart_window == 600.0, 15, "the 10-minute window")
+    t = hoop.chart_data()[0]
+    assert t[0] <= first  # nothing thrown away: the points of the 10 s window are still there
+    wait_until(lambda: _red_pixels(page) > 50, 15, "the error line in the long window", poll_s=0.5)
+    page.get_by_role("combobox", name="Chart window").click()
+    page.get_by_role("option", name="10 s", exact=True).click()
+    wait_until(lambda: app.chart_window == 10.0, 15, "the 10-second window")

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 import queue
 import threading
 import time
@@ -80,6 +81,20 @@ GRIDS = {
     "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
     "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
 }
+
+
+def log_axis(series) -> tuple[float, float]:
+    """The error chart's y range [decades] for ``series`` of log10 values: whole decades from
+    below the least to above the largest finite value (at least two decades; the floor where
+    an error is exactly 0), so the lines fill the chart whatever their size."""
+    values = np.concatenate([np.asarray(y, float) for y in series]) if len(series) else []
+    values = values[np.isfinite(values)] if len(values) else values
+    if not len(values):
+        return (LOG_FLOOR, 2.0)
+    lo, hi = math.floor(values.min()) - 0.5, math.ceil(values.max()) + 0.5
+    if hi - lo < 2.0:
+        lo, hi = (lo + hi) / 2 - 1.0, (lo + hi) / 2 + 1.0
+    return (max(lo, LOG_FLOOR - 0.5), hi)
 
 
 def camera_reported(client) -> bool:
@@ -185,6 +200,8 @@ class MechvizApp:
             key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
             for key, cls in EXHIBITS.items()
         }
+        for ex in self.exhibits.values():
+            ex.chart_window = self.chart_window  # the charts draw on the long history
         self.panels: dict[str, Panel] = {}
         server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
         with server.atomic():
@@ -669,7 +686,7 @@ class MechvizApp:
                 continue
             ex = self.exhibits[key]
             shown = self._shown.get(key)
-            if not force and shown == (ex.revision, ex.history.version):
+            if not force and shown == (ex.revision, ex.long_history.version):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
             if key == self.presenting:
@@ -677,15 +694,15 @@ class MechvizApp:
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or shown is None or shown[1] != ex.history.version:
+            if force or shown is None or shown[1] != ex.long_history.version:
                 chart = self.w[f"{key}.chart"]
-                data = ex.chart_data()
+                data = ex.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
-                    chart.data = data[: len(chart.series)]
+                    chart.data = data
                     self.panels[key].keep_time_axis(
-                        "chart", float(data[0][-1]), self.chart_window, (LOG_FLOOR, 2.0)
+                        "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._shown[key] = (ex.revision, ex.history.version)
+            self._shown[key] = (ex.revision, ex.long_history.version)
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -222,9 +222,13 @@ class HoopExhibit(HoopModel, Exhibit):
         if chart is None or len(self.motion) < 2:
             return
         data = self.modal_history()
+        # the window the chart selector shows (as far back as the motion's samples reach)
+        window = float(getattr(panel.app, "chart_window", 10.0))
+        first = int(np.searchsorted(data[0], data[0][-1] - window))
+        data = tuple(np.asarray(d)[first:] for d in data)
         chart.data = data
         top = 1.3 * max(float(np.abs(np.concatenate(data[1:3])).max()), 1e-6)
-        window = max(10.0, 3 * 2 * math.pi / float(self.mode_frequencies[0]))
+        top = 10 ** (math.ceil(4 * math.log10(top)) / 4)  # steps of a quarter decade: steady
         panel.keep_time_axis("modes_chart", float(data[0][-1]), window, (-top, top))
 
     # ------------------------------------------------------------------ drawing

@@ -187,20 +187,23 @@ class Panel:
 
     def keep_time_axis(self, name: str, t: float, window: float, y_range) -> None:
         """Give the chart ``name`` an explicit time axis: the ``window`` [s] ending a quarter
-        window ahead of ``t``, moved on once ``t`` passes its end, and the y range ``y_range``.
+        window ahead of ``t``, moved on once ``t`` passes its end, and the y range ``y_range``
+        (changed when it changes: the error chart's follows its data in whole decades).
         The browser's chart keeps the time range it had when it was drawn; one drawn again
         (after a resize and a tab switch) would keep a stale range and show no lines. Moving
         the range redraws the chart, so it moves in quarter-window steps, not every update."""
-        lo, hi, win = self._time_axes.get(name, (math.inf, -math.inf, 0.0))
-        if lo <= t <= hi and win == window:
+        lo, hi, win, ys = self._time_axes.get(name, (math.inf, -math.inf, 0.0, None))
+        y_range = tuple(float(y) for y in y_range)
+        if lo <= t <= hi and win == window and ys == y_range:
             return
-        hi = t + 0.25 * window
-        lo = hi - 1.25 * window
-        self._time_axes[name] = (lo, hi, window)
+        if not (lo <= t <= hi and win == window):
+            hi = t + 0.25 * window
+            lo = hi - 1.25 * window
+        self._time_axes[name] = (lo, hi, window, y_range)
         uplot = self.viser.uplot
         self.w[f"{self.key}.{name}"].scales = {
             "x": uplot.Scale(time=False, auto=False, range=(lo, hi)),
-            "y": uplot.Scale(auto=False, range=tuple(y_range)),
+            "y": uplot.Scale(auto=False, range=y_range),
         }
 
     def explain(self, exc: ValueError) -> str:
@@ -219,7 +222,11 @@ class Panel:
         self.put("readout", self.gui.add_markdown(""))
         series = [
             viser.uplot.Series(label="t [s]"),
-            viser.uplot.Series(label="log10 |energy error|", stroke="#d03030", width=1.5),
+            viser.uplot.Series(
+                label="log10 |energy error| (y axis fitted to the data)",
+                stroke="#d03030",
+                width=1.5,
+            ),
             viser.uplot.Series(label="log10 error", stroke="#3060d0", width=1.5),
         ]
         if compare:
