@@ -760,3 +760,24 @@ def test_the_tolerance_sets_the_error_the_viewer_shows(server):
         errors[rtol] = float(ex.sample.error[0])
         assert ex.sim.steps < 600  # fewer steps than frames: several frames per step
     assert errors[1e-3] > 1e-5 and errors[1e-9] < 1e-7
+
+
+def test_a_gyrofrequency_the_frames_cannot_resolve_is_said_so_not_shown_as_an_alias(app):
+    # mass 1e-3 kg: omega = 1000 rad/s, the velocity turns tens of radians between samples
+    app.enqueue("cyclotron", {"op": "set", "params": {"mass": 1e-3}})
+    frames(app, 90)
+    ex = app.exhibits["cyclotron"]
+    estimate = ex.measured()["gyrofrequency"]
+    assert estimate.value is None and "at this frame rate" in estimate.reason
+    assert "not resolved (at this frame rate" in ex.readout()
+    app.enqueue("cyclotron", {"op": "set", "params": {"mass": 1.0}})  # 1 rad/s: resolved
+    frames(app, 240)
+    assert ex.measured()["gyrofrequency"].value == pytest.approx(1.0, rel=1e-3)
+
+
+def test_an_adaptive_run_reads_its_steps_per_simulated_second_not_one_frames_count(app):
+    app.enqueue("hoop", {"op": "set", "method": "dop853"})
+    frames(app, 60)
+    ex = app.exhibits["hoop"]
+    rate = ex.sample.steps / ex.t
+    assert rate > 0 and f"{rate:.3g} steps per simulated second" in ex.readout()

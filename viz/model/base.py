@@ -598,7 +598,9 @@ class ExhibitModel:
         shows there."""
         line = f"`{sim.method.name}` ({sim.step_label()})"
         if sim is self.sim and sim.method.adaptive:
-            line += f", {self.steps_last_advance} steps in the last frame"
+            # averaged over the run: a frame often ends inside one long step (0 steps then)
+            rate = self.sample.steps / self.t if self.t > 0 else 0.0
+            line += f", {rate:.3g} steps per simulated second"
             if sim.last_step is not None:
                 line += f", h = {fmt(sim.last_step, 2)} s"
         return line

@@ -158,12 +158,24 @@ class CyclotronModel(ExhibitModel):
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
         out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
+        # sampled more than half a turn apart, the turn between two samples is ambiguous (the
+        # estimate would be an alias): say so instead of showing it
+        turn = cy.gyrofrequency(self.params) * (float(np.max(np.diff(t))) if len(t) > 1 else 0.0)
+        aliased = measure.Estimate(
+            None,
+            f"at this frame rate: the velocity turns {turn:.3g} rad between samples, more than "
+            "half a turn",
+        )
+        if turn > math.pi:
+            out["gyrofrequency"] = aliased
         circle = measure.fit_circle(x[:, 0])
         out["radius"] = measure.Estimate(circle.value[1]) if circle else circle
         out["beam_gyrofrequencies"] = None
         if self.beam_motion is not None:
             tb, vb = self.beam_motion.arrays()
-            out["beam_gyrofrequencies"] = measure.gyrofrequency(tb, vb)
+            out["beam_gyrofrequencies"] = (
+                aliased if turn > math.pi else measure.gyrofrequency(tb, vb)
+            )
         return out
 
     # ------------------------------------------------------------------ commands
