@@ -781,3 +781,20 @@ def test_an_adaptive_run_reads_its_steps_per_simulated_second_not_one_frames_cou
     ex = app.exhibits["hoop"]
     rate = ex.sample.steps / ex.t
     assert rate > 0 and f"{rate:.3g} steps per simulated second" in ex.readout()
+
+
+def test_a_kick_leaves_a_ghost_of_the_orbit_before_it(app):
+    frames(app, 10)
+    ex = app.exhibits["cyclotron"]
+    assert not ex.ghost_ring.visible  # no kick yet
+    centre, radius = ex.theory_centre.copy(), ex.theory_radius
+    enter(app, "cyclotron.kick", "0.5")
+    app.enqueue("cyclotron", {"op": "kick"})
+    frames(app, 2)
+    assert ex.ghost_ring.visible and ex.theory_radius > radius  # a new circle, the old one kept
+    np.testing.assert_allclose(ex.ghost_ring.position[:2], centre[:2], atol=1e-6)
+    ghost_r = np.hypot(*ex.ghost_ring.points[:, 0, :2].T.astype(float))
+    np.testing.assert_allclose(ghost_r, radius, rtol=1e-5)
+    app.enqueue("cyclotron", "reset")
+    frames(app, 1)
+    assert not ex.ghost_ring.visible

@@ -129,6 +129,24 @@ def test_readme_screenshot_with_environment_lighting(viewer, tmp_path):
     assert screenshot.stat().st_size > 20_000
 
 
+def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
+    """The hoop presented alone (panel collapsed, key figures large), with the lighting of the
+    screenshot before; saved as docs/img/viewer-present.png by ``make screenshots``."""
+    app, page, _ = viewer
+    app.enqueue("app", {"op": "present", "value": "Hoop"})
+    try:
+        wait_until(lambda: app.presenting == "hoop", 20, "presentation mode")
+        page.get_by_role("button", name="Pause").wait_for(state="hidden", timeout=scaled(20) * 1000)
+        frames_later(app, 120)  # the camera has moved and the figures are measured
+        wait_until(lambda: "ω1 =" in app.figures["hoop"].text, 20, "the key figures")
+        screenshot = browser.picture_path("viewer-present.png", tmp_path)
+        page.screenshot(path=str(screenshot), timeout=scaled(30) * 1000)
+        assert screenshot.stat().st_size > 20_000
+    finally:
+        app.enqueue("app", {"op": "present", "value": "Off"})
+        page.get_by_role("button", name="Pause").wait_for(timeout=scaled(20) * 1000)
+
+
 def _chart_lines(page) -> tuple[int, int]:
     """Red and blue pixels (the energy-error and error lines) in the visible tab's chart. The
     chart is drawn anew when its time axis moves on (every quarter window): a locator that

@@ -109,6 +109,16 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             thickness=2.0,
             thickness_units="screen",
         )
+        # the orbit before the last kick, faint: the kick's shift of the circle stays in view
+        self.ghost_ring = s.add_line_segments(
+            f"{r}/orbit_before_kick",
+            geo.circle_segments(1.0),
+            colors=np.array(geo.GHOST, np.uint8),
+            thickness=1.5,
+            thickness_units="screen",
+            visible=False,
+        )
+        self._drawn_circle: tuple | None = None  # (centre x, y, radius, height) last drawn
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
@@ -128,6 +138,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     def _started(self) -> None:
         p, cmp_ = self.params, self.compare
+        self.ghost_ring.visible = False  # a new start has no orbit before a kick
+        self._drawn_circle = None
         self.trail.clear()
         self.compare_trail.clear()
         self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
@@ -138,6 +150,11 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     def _segment_started(self) -> None:
         self.trail.lift()
         self.compare_trail.lift()
+        if getattr(self, "_drawn_circle", None) is not None:  # a kick: keep the old orbit
+            x, y, radius, z = self._drawn_circle
+            self.ghost_ring.points = geo.circle_segments(radius)
+            self.ghost_ring.position = (x, y, z)
+            self.ghost_ring.visible = True
 
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
@@ -201,6 +218,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.ring.points = geo.circle_segments(radius)
             self._ring_radius = radius
         self.ring.position = (centre[0], centre[1], pos[2])
+        self._drawn_circle = (float(centre[0]), float(centre[1]), float(radius), float(pos[2]))
         if self.beam is not None and self.beam_node is not None:
             shown = self._display(self.beam.state[:, :3])
             self.beam_node.batched_positions = shown
