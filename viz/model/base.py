@@ -36,6 +36,7 @@ import numpy as np
 import dynamics
 from dynamics import params as _v
 
+from .history import LongHistory
 from .plot import Curve, Samples, Variable, common_variables
 
 # |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
@@ -148,10 +149,6 @@ class Ring:
         return self._buf[end - self._n : end].copy()
 
 
-LONG_SECONDS = 600.0  # s of simulated time every chart window can draw on (the longest window)
-LONG_SPACING = 0.05  # s between the long history's points at most (20 a second at 1x)
-
-
 class History:
     """Chart points: ``t`` and named series, the last ``maxlen`` of them (:class:`Ring`)."""
 
@@ -236,10 +233,7 @@ class ExhibitModel:
         self.history = History(self.chart_series, maxlen=history_len)
         self.trace = Ring((1,), history_len)  # sized for the run's state in _reset_common
         self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
-        # the last LONG_SECONDS of chart points, LONG_SPACING apart at most, whatever window
-        # the chart shows: a change of window picks its points from here (none is lost)
-        self.long_history = History(self.chart_series, maxlen=round(LONG_SECONDS / LONG_SPACING))
-        self._long_t = -math.inf
+        self.long_history = LongHistory(History, self.chart_series)  # what every window draws on
         self.chart_window: float | None = None  # s shown by chart_data (None: the last points)
         self._chart_t = 0.0  # time of the newest chart point
         self.sim: dynamics.Simulation | None = None
@@ -367,8 +361,8 @@ class ExhibitModel:
 
     def set_chart_window(self, seconds: float) -> None:
         """Spread the chart's points evenly over the last ``seconds`` of simulated time (the
-        number of points stays the same), taken from the long history (up to
-        ``LONG_SECONDS``): the chart keeps what it showed; the plot's trace starts afresh."""
+        number of points stays the same), taken from the long history (ten minutes,
+        :mod:`viz.model.history`): the chart keeps what it showed; the trace starts afresh."""
         self.chart_spacing = float(seconds) / self.history.maxlen
         self.chart_window = float(seconds)
         self.history.clear()
@@ -376,9 +370,7 @@ class ExhibitModel:
         self.revision += 1
 
     def _record(self) -> None:
-        if self.t - self._long_t >= LONG_SPACING or self.paused or not len(self.long_history):
-            self._long_t = self.t
-            self.long_history.add(self.t, **self._chart_values())
+        self.long_history.add(self.t, self._chart_values(), force=self.paused)
         self._record_window()
 
     def _chart_values(self) -> dict[str, float]:
@@ -405,13 +397,7 @@ class ExhibitModel:
         much of the long history."""
         if self.chart_window is None or not len(self.long_history):
             return self.history.arrays()
-        arrays = self.long_history.arrays()
-        t = arrays[0]
-        first = int(np.searchsorted(t, t[-1] - self.chart_window))
-        n = len(t) - first
-        stride = max(1, math.ceil(n / self.history.maxlen))
-        keep = np.arange(len(t) - 1, first - 1, -stride)[::-1]  # the newest point always
-        return tuple(a[keep] for a in arrays)
+        return self.long_history.window(self.chart_window, self.history.maxlen)
 
     def stability_text(self) -> str:
         """Where the running method's step stops being stable (markdown, for the step control):
@@ -532,7 +518,6 @@ class ExhibitModel:
         self._compare_sample = None
         self.history.clear()
         self.long_history.clear()
-        self._long_t = -math.inf
         d = self.sim.state.shape[1]
         if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
             self.trace = Ring((d + 4,), self.history.maxlen)
