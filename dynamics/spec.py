@@ -46,6 +46,10 @@ class Setting:
     #: ``(setting, value)``: given, this setting only means something when that other start
     #: setting has that value (the disk's ``extra_spin`` needs ``motion = "released"``).
     needs: tuple[str, Any] | None = None
+    #: ``(lo, hi)``: the values a live exhibit of the system stays meaningful at (the viewer's
+    #: panel refuses others: with a mass of 1e300 nothing moves, with a radius of 1e6 the
+    #: exhibit leaves the screen); the API and the command line take whatever ``rule`` allows.
+    span: tuple[float, float] | None = None
 
     @property
     def flag(self) -> str:
@@ -59,15 +63,23 @@ class Setting:
         return self.rule(self.name, value)
 
 
-def param(Params: type, name: str, label: str, unit: str, help: str = "") -> Setting:
+def param(
+    Params: type,
+    name: str,
+    label: str,
+    unit: str,
+    help: str = "",
+    span: tuple[float, float] | None = None,
+) -> Setting:
     """The :class:`Setting` of the physical parameter ``name`` of the dataclass ``Params``: its
-    default and its check are the dataclass's own (one default, one rule)."""
+    default and its check are the dataclass's own (one default, one rule); ``span`` is the
+    range a live exhibit takes (:attr:`Setting.span`)."""
     default = next(f.default for f in fields(Params) if f.name == name)
 
     def rule(n: str, value: Any) -> Any:
         return getattr(Params(**{n: value}), n)
 
-    return Setting(name, label, unit, default, rule, help)
+    return Setting(name, label, unit, default, rule, help, span=span)
 
 
 @dataclass(frozen=True)

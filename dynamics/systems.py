@@ -427,16 +427,33 @@ def _build_disk(p: disk.DiskParams, start: dict) -> tuple[DrivenDisk | ReleasedD
     return system, system.default_state()
 
 
+# What a live exhibit takes (Setting.span): masses within six decades of 1 kg keep every motion
+# moving on screen; radii up to 2 m keep each exhibit clear of its neighbours (4.4 m apart).
+MASSES = (1e-3, 1e3)
+RADII = (0.1, 2.0)
+
 CYCLOTRON = SystemSpec(
     name="cyclotron",
     title="Charge in a uniform magnetic field",
     Params=cyclotron.CyclotronParams,
     params=(
         param(
-            cyclotron.CyclotronParams, "charge", "Charge q", "C", "charge q [C] (signed, nonzero)"
+            cyclotron.CyclotronParams,
+            "charge",
+            "Charge q",
+            "C",
+            "charge q [C] (signed, nonzero)",
+            span=(-1e3, 1e3),
         ),
-        param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]"),
-        param(cyclotron.CyclotronParams, "field", "Field B", "T", "field B [T] along +z (nonzero)"),
+        param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]", span=MASSES),
+        param(
+            cyclotron.CyclotronParams,
+            "field",
+            "Field B",
+            "T",
+            "field B [T] along +z (nonzero)",
+            span=(-1e3, 1e3),
+        ),
     ),
     start=(
         Setting(
@@ -470,10 +487,12 @@ HOOP = SystemSpec(
     title="Bead on a hanging hoop",
     Params=hoop.HoopParams,
     params=(
-        param(hoop.HoopParams, "hoop_mass", "Hoop mass M", "kg", "hoop mass M [kg]"),
-        param(hoop.HoopParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]"),
-        param(hoop.HoopParams, "radius", "Radius a", "m", "hoop radius a [m]"),
-        param(hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]"),
+        param(hoop.HoopParams, "hoop_mass", "Hoop mass M", "kg", "hoop mass M [kg]", span=MASSES),
+        param(hoop.HoopParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
+        param(hoop.HoopParams, "radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
+        param(
+            hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]", span=(1e-2, 1e3)
+        ),
     ),
     start=(
         Setting(
@@ -497,10 +516,17 @@ DISK = SystemSpec(
     title="Spinning disk with a bead",
     Params=disk.DiskParams,
     params=(
-        param(disk.DiskParams, "disk_mass", "Disk mass M", "kg", "disk mass M [kg]"),
-        param(disk.DiskParams, "radius", "Radius R", "m", "disk radius R [m]"),
-        param(disk.DiskParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]"),
-        param(disk.DiskParams, "omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]"),
+        param(disk.DiskParams, "disk_mass", "Disk mass M", "kg", "disk mass M [kg]", span=MASSES),
+        param(disk.DiskParams, "radius", "Radius R", "m", "disk radius R [m]", span=RADII),
+        param(disk.DiskParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
+        param(
+            disk.DiskParams,
+            "omega",
+            "Spin ω",
+            "rad/s",
+            "spin rate about the axle [rad/s]",
+            span=(-50.0, 50.0),
+        ),
     ),
     start=(
         Setting(

@@ -73,7 +73,8 @@ def project(point, position, look_at, width: int, height: int) -> tuple[float, f
 
 
 def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Box]:
-    """Screen boxes of every visible, non-empty label for ``camera`` = (position, look_at)."""
+    """Screen boxes of every visible, non-empty label for ``camera`` = (position, look_at)
+    (several lines of text: as wide as the longest, one line height each)."""
     handles = server.scene._handle_from_node_name
     out = []
     for name, h in handles.items():
@@ -85,7 +86,10 @@ def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
         xy = project(p, *camera, width, height)
         if xy is None:
             continue
-        w, hgt = CHAR_PX * len(h.text) + 6, LINE_PX
+        # viser keeps a screen label's size in proportion to the page's height (800 px: 1x)
+        size = float(getattr(h, "font_screen_scale", 1.0)) * height / 800
+        lines = h.text.split("\n")
+        w, hgt = size * (CHAR_PX * max(len(t) for t in lines) + 6), size * LINE_PX * len(lines)
         x, y = xy
         vert, horiz = h.anchor.split("-")
         x0 = {"left": x, "center": x - w / 2, "right": x - w}[horiz]

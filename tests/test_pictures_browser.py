@@ -125,14 +125,22 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
     app.enqueue("app", {"op": "present", "value": "Disk"})
     try:
         wait_until(lambda: app.presenting is not None, 20, "presentation mode")
+        # the still shows the construction, not presentation mode's key figures beside it
+        app.enqueue("call", lambda a: setattr(a.figures["disk"], "visible", False))
         frames_later(app, 60)  # the camera's move to the disk is a second of frames
         img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
-        drawn = _drawn(img)  # the construction fills part of the page
-        rows, cols = np.nonzero(drawn[:, : img.shape[1] - 360])  # left of the panel's corner
-        cy, cx = int(np.median(rows)), int(np.median(cols))
-        half = 260  # the README's still: the body and its construction, not the floor
-        _save(
-            img[max(0, cy - half) : cy + half, max(0, cx - half) : cx + half], "poinsot", tmp_path
+        # the README's still: the disk's box as the browser's camera sees it (the body, its
+        # construction and the construction's names under it), not the floor
+        from viz.scene import framing
+
+        client = next(iter(app.server.get_clients().values()))
+        cam = client.camera
+        h, w = img.shape[:2]
+        _, x0, x1, y0, y1 = framing.share(
+            *app.exhibits["disk"].bounds, cam.position, cam.look_at, w, h, cam.fov
         )
+        x0, y0 = max(0, int(x0) - 20), max(0, int(y0) - 20)
+        _save(img[y0 : int(y1) + 20, x0 : int(x1) + 20], "poinsot", tmp_path)
+        assert "Poinsot" in app.exhibits["disk"].poinsot.names[0].text
     finally:
         app.enqueue("app", {"op": "present", "value": "Off"})

@@ -81,6 +81,41 @@ def test_the_charge_sits_in_its_well_at_the_level_of_its_transverse_energy():
     assert np.nanmin(well.y) == pytest.approx(bottom.y[0], rel=1e-9)  # r0 at the bottom
 
 
+@pytest.mark.parametrize("where", ["panel", "recording"])
+def test_the_well_is_drawn_whole_on_the_default_orbit_where_r_never_moves(where):
+    """The default start circles the axis: r is constant, the path one point, the charge at the
+    bottom of its well. The axes still show the well from near r = 0 to beyond the turning
+    point, over at least half of E_perp, with the walls rising through the level: the live
+    panel's image and a recording's picture (both through viz.model.plot.draw_xy)."""
+    from matplotlib.figure import Figure
+
+    from viz.model.plot import draw_xy
+
+    cfg = CyclotronConfig()
+    p = cfg.physics()
+    smp = samples_of(CyclotronExhibit, cfg, 6.0, n=120)
+    v = CyclotronExhibit.plot_variables(cfg)
+    r = v["r"].values(smp)
+    assert np.ptp(r) < 1e-9 * r.max()  # r does not move
+    e_perp = 0.5 * p.mass * (smp.states[-1, 3] ** 2 + smp.states[-1, 4] ** 2)
+    curves = CyclotronExhibit.plot_curves(cfg, "r", "V_eff", smp)
+    if where == "panel":
+        image = PlotImage()
+        image.render(variables=v, x="r", y="V_eff", samples=smp, curves=curves)
+        ax = image.ax
+    else:
+        ax = Figure().add_subplot()
+        draw_xy(ax, v, "r", "V_eff", smp, curves)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert y1 - y0 >= 0.5 * e_perp, (y0, y1, e_perp)
+    assert x0 <= 0.1 * r[-1] and x1 >= 1.2 * r[-1]  # near 0 to beyond the turning point
+    well = curves[0]
+    shown = (well.x >= x0) & (well.x <= x1) & (well.y >= y0) & (well.y <= y1)
+    assert shown.sum() > 0.5 * len(well.x)  # most of the well is on the axes
+    inner, outer = well.x < 0.7 * r[-1], well.x > 1.15 * r[-1]
+    assert well.y[inner].max() > e_perp and well.y[outer].max() > e_perp  # both walls rise
+
+
 def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendulum():
     """Mode 1 is the pendulum theta'' = -w1^2 sin theta: the drawn separatrix has the energy of
     the upright pendulum, a swing of 3 rad stays inside it on its own exact orbit, and a start

@@ -28,6 +28,7 @@ The whole app, headless and without its loop thread::
     app = MechvizApp(port=0, start_loop=False)   # or MechvizApp(server=my_server, ...)
     app.step_frame()                 # apply queued commands, advance, draw (one frame)
     app.enqueue("hoop", {"op": "set", "method": "rk4"})   # as the GUI does
+    app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
@@ -41,7 +42,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import math
 import queue
 import threading
 import time
@@ -53,21 +53,14 @@ import numpy as np
 
 from .frames import FrameLog
 from .live_record import add_record_toggle
-from .model.base import LOG_FLOOR
-from .scene import EXHIBITS, CyclotronExhibit, Exhibit
-from .scene.panel import Panel
+from .scene import EXHIBITS, Exhibit
+from .scene.fields import NumberField, Typing
+from .scene.panel import Panel, parse_number
+from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
 SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
 ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
-VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
-PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
-PRESENT_DISTANCE = 0.7  # presentation mode's camera distance, times the preset's
-PANEL_SHIFT = 0.3  # of the viewing distance: a preset's sideways slide clear of the GUI panel
-OVERVIEW = (
-    (1.5, -8.4, 3.9),
-    (1.5, 0.0, 1.0),
-)  # the three exhibits left of the GUI panel at 1280x800
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -83,7 +76,7 @@ GRIDS = {
 
 
 # --------------------------------------------------------------------------- the app
-class MechvizApp:
+class MechvizApp(Views):
     """Server, exhibits, GUI and the simulation loop."""
 
     def __init__(
@@ -124,10 +117,13 @@ class MechvizApp:
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
+        self.figures: dict[str, Any] = {}  # key -> the label of its key figures
         self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
+        self.typing = Typing()  # number fields holding typed text not yet read
+        self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
 
         scene = server.scene
         scene.set_up_direction("+z")
@@ -162,15 +158,18 @@ class MechvizApp:
             key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
             for key, cls in EXHIBITS.items()
         }
+        for ex in self.exhibits.values():
+            ex.chart_window = self.chart_window  # the charts draw on the long history
         self.panels: dict[str, Panel] = {}
-        server.initial_camera.position = OVERVIEW[0]
-        server.initial_camera.look_at = OVERVIEW[1]
+        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
         with server.atomic():
             self._draw()
+        server.on_client_connect(self._frame_new_client)
         self.gui = None
         self.recorder = None  # the Record toggle's viz.live_record.LiveRecorder (with the GUI)
         if gui:
             self._build_gui()
+            self._build_figures()
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
         if start_loop:
@@ -243,15 +242,13 @@ class MechvizApp:
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
-            v = cmd["value"]
             lo, hi = SPEEDS
-            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
-                if self.gui is not None:
-                    self._syncing = True
-                    self.w["speed"].value = self.speed  # the box shows the speed in force
-                    self._syncing = False
-                raise ValueError(f"Speed must lie between {lo:g}x and {hi:g}x, got {v!r}")
-            self.speed = float(v)
+            try:
+                v = parse_number("Speed [×]", cmd["value"], lo, hi)
+            finally:
+                self._show_speed()  # the box shows the speed in force (springs back if refused)
+            self.speed = v
+            self._show_speed()
             self._rtf_window.clear()
         elif op == "reset":
             for ex in self.exhibits.values():
@@ -286,6 +283,14 @@ class MechvizApp:
         if self.gui is not None:
             self._sync_play_button()
 
+    def _show_speed(self) -> None:
+        if self.gui is not None:
+            self._syncing = True
+            try:
+                self.speed_field.show(self.speed)
+            finally:
+                self._syncing = False
+
     def _apply_theme(self, theme: str) -> None:
         """Page and floor for ``theme``; the scene's palette reads on both (viz.geometry)."""
         self.theme = theme
@@ -294,6 +299,7 @@ class MechvizApp:
             self.w["theme"].value = theme
             self._syncing = False
         self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        self._show_figures()
         self._configure_page()
 
     def _configure_page(self) -> None:
@@ -315,54 +321,6 @@ class MechvizApp:
         for client in self.server.get_clients().values():
             with contextlib.suppress(Exception):
                 client.add_notification(title, body, auto_close_seconds=8.0, color=color)
-
-    def camera_preset(self, view: str):
-        """``(position, look_at)`` of a preset. An exhibit's own view is slid sideways by
-        ``PANEL_SHIFT`` of its distance, so the exhibit sits in the middle of the part of the
-        page left of the GUI panel (at 1280x800 the panel covers the right quarter); *Top*
-        looks straight down on the cyclotron's orbit."""
-        if view == "All":
-            return OVERVIEW
-        if view == "Top":  # looking down (+y up on the screen, +x right), slid clear of the panel
-            o = self.exhibits[CyclotronExhibit.key].origin + (PANEL_SHIFT * 6.5, 0.0, 0.0)
-            return tuple(o + (0.0, -0.01, 6.5)), tuple(o)
-        position, target = (np.asarray(v, float) for v in self.exhibits[VIEWS[view]].camera)
-        forward = target - position
-        right = np.cross(forward, (0.0, 0.0, 1.0))  # the camera's right (+z up), in the floor
-        right *= PANEL_SHIFT * np.linalg.norm(forward) / max(np.linalg.norm(right), 1e-12)
-        return tuple(position + right), tuple(target + right)
-
-    def _present(self, view, client=None) -> None:
-        """Presentation mode: ``view`` (an exhibit's preset name) alone on the page, framed in
-        the middle of it, labels ``PRESENT_TEXT`` times larger and the panel minimized (its
-        button opens it again); ``"Off"`` brings the three and the panel back."""
-        if view not in ("Off", *VIEWS):
-            raise ValueError(f"Present must be Off or one of {', '.join(VIEWS)}, got {view!r}")
-        self.presenting = None if view == "Off" else VIEWS[view]
-        scale = 1.0 if self.presenting is None else PRESENT_TEXT
-        for key, ex in self.exhibits.items():
-            ex.scene.get_handle_by_name(ex.root).visible = self.presenting in (None, key)
-            for h in ex.labels():
-                h.font_screen_scale = scale
-        self._configure_page()
-        if self.presenting is None:
-            self._move_camera(client, "All")
-        else:
-            # the exhibit in the page's middle, the camera a third closer than its preset
-            position, target = (np.asarray(v, float) for v in self.exhibits[self.presenting].camera)
-            position = tuple(target + PRESENT_DISTANCE * (position - target))
-            target = tuple(target)
-            for c in [client] if client is not None else list(self.server.get_clients().values()):
-                with c.atomic():
-                    c.camera.position, c.camera.look_at = position, target
-
-    def _move_camera(self, client, view: str) -> None:
-        position, target = self.camera_preset(view)
-        clients = [client] if client is not None else list(self.server.get_clients().values())
-        for c in clients:
-            with c.atomic():
-                c.camera.position = position
-                c.camera.look_at = target
 
     # ------------------------------------------------------------------ the frame
     def _advance(self, sim_seconds: float, *, measure_all: bool = False) -> None:
@@ -452,14 +410,20 @@ class MechvizApp:
                 "Step", icon=viser.Icon.PLAYER_TRACK_NEXT, hint="Advance one frame"
             )
             w["reset"] = gui.add_button("Reset all", icon=viser.Icon.REFRESH)
-            w["speed"] = gui.add_slider(
-                "Speed",
-                min=SPEEDS[0],
-                max=SPEEDS[1],
-                step=0.1,
-                initial_value=self.speed,
-                hint="Simulated seconds per real second",
+            self.speed_field = NumberField(
+                gui,
+                "Speed [×]",
+                self.speed,
+                read=lambda text: self.enqueue("app", {"op": "speed", "value": text}),
+                current=lambda: self.speed,
+                on=self._on,
+                typing=self.typing,
+                hint="Simulated seconds per real second (type a number and press Enter)",
+                track=(SPEEDS[0], SPEEDS[1], 0.1),
+                track_apply=lambda x: self.enqueue("app", {"op": "speed", "value": x}),
             )
+            w["speed"], w["speed_track"] = self.speed_field.box, self.speed_field.track
+            self.number_fields["speed"] = self.speed_field
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["present"] = gui.add_dropdown(
@@ -493,10 +457,9 @@ class MechvizApp:
             w["chart_window"],
             lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),
         )
-        w["play"].on_click(lambda _: self.enqueue("app", {"op": "toggle"}))
-        w["step"].on_click(lambda _: self.enqueue("app", {"op": "step"}))
-        w["reset"].on_click(lambda _: self.enqueue("app", {"op": "reset"}))
-        self._on(w["speed"], lambda v: self.enqueue("app", {"op": "speed", "value": v}))
+        w["play"].on_click(lambda _: self._click({"op": "toggle"}))
+        w["step"].on_click(lambda _: self._click({"op": "step"}))
+        w["reset"].on_click(lambda _: self._click({"op": "reset"}))
 
         @w["view"].on_click
         def _(event) -> None:
@@ -509,12 +472,21 @@ class MechvizApp:
                 ex.build_panel(panel)
 
     def _on(self, widget, fn: Callable[[Any], None]) -> None:
-        """on_update that ignores the loop's own widget syncs and passes the new value."""
+        """on_update that ignores the loop's own widget syncs and passes the new value. A
+        person touching a control has left any number box typed into: that text is read first
+        (the number fields' own boxes are not such a move)."""
 
         @widget.on_update
         def _(_event) -> None:
             if not self._syncing:
+                if type(widget).__name__ != "GuiTextHandle":
+                    self.typing.commit()
                 fn(widget.value)
+
+    def _click(self, command) -> None:
+        """A button of the app: pending typed numbers are read first, then ``command``."""
+        self.typing.commit()
+        self.enqueue("app", command)
 
     def _sync_play_button(self) -> None:
         b = self.w["play"]
@@ -560,21 +532,23 @@ class MechvizApp:
                 continue
             ex = self.exhibits[key]
             shown = self._shown.get(key)
-            if not force and shown == (ex.revision, ex.history.version):
+            if not force and shown == (ex.revision, ex.long_history.version):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
+            if key == self.presenting:
+                self._show_figures()
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or shown is None or shown[1] != ex.history.version:
+            if force or shown is None or shown[1] != ex.long_history.version:
                 chart = self.w[f"{key}.chart"]
-                data = ex.chart_data()
+                data = ex.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
-                    chart.data = data[: len(chart.series)]
+                    chart.data = data
                     self.panels[key].keep_time_axis(
-                        "chart", float(data[0][-1]), self.chart_window, (LOG_FLOOR, 2.0)
+                        "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._shown[key] = (ex.revision, ex.history.version)
+            self._shown[key] = (ex.revision, ex.long_history.version)
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -36,6 +36,7 @@ import numpy as np
 import dynamics
 from dynamics import params as _v
 
+from .history import LongHistory
 from .plot import Curve, Samples, Variable, common_variables
 
 # |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
@@ -242,6 +243,8 @@ class ExhibitModel:
         self.history = History(self.chart_series, maxlen=history_len)
         self.trace = Ring((1,), history_len)  # sized for the run's state in _reset_common
         self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
+        self.long_history = LongHistory(History, self.chart_series)  # what every window draws on
+        self.chart_window: float | None = None  # s shown by chart_data (None: the last points)
         self._chart_t = 0.0  # time of the newest chart point
         self.sim: dynamics.Simulation | None = None
         self.compare: dynamics.Simulation | None = None
@@ -368,29 +371,43 @@ class ExhibitModel:
 
     def set_chart_window(self, seconds: float) -> None:
         """Spread the chart's points evenly over the last ``seconds`` of simulated time (the
-        number of points stays the same); the chart starts afresh."""
+        number of points stays the same), taken from the long history (ten minutes,
+        :mod:`viz.model.history`): the chart keeps what it showed; the trace starts afresh."""
         self.chart_spacing = float(seconds) / self.history.maxlen
+        self.chart_window = float(seconds)
         self.history.clear()
         self.trace.clear()
         self.revision += 1
 
     def _record(self) -> None:
-        if len(self.history) and self.t - self._chart_t < self.chart_spacing and not self.paused:
-            return  # not yet time for the next point of a long window
-        self._chart_t = self.t
+        self.long_history.add(self.t, self._chart_values(), force=self.paused)
+        self._record_window()
+
+    def _chart_values(self) -> dict[str, float]:
         smp = self.sample
         values = {"energy": log10_abs(smp.energy_error), "error": log10_abs(smp.error)}
         c = self.compare_sample
         if c is not None:
             values["energy_compare"] = log10_abs(c.energy_error)
             values["error_compare"] = log10_abs(c.error)
-        self.history.add(self.t, **values)
+        return values
+
+    def _record_window(self) -> None:
+        if len(self.history) and self.t - self._chart_t < self.chart_spacing and not self.paused:
+            return  # not yet time for the next point of a long window
+        self._chart_t = self.t
+        smp = self.sample
+        self.history.add(self.t, **self._chart_values())
         err = smp.error[0] if smp.error is not None else math.nan
         self.trace.add([self.t, *smp.state[0], smp.energy[0], smp.energy_error[0], err])
 
     def chart_data(self) -> tuple[np.ndarray, ...]:
-        """``(t, log10|dE/E0|, log10 error, ...)`` of the last samples (see ``chart_series``)."""
-        return self.history.arrays()
+        """``(t, log10|dE/E0|, log10 error, ...)`` of the last samples (see ``chart_series``);
+        with a ``chart_window`` set, at most ``history.maxlen`` points evenly spread over that
+        much of the long history."""
+        if self.chart_window is None or not len(self.long_history):
+            return self.history.arrays()
+        return self.long_history.window(self.chart_window, self.history.maxlen)
 
     def stability_text(self) -> str:
         """Where the running method's step stops being stable (markdown, for the step control):
@@ -510,6 +527,7 @@ class ExhibitModel:
         self._sample = None
         self._compare_sample = None
         self.history.clear()
+        self.long_history.clear()
         d = self.sim.state.shape[1]
         if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
             self.trace = Ring((d + 4,), self.history.maxlen)
@@ -585,7 +603,9 @@ class ExhibitModel:
         shows there."""
         line = f"`{sim.method.name}` ({sim.step_label()})"
         if sim is self.sim and sim.method.adaptive:
-            line += f", {self.steps_last_advance} steps in the last frame"
+            # averaged over the run: a frame often ends inside one long step (0 steps then)
+            rate = self.sample.steps / self.t if self.t > 0 else 0.0
+            line += f", {rate:.3g} steps per simulated second"
             if sim.last_step is not None:
                 line += f", h = {fmt(sim.last_step, 2)} s"
         return line

@@ -22,7 +22,7 @@ from dynamics.systems import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
 from .figures import figure, keep
-from .plot import Curve, Variable, common_variables
+from .plot import Curve, Variable, common_variables, well_axes
 from .traces import Traces
 
 
@@ -160,12 +160,24 @@ class CyclotronModel(ExhibitModel):
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
         out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
+        # sampled more than half a turn apart, the turn between two samples is ambiguous (the
+        # estimate would be an alias): say so instead of showing it
+        turn = cy.gyrofrequency(self.params) * (float(np.max(np.diff(t))) if len(t) > 1 else 0.0)
+        aliased = measure.Estimate(
+            None,
+            f"at this frame rate: the velocity turns {turn:.3g} rad between samples, more than "
+            "half a turn",
+        )
+        if turn > math.pi:
+            out["gyrofrequency"] = aliased
         circle = measure.fit_circle(x[:, 0])
         out["radius"] = measure.Estimate(circle.value[1]) if circle else circle
         out["beam_gyrofrequencies"] = None
         if self.beam_motion is not None:
             tb, vb = self.beam_motion.arrays()
-            out["beam_gyrofrequencies"] = measure.gyrofrequency(tb, vb)
+            out["beam_gyrofrequencies"] = (
+                aliased if turn > math.pi else measure.gyrofrequency(tb, vb)
+            )
         return out
 
     # ------------------------------------------------------------------ commands
@@ -231,7 +243,7 @@ class CyclotronModel(ExhibitModel):
             w = well(p, st)
             lo, hi = w["x_range"]
             return [
-                Curve(w["x"], w["V"], "V_eff(r)"),
+                Curve(w["x"], w["V"], "V_eff(r)", axes=(w["x_range"], w["y_range"])),
                 Curve(np.array([lo, hi]), np.full(2, w["level"][0]), "level E⊥", dashed=True),
                 Curve(
                     np.array([w["r0"]]),
@@ -368,9 +380,10 @@ def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
     dist, rho = math.hypot(centre[0], centre[1]), cy.larmor_radius(p, st)
     r_min, r_max = abs(dist - rho), dist + rho
     r0 = cy.effective_potential_minimum(p, p_phi) if p_phi != 0.0 else 0.0
-    lo = max(0.5 * r_min, 0.02 * r_max)
-    hi = 1.25 * r_max + 0.05
-    grid = np.linspace(lo, hi, 160)
+    x_range, y_range = well_axes(r_max, e_perp)
+    hi = x_range[1]
+    lo = 0.02 * hi  # the wall near the axis rises far beyond the axes: cut off there
+    grid = np.linspace(lo, hi, 240)
     x = np.unique(np.concatenate([grid, [r_now], [r0] if lo <= r0 <= hi else []]))
     with np.errstate(divide="ignore", invalid="ignore"):
         V = cy.effective_potential(p, x, p_phi)
@@ -382,8 +395,8 @@ def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
         "level": np.full_like(x, e_perp),
         "point": point,
         "bottom": bottom,
-        "x_range": (float(lo), float(hi)),
-        "y_range": (0.0, 2.5 * e_perp if e_perp > 0 else 1.0),
+        "x_range": x_range,
+        "y_range": y_range,
         "r": r_now,
         "r0": r0,
         "r_min": r_min,

@@ -67,6 +67,23 @@ class Curve:
     label: str
     dashed: bool = False
     kw: dict = field(default_factory=dict)
+    #: ``((x0, x1), (y0, y1))`` the axes must show whatever the motion does (a well, from
+    #: :func:`well_axes`); the curve's points outside them are cut off.
+    axes: tuple[tuple[float, float], tuple[float, float]] | None = None
+
+
+def well_axes(
+    r_max: float, level: float, floor: float = 0.0
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The axes that show a particle's radial well ``V(r)`` whole at the level ``E`` [J]: ``r``
+    from 0 to twice the outer turning point ``r_max`` [m], ``V`` from ``floor`` (the
+    least the well can be, 0 for the cyclotron's square) to twice the level. The walls cross
+    the level at the turning points, so they show whether ``r`` swings between them or stays
+    put at the bottom (a circle centred on the axis: then the path is one point and the
+    well's own shape is all there is to scale by)."""
+    r1 = 2.0 * r_max if r_max > 0 else 1.0
+    top = floor + 2.0 * (level - floor) if level > floor else floor + 1.0
+    return (0.0, r1), (floor, top)
 
 
 def common_variables(state_labels: dict[str, str]) -> dict[str, Variable]:
@@ -141,7 +158,8 @@ def _finite(variables, x: str, y: str, samples: Samples) -> tuple[np.ndarray, np
 def limits(xs: np.ndarray, ys: np.ndarray, curves: Sequence[Curve]):
     """``((x0, x1), (y0, y1))``: the path with a margin, widened to the curves' points within
     twice its span (so the separatrix shows around a small swing, but a well's walls at infinity
-    do not); ``None`` without a path."""
+    do not) and to the axes a curve asks for (:attr:`Curve.axes`: the whole well, also when the
+    path is a point); ``None`` without a path."""
     if len(xs) == 0:
         return None
     lo, hi = np.array([xs.min(), ys.min()]), np.array([xs.max(), ys.max()])
@@ -154,7 +172,12 @@ def limits(xs: np.ndarray, ys: np.ndarray, curves: Sequence[Curve]):
         if len(pts):
             lo, hi = np.minimum(lo, pts.min(axis=0)), np.maximum(hi, pts.max(axis=0))
     pad = 0.06 * np.maximum(hi - lo, span)
-    return (lo[0] - pad[0], hi[0] + pad[0]), (lo[1] - pad[1], hi[1] + pad[1])
+    lo, hi = lo - pad, hi + pad
+    for c in curves:  # the axes a curve must be seen in, around the path
+        if c.axes is not None:
+            (x0, x1), (y0, y1) = c.axes
+            lo, hi = np.minimum(lo, (x0, y0)), np.maximum(hi, (x1, y1))
+    return (lo[0], hi[0]), (lo[1], hi[1])
 
 
 def _holds(current, wanted) -> bool:

@@ -34,6 +34,13 @@ from ..model.base import (  # noqa: F401  (re-exported for the scenes)
 )
 
 
+def brief(x, digits: int = 4) -> str:
+    """A measured figure short enough to show large: its value, or "not resolved"."""
+    if hasattr(x, "value"):
+        return "not resolved" if x.value is None else fmt(x.value, digits)
+    return fmt(x, digits)
+
+
 class Exhibit(ExhibitModel):
     """A model drawn: subclasses add ``icon``, ``_build``, ``_started``, ``draw``, ``readout``,
     ``camera``, ``_extent`` and ``build_panel`` to a model class."""
@@ -83,6 +90,15 @@ class Exhibit(ExhibitModel):
 
     def _extent(self):  # pragma: no cover - abstract
         raise NotImplementedError
+
+    def key_figures(self) -> list[tuple[str, str]]:
+        """``(name, value)`` of the figures presentation mode shows large beside the exhibit:
+        the time and the relative energy error, and each exhibit's own measured figures."""
+        smp = self.sample
+        return [
+            ("t", f"{self.t:.1f} s"),
+            ("ΔE/E", f"{float(np.max(np.abs(smp.energy_error))):.1e}"),
+        ]
 
     def labels(self) -> list:
         """The exhibit's text labels in the scene (for presentation mode's larger text)."""

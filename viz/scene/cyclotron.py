@@ -20,7 +20,7 @@ from dynamics import cyclotron as cy
 
 from .. import geometry as geo
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 
 
 class BeamTrails:
@@ -75,8 +75,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         s.add_frame(r, show_axes=False, position=self.origin)
         self.label = s.add_label(
             f"{r}/label",
-            "Cyclotron: charge in a uniform field B",
-            position=(0.0, 0.0, H + 0.5),
+            "Cyclotron: charge in a field B",
+            # above the back edge: seen from the top it lies beyond the orbit, not across it
+            position=(0.0, 1.7, H + 0.5),
             anchor="bottom-center",
         )
         self.field_arrows = s.add_arrows(
@@ -87,7 +88,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             head_radius=0.045,
             head_length=0.12,
         )
-        self.field_label = s.add_label(f"{r}/field_label", "B", position=(1.6, 1.6, H + 0.1))
+        self.field_label = s.add_label(f"{r}/field_label", "field B", position=(-1.6, 1.6, H + 0.1))
         # one batched node: instance 0 the charge, 1 the comparison run (scale 0 while there
         # is none), 2 the guiding centre
         ball = geo.sphere_mesh(0.07)
@@ -108,6 +109,16 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             thickness=2.0,
             thickness_units="screen",
         )
+        # the orbit before the last kick, faint: the kick's shift of the circle stays in view
+        self.ghost_ring = s.add_line_segments(
+            f"{r}/orbit_before_kick",
+            geo.circle_segments(1.0),
+            colors=np.array(geo.GHOST, np.uint8),
+            thickness=1.5,
+            thickness_units="screen",
+            visible=False,
+        )
+        self._drawn_circle: tuple | None = None  # (centre x, y, radius, height) last drawn
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
@@ -127,6 +138,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     def _started(self) -> None:
         p, cmp_ = self.params, self.compare
+        self.ghost_ring.visible = False  # a new start has no orbit before a kick
+        self._drawn_circle = None
         self.trail.clear()
         self.compare_trail.clear()
         self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
@@ -137,6 +150,11 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     def _segment_started(self) -> None:
         self.trail.lift()
         self.compare_trail.lift()
+        if getattr(self, "_drawn_circle", None) is not None:  # a kick: keep the old orbit
+            x, y, radius, z = self._drawn_circle
+            self.ghost_ring.points = geo.circle_segments(radius)
+            self.ghost_ring.position = (x, y, z)
+            self.ghost_ring.visible = True
 
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
@@ -200,6 +218,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.ring.points = geo.circle_segments(radius)
             self._ring_radius = radius
         self.ring.position = (centre[0], centre[1], pos[2])
+        self._drawn_circle = (float(centre[0]), float(centre[1]), float(radius), float(pos[2]))
         if self.beam is not None and self.beam_node is not None:
             shown = self._display(self.beam.state[:, :3])
             self.beam_node.batched_positions = shown
@@ -215,6 +234,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         return (tuple(o + (0.0, -5.2, 3.6)), tuple(o + (0.0, 0.0, 0.8)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        m = self.measured()
+        w_th = cy.gyrofrequency(self.params)
+        return [
+            ("ω", f"{brief(m['gyrofrequency'])} rad/s (theory {fmt(w_th, 4)})"),
+            ("r", f"{brief(m['radius'])} m (theory {fmt(self.theory_radius, 4)})"),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp = self.params, self.sample
         w_th = cy.gyrofrequency(p)
@@ -262,8 +290,14 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         panel.param_inputs()
         panel.integrator_inputs(compare=True)
         with gui.add_folder("Kick and beam"):
-            strength = panel.slider(
-                "kick", "Kick dv [m/s]", -1.0, 1.0, 0.05, c.kick, lambda v: None
+            panel.slider(
+                "kick",
+                "Kick dv [m/s]",
+                -1.0,
+                1.0,
+                0.05,
+                c.kick,
+                lambda v: panel.send({"op": "set", "kick": float(v)}),
             )
             kick = gui.add_button(
                 "Kick", hint="Radial velocity kick: the predicted circle moves at once"
@@ -281,9 +315,17 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
                 200,
                 1,
                 c.beam_size,
-                lambda v: panel.send({"op": "set", "beam_size": int(v)}),
+                # a whole number goes as one; 2.5 is refused by the config, named
+                lambda v: panel.send(
+                    {"op": "set", "beam_size": int(v) if float(v).is_integer() else v}
+                ),
             )
-        kick.on_click(lambda _: panel.send({"op": "kick", "dv": float(strength.value)}))
+
+        def give_kick(_event) -> None:
+            panel.app.typing.commit()  # a kick typed and not yet entered is the one meant
+            panel.send({"op": "kick"})  # dv: the kick in force when the command is applied
+
+        kick.on_click(give_kick)
         panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
         panel.plot(
             "p_φ is conserved, so r moves in the well V_eff(r) = (p_φ − qBr²/2)²/2mr² at the level "

@@ -23,11 +23,14 @@ from dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
 LIFT = np.array([0.0, 0.0, 0.4])
+# The disk's opacity: driven, nearly solid; released, the Poinsot ellipsoid at the centre of
+# mass shows through it.
+DISK_OPACITY = {"driven": 0.85, "released": 0.3}
 
 
 class PoinsotPicture:
@@ -39,6 +42,16 @@ class PoinsotPicture:
     def __init__(self, scene, root: str) -> None:
         self.scene, self.root = scene, root
         self.frame = scene.add_frame(f"{root}/poinsot", show_axes=False, visible=False)
+        # the names, in one label fixed in space under the ellipsoid (text turning with the
+        # body, or riding on the moving contact point, would pile up on screen)
+        self.names = [
+            scene.add_label(
+                f"{root}/poinsot_label",
+                "Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode",
+                anchor="top-right",
+                visible=False,
+            ),
+        ]
         self.plane_frame = scene.add_frame(
             f"{root}/invariable_plane", show_axes=False, visible=False
         )
@@ -48,6 +61,7 @@ class PoinsotPicture:
             scene, f"{root}/invariable_plane/herpolhode", geo.MOMENTUM, cap=900
         )
         self.scale = 1.0
+        self.radius = 1.0
 
     def start(self, moments: np.ndarray, radius: float, shown: bool) -> None:
         semi = 1.0 / np.sqrt(moments)
@@ -74,6 +88,9 @@ class PoinsotPicture:
         self.polhode.clear()
         self.herpolhode.clear()
         self.frame.visible = self.plane_frame.visible = shown
+        self.radius = radius
+        for h in self.names:
+            h.visible = shown
 
     def draw(self, pc: dict, cm_world: np.ndarray) -> None:
         """``pc`` from :func:`dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
@@ -85,6 +102,8 @@ class PoinsotPicture:
         offset = n * pc["distance"] * self.scale
         self.plane_frame.wxyz = geo.quat_from_matrix(turn)
         self.plane_frame.position = cm_world + offset
+        # under the ellipsoid, reaching left (the hoop's labels stand to the right)
+        self.names[0].position = cm_world + (0.3 * self.radius, 0.0, -0.65 * self.radius)
         self.polhode.push(pc["contact_body"] * self.scale)
         self.polhode.draw()
         # the herpolhode in the plane's own coordinates (the plane is fixed while L is)
@@ -165,7 +184,11 @@ class DiskExhibit(DiskModel, Exhibit):
         disk = geo.disk_mesh(R, 0.04 * R)
         disk.apply_translation(dk.disk_centre(p))
         self.disk_node = s.add_mesh_simple(
-            f"{body}/disk", disk.vertices, disk.faces, color=geo.DISK, opacity=0.85
+            f"{body}/disk",
+            disk.vertices,
+            disk.faces,
+            color=geo.DISK,
+            opacity=DISK_OPACITY["driven"],
         )
         rim = geo.circle_segments(1.004 * R, 96)  # just outside the edge: seen from both sides
         rim[..., 1] += R  # centred on the disk centre (0, R, 0)
@@ -228,10 +251,17 @@ class DiskExhibit(DiskModel, Exhibit):
             head_radius=0.04 * R,
             head_length=0.1 * R,
         )
-        # Unlabelled in the scene: text tied to turning axes piles up on screen. The readout lists
-        # each axis by its colour with its moment (axes_text).
+        # Named by colour in one label fixed in space, in front of the disk at the floor: text
+        # tied to the turning axes would pile up on screen.
         self.axes_text = ", ".join(
             f"I{k + 1} {name} {moments[k] / mr2:.4g}" for k, name in enumerate(AXIS_NAMES)
+        )
+        about = "A" if mode == "driven" else "the centre of mass"
+        self.moments_label = self.scene.add_label(
+            f"{self.root}/moments_label",
+            f"principal moments about {about} [MR²]:\n{self.axes_text}",
+            position=(0.0, -1.4 * R, 0.05),
+            anchor="top-center",
         )
         self._built_masses = (p.disk_mass, p.bead_mass, R, mode)
 
@@ -242,6 +272,7 @@ class DiskExhibit(DiskModel, Exhibit):
         elif self._built_masses != (p.disk_mass, p.bead_mass, p.radius, c.mode):
             self._build_axes(p, c.mode)
         driven = c.mode == "driven"
+        self.disk_node.opacity = DISK_OPACITY[c.mode]
         self.axle_node.visible = driven
         for h in self.bearings:
             h.visible = driven
@@ -347,6 +378,20 @@ class DiskExhibit(DiskModel, Exhibit):
         return (tuple(o + (0.8, -5.0, 2.8)), tuple(o + (0.0, 0.0, 1.4)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        if self.config.mode == "driven":
+            meas = self.measured()["bearing_force"]
+            force = f"{brief(meas)} N (theory {fmt(self.force_amplitude, 4)})"
+            return [("|F_B|", force), ("t", f"{self.t:.1f} s")]
+        meas = self.measured()
+        return [
+            (
+                "polhode period",
+                f"{brief(meas['polhode_period'])} s (theory {fmt(self.polhode_period(), 4)})",
+            ),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp = self.params, self.sample
         about = "A" if self.config.mode == "driven" else "the centre of mass"
@@ -403,7 +448,7 @@ class DiskExhibit(DiskModel, Exhibit):
 
     # ------------------------------------------------------------------ GUI
     def sync_panel(self, panel) -> None:
-        panel.w["disk.spin"].value = float(self.config.extra_spin[2])
+        panel.show("spin", float(self.config.extra_spin[2]))
 
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
@@ -420,6 +465,7 @@ class DiskExhibit(DiskModel, Exhibit):
                 0.01,
                 float(c.extra_spin[2]),
                 lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}),
+                current=lambda: float(self.config.extra_spin[2]),
                 hint="Spin about the disk normal added at release: seeds the tumble",
             )
             follow = panel.put(

@@ -20,7 +20,7 @@ from dynamics import hoop as hp
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import add_maps
-from .base import Exhibit, fmt
+from .base import Exhibit, brief, fmt
 from .panel import number_text
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -56,6 +56,19 @@ class ConfigurationSpace:
             thickness=2.0,
             thickness_units="screen",
         )
+        # its names: the title (naming the axes) under the square, each mode line at its upper
+        # end (placed in start(): they depend on the masses), mode 1 right, mode 2 left of it
+        c0 = centre.astype(float)
+        scene.add_label(
+            f"{root}/label_title",
+            "configuration space:\nθ1 → (across), θ2 ↑ (up)",
+            position=c0 + (-half, 0, -half - 0.03),
+            anchor="top-left",
+        )
+        self.mode_labels = [
+            scene.add_label(f"{root}/label_mode1", "mode 1", anchor="bottom-left"),
+            scene.add_label(f"{root}/label_mode2", "mode 2", anchor="bottom-right"),
+        ]
         self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
         self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
         self.scale = 1.0
@@ -70,6 +83,10 @@ class ConfigurationSpace:
             u = np.asarray(shape, float) / np.abs(shape).max()  # reaches the square's edge
             lines.append([self.point(-reach * u), self.point(reach * u)])
         self.modes.points = np.asarray(lines, np.float32)
+        # mode 1 at its upper right end; mode 2 at its upper end, reaching left (clear of mode 1)
+        for label, (a, b) in zip(self.mode_labels, lines, strict=True):
+            top = a if a[2] > b[2] else b
+            label.position = top + (0.0, 0.0, 0.02)
         self.path.clear()
         self.ghost.clear()
         self.ghost.visible = ghost
@@ -206,9 +223,13 @@ class HoopExhibit(HoopModel, Exhibit):
         if chart is None or len(self.motion) < 2:
             return
         data = self.modal_history()
+        # the window the chart selector shows (as far back as the motion's samples reach)
+        window = float(getattr(panel.app, "chart_window", 10.0))
+        first = int(np.searchsorted(data[0], data[0][-1] - window))
+        data = tuple(np.asarray(d)[first:] for d in data)
         chart.data = data
         top = 1.3 * max(float(np.abs(np.concatenate(data[1:3])).max()), 1e-6)
-        window = max(10.0, 3 * 2 * math.pi / float(self.mode_frequencies[0]))
+        top = 10 ** (math.ceil(4 * math.log10(top)) / 4)  # steps of a quarter decade: steady
         panel.keep_time_axis("modes_chart", float(data[0][-1]), window, (-top, top))
 
     # ------------------------------------------------------------------ drawing
@@ -246,6 +267,13 @@ class HoopExhibit(HoopModel, Exhibit):
         return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
 
     # ------------------------------------------------------------------ readout
+    def key_figures(self) -> list[tuple[str, str]]:
+        freqs, meas = self.mode_frequencies, self.measured()["mode_frequencies"]
+        return [
+            *((f"ω{k + 1}", f"{brief(meas[k])} rad/s (theory {fmt(freqs[k], 4)})") for k in (0, 1)),
+            *super().key_figures(),
+        ]
+
     def readout(self) -> str:
         p, smp, c = self.params, self.sample, self.config
         freqs = self.mode_frequencies

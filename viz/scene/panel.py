@@ -11,14 +11,16 @@ One rule for every number a person types, the command line's and the demo files'
 (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
 non-finite or subnormal value or one outside the control's range is refused with a notification
 that names the field as the panel labels it, and the box goes back to the value in force.
-Number fields are text boxes for that reason: the browser's own number input rewrites
-scientific notation as it is typed.
+Number fields are text boxes read on Enter (:mod:`viz.scene.fields`) for that reason: the
+browser's own number input rewrites scientific notation as it is typed. A parameter's range is
+the one its system's description gives for a live exhibit (:attr:`dynamics.spec.Setting.span`);
+a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
+taken with a warning beyond the method's stability limit (:mod:`dynamics.stability`).
 """
 
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -30,6 +32,7 @@ import dynamics
 from ..model.plot import PlotImage
 from ..warm import warm_method
 from .base import LOG_FLOOR
+from .fields import NumberField, number_text  # noqa: F401  (number_text re-exported)
 
 
 def rtol_label(rtol: float) -> str:
@@ -46,19 +49,18 @@ def rtol_options(current: float) -> tuple[str, ...]:
     return decades if label in decades else (*decades, label)
 
 
-def parse_number(label: str, text, lo: float | None = None, hi: float | None = None) -> float:
+def parse_number(
+    label: str, text, lo: float | None = None, hi: float | None = None, why: str = ""
+) -> float:
     """The number typed into the field ``label``, read by the one rule for typed numbers
     (:func:`dynamics.params.parse_number`) and held to the control's range, or a
     :class:`dynamics.params.SettingError` with one line naming the field as the panel labels it."""
     x = dynamics.parse_number(label, text)
     if (lo is not None and x < lo) or (hi is not None and x > hi):
-        raise dynamics.SettingError(label, f"{label} must lie between {lo:g} and {hi:g}, got {x:g}")
+        raise dynamics.SettingError(
+            label, f"{label} must lie between {lo:g} and {hi:g}{why}, got {x:g}"
+        )
     return x
-
-
-def number_text(x: float) -> str:
-    """How a number field shows a value: six significant digits, no trailing zeros."""
-    return f"{float(x):.6g}"
 
 
 def method_text(name: str) -> str:
@@ -75,7 +77,6 @@ class Panel:
     """One exhibit's controls. ``w`` is the app's widget table, keyed ``"<exhibit>.<name>"``."""
 
     SYNCED = ("method", "dt", "beam", "beam_size", "kick", "mode", "follow_cm", "amplitude")
-    TYPING_PAUSE = 1.0  # s without a keystroke before a number field is read
 
     def __init__(self, app, exhibit) -> None:
         self.app = app
@@ -85,6 +86,7 @@ class Panel:
         self.key = exhibit.key
         self.w: dict[str, Any] = app.w
         self.labels: dict[str, str] = {}  # setting name (as in messages) -> the field's label
+        self.fields: dict[str, NumberField] = {}  # the number fields, by their name in ``w``
         self._time_axes: dict[str, tuple[float, float, float]] = {}  # chart -> (t0, t1, window)
         self.plot_choice = exhibit.default_plot(exhibit.config)  # (x, y) of the panel's plot
         self._plot_image: PlotImage | None = None
@@ -117,78 +119,91 @@ class Panel:
         value: float,
         apply,
         *,
-        current=None,
+        current,
         lo=None,
         hi=None,
         hint=None,
+        check=None,
+        track=None,
+        why="",
     ):
-        """A number field (a text box read by :func:`parse_number`); ``apply(x)`` gets the value.
-
-        The browser sends the box's text on every keystroke, and ``2.5e`` is on the way to
-        ``2.5e-2``: the text is read once typing has paused for ``TYPING_PAUSE`` seconds.
-        ``current()`` gives the value in force: text that shows it (the browser echoing what the
-        app just wrote into the box) changes nothing."""
-        h = self.put(name, self.gui.add_text(label, initial_value=number_text(value), hint=hint))
+        """A number field (:class:`viz.scene.fields.NumberField`): ``apply(x)`` gets the value
+        once it is submitted (Enter, or another control touched), read by :func:`parse_number`
+        and held to ``lo``..``hi``; ``check(x)`` may refuse it further (``ValueError``) or warn
+        (returns a message). ``current()`` is the value in force. With ``track = (lo, hi, step)``
+        a slider track under the box sets it too."""
         self.labels[name.split(".")[-1]] = label
-        pending: list[threading.Timer] = []
 
-        def read(v):
-            if current is not None and str(v).strip() == number_text(current()):
-                return
+        def read(text):
             try:
-                x = parse_number(label, v, lo, hi)
+                x = parse_number(label, text, lo, hi, why)
+                warning = check(x) if check is not None else None
             except ValueError as exc:
                 self.refuse(str(exc))
                 return
             apply(x)
+            if warning:
+                self.app.notify(f"Warning ({self.exhibit.title})", warning, color="orange")
 
-        def on(v):
-            for timer in pending:
-                timer.cancel()
-            pending.clear()
-            if self.TYPING_PAUSE <= 0:
-                read(v)
-                return
-            timer = threading.Timer(self.TYPING_PAUSE, read, args=(v,))
-            timer.daemon = True
-            pending.append(timer)
-            timer.start()
-
-        self.on(h, on)
-        return h
+        field = NumberField(
+            self.gui,
+            label,
+            value,
+            read=read,
+            current=current,
+            on=self.on,
+            typing=self.app.typing,
+            hint=hint,
+            track=track,
+            track_apply=apply,
+        )
+        self.fields[name] = field
+        self.app.number_fields[f"{self.key}.{name}"] = field
+        self.put(name, field.box)
+        if field.track is not None:
+            self.put(f"{name}_track", field.track)
+        return field
 
     def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
-        """A slider whose typed-in values obey the same range as its track."""
-        h = self.put(
-            name, self.gui.add_slider(label, min=lo, max=hi, step=step, initial_value=value, **kw)
+        """A number field over a slider track; typed values obey the same range as the track.
+        The value in force is ``current()``, by default the exhibit's config field ``name``."""
+        current = kw.pop("current", lambda: getattr(self.exhibit.config, name))
+        return self.number(
+            name,
+            label,
+            value,
+            apply,
+            current=current,
+            lo=lo,
+            hi=hi,
+            track=(lo, hi, step),
+            **kw,
         )
-        self.labels[name] = label
 
-        def on(v):
-            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
-                self.refuse(f"{label} must lie between {lo:g} and {hi:g}, got {v!r}")
-                return
-            apply(v)
-
-        self.on(h, on)
-        return h
+    def show(self, name: str, value) -> None:
+        """Show ``value`` in the field ``name`` (box and track); the caller holds the app's
+        syncing flag (:meth:`sync` does)."""
+        self.fields[name].show(value)
 
     def keep_time_axis(self, name: str, t: float, window: float, y_range) -> None:
         """Give the chart ``name`` an explicit time axis: the ``window`` [s] ending a quarter
-        window ahead of ``t``, moved on once ``t`` passes its end, and the y range ``y_range``.
+        window ahead of ``t``, moved on once ``t`` passes its end, and the y range ``y_range``
+        (changed when it changes: the error chart's follows its data in whole decades).
         The browser's chart keeps the time range it had when it was drawn; one drawn again
         (after a resize and a tab switch) would keep a stale range and show no lines. Moving
         the range redraws the chart, so it moves in quarter-window steps, not every update."""
-        lo, hi, win = self._time_axes.get(name, (math.inf, -math.inf, 0.0))
-        if lo <= t <= hi and win == window:
+        lo, hi, win, ys = self._time_axes.get(name, (math.inf, -math.inf, 0.0, None))
+        y_range = tuple(float(y) for y in y_range)
+        if lo <= t <= hi and win == window and ys == y_range:
             return
-        hi = t + 0.25 * window
-        lo = hi - 1.25 * window
-        self._time_axes[name] = (lo, hi, window)
+        if not (lo <= t <= hi and win == window):
+            hi = t + 0.25 * window
+            lo = hi - 1.25 * window
+        self._time_axes[name] = (lo, hi, window, y_range)
         uplot = self.viser.uplot
         self.w[f"{self.key}.{name}"].scales = {
             "x": uplot.Scale(time=False, auto=False, range=(lo, hi)),
-            "y": uplot.Scale(auto=False, range=tuple(y_range)),
+            "y": uplot.Scale(auto=False, range=y_range),
         }
 
     def explain(self, exc: ValueError) -> str:
@@ -207,7 +222,11 @@ class Panel:
         self.put("readout", self.gui.add_markdown(""))
         series = [
             viser.uplot.Series(label="t [s]"),
-            viser.uplot.Series(label="log10 |energy error|", stroke="#d03030", width=1.5),
+            viser.uplot.Series(
+                label="log10 |energy error| (y axis fitted to the data)",
+                stroke="#d03030",
+                width=1.5,
+            ),
             viser.uplot.Series(label="log10 error", stroke="#3060d0", width=1.5),
         ]
         if compare:
@@ -232,6 +251,31 @@ class Panel:
             ),
         )
 
+    def check_step(self, dt: float) -> str | None:
+        """Refuse a step ``dt`` [s] longer than one period of the exhibit's fastest motion (each
+        step would jump over a whole turn, and at the viewer's speeds the exhibit would stand
+        still for seconds between steps); return a warning if it is beyond the running method's
+        stability limit (the run will blow up: worth showing, not worth hiding)."""
+        from dynamics import stability
+
+        sim = self.exhibit.sim
+        label = self.labels.get("dt", "dt")
+        omega = stability.fastest_frequency(sim.system, self.exhibit.state)
+        if omega > 0 and dt > 2 * math.pi / omega:
+            raise dynamics.SettingError(
+                "dt",
+                f"{label} = {dt:g} s is longer than one period of the fastest motion "
+                f"({2 * math.pi / omega:.3g} s): the exhibit would stand still between steps",
+            )
+        m = sim.method
+        if m.adaptive or m.backend == "exact":
+            return None
+        limit = stability.stability_limit(m.name, sim.system, self.exhibit.state)
+        if limit is not None and dt > limit:
+            where = "at every step size" if limit == 0.0 else f"above dt = {limit:.3g} s"
+            return f"{label} = {dt:g} s: {m.name} is unstable {where}; expect the run to blow up"
+        return None
+
     def param_inputs(self) -> None:
         """A number field for each physical parameter of the exhibit's system, labelled as its
         description says (:attr:`dynamics.spec.SystemSpec.params`)."""
@@ -239,12 +283,17 @@ class Panel:
             for setting in self.exhibit.Config.spec.params:
                 name, label = setting.name, setting.panel_label
                 value = self.exhibit.config.params[name]
+                lo, hi = setting.span or (None, None)
                 self.number(
                     f"params.{name}",
                     label,
                     value,
                     lambda x, n=name: self.send({"op": "set", "params": {n: x}}),
                     current=lambda n=name: self.exhibit.config.params[n],
+                    lo=lo,
+                    hi=hi,
+                    hint=setting.help or None,
+                    why=" (where the exhibit stays meaningful on screen)",
                 )
 
     def integrator_inputs(self, *, compare: bool) -> None:
@@ -262,6 +311,7 @@ class Panel:
                 ex.config.dt,
                 lambda x: self.send({"op": "set", "dt": x}),
                 current=lambda: self.exhibit.config.dt,
+                check=self.check_step,
             )
             self.put("limit", gui.add_markdown(ex.stability_text()))
             # a dropdown of decades: a number input shows 1e-9 as 0.0000000
@@ -404,18 +454,19 @@ class Panel:
         c = self.exhibit.config
         w, key = self.w, self.key
         for name, value in c.params.items():
-            h = w.get(f"{key}.params.{name}")
-            if h is not None and value is not None:
-                h.value = number_text(value)
+            if f"params.{name}" in self.fields and value is not None:
+                self.show(f"params.{name}", value)
         h = w.get(f"{key}.rtol")
         if h is not None:
             h.options = rtol_options(c.rtol)
             h.value = rtol_label(c.rtol)
         for name in self.SYNCED:
+            if name in self.fields and hasattr(c, name):
+                self.show(name, getattr(c, name))
+                continue
             h = w.get(f"{key}.{name}")
             if h is not None and hasattr(c, name):
-                value = getattr(c, name)
-                h.value = number_text(value) if isinstance(h.value, str) and name == "dt" else value
+                h.value = getattr(c, name)
         self.show_step_controls()
         h = w.get(f"{key}.compare_method")
         if h is not None:
@@ -427,7 +478,7 @@ class Panel:
     def show_step_controls(self) -> None:
         """Show the step box for fixed-step methods and the tolerance for adaptive ones only."""
         m = self.exhibit.sim.method
-        dt, rtol = self.w.get(f"{self.key}.dt"), self.w.get(f"{self.key}.rtol")
+        dt, rtol = self.fields.get("dt"), self.w.get(f"{self.key}.rtol")
         if dt is not None:
             dt.visible = not m.adaptive and m.backend != "exact"
         if rtol is not None:

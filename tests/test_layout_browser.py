@@ -1,0 +1,193 @@
+"""How large the exhibits are on a 1280 x 800 page in headless Chromium, as a lecture hall sees it.
+
+The camera each preset leaves the page with is read back from the browser (viser reports it to
+the server) and the exhibit's box is projected through it onto the page: in its own preset each
+exhibit fills at least 55 % of the height of the part of the page left of the panel (measured in
+the page: the panel's left edge), the first view shows all three there. Presentation mode
+collapses the panel and draws the key figures at least 28 pixels high (measured on the
+screenshot: the height of the dark ink of each line of the figures' label).
+"""
+
+from __future__ import annotations
+
+import browser
+import numpy as np
+import pytest
+from waiting import scaled, wait_until
+
+pytestmark = pytest.mark.browser
+
+PAGE = (1280, 800)
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    browser.require_browser()
+    from viz.app import MechvizApp, warm_up
+
+    warm_up("defaults")
+    app = MechvizApp(port=0, environment_map=False)
+    try:
+        with browser.open_page(app.url, width=PAGE[0], height=PAGE[1], timeout_s=60) as page:
+            browser.dismiss_webgl_alert(page)
+            yield app, page
+    finally:
+        app.stop()
+
+
+def _camera(app, target):
+    """The browser's camera once its look-at point is ``target``: (position, look_at, fov)."""
+    client = next(iter(app.server.get_clients().values()))
+
+    def arrived():
+        cam = client.camera
+        return np.allclose(cam.look_at, target, atol=1e-3) and cam
+
+    try:
+        cam = wait_until(arrived, 20, f"the camera to look at {target}")
+    except TimeoutError as exc:
+        raise TimeoutError(f"{exc}; it looks at {client.camera.look_at}") from None
+    assert cam.image_width * PAGE[1] == cam.image_height * PAGE[0]  # drawn at some scale of it
+    return np.array(cam.position), np.array(cam.look_at), float(cam.fov)
+
+
+def _panel_left(page) -> float:
+    return page.get_by_role("button", name="Pause").bounding_box()["x"] - 20
+
+
+def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
+    from viz.scene import framing
+
+    app, page = viewer
+    free = _panel_left(page)
+    position, target, fov = _camera(app, app.camera_preset("All", *PAGE)[1])  # the first view
+    shares = []
+    for key, ex in app.exhibits.items():
+        share, x0, x1, y0, y1 = framing.share(*ex.bounds, position, target, *PAGE, fov)
+        assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], key
+        shares.append((y0, y1))
+    union = (max(y for _, y in shares) - min(y for y, _ in shares)) / PAGE[1]
+    # three side by side, seen obliquely (the nearest larger) as wide as the free part allows
+    assert union >= 0.35, f"the first view's exhibits span {union:.0%} of the height"
+    print(f"first view: the three exhibits span {union:.0%} of the height")
+    for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
+        page.get_by_role("button", name=view, exact=True).click()
+        position, target, fov = _camera(app, app.camera_preset(view, *PAGE)[1])
+        share, x0, x1, y0, y1 = framing.share(
+            *app.exhibits[key].bounds, position, target, *PAGE, fov
+        )
+        assert share >= 0.55, f"{view}: {share:.0%} of the height"
+        assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], view
+        print(f"{view}: {share:.0%} of the height")
+
+
+@pytest.mark.parametrize("mode", ["driven", "released"])
+def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
+    """The labels' boxes on the page, for the camera the browser has at each preset: none
+    overlaps another in the part of the page left of the panel, while the disk turns (driven)
+    or tumbles (released, with the Poinsot picture's names)."""
+    import screen
+
+    app, page = viewer
+    app.enqueue("disk", {"op": "set", "mode": mode})
+    wait_until(lambda: app.exhibits["disk"].config.mode == mode, 15, f"the {mode} disk")
+    free = _panel_left(page)
+    names = set()
+    for view in ("All", "Cyclotron", "Disk", "Hoop", "Top"):
+        page.get_by_role("button", name=view, exact=True).click()
+        position, target, _ = _camera(app, app.camera_preset(view, *PAGE)[1])
+        t0 = app.exhibits["disk"].t
+        for _ in range(4):  # over a second of the motion: the moving labels move
+            boxes = [
+                b for b in screen.label_boxes(app.server, (position, target), *PAGE) if b.x0 < free
+            ]
+            assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
+            names |= {b.text for b in boxes}
+            wait_until(
+                lambda t=app.exhibits["disk"].t: app.exhibits["disk"].t > t + 0.3, 15, "time"
+            )
+        assert app.exhibits["disk"].t > t0
+    expected = {"mode 1", "mode 2", "configuration space:\nθ1 → (across), θ2 ↑ (up)"}
+    if mode == "released":
+        expected.add("Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode")
+    assert expected <= names, expected - names
+    assert any(t.startswith("principal moments") for t in names)
+
+
+def _ink_lines(img: np.ndarray) -> list[int]:
+    """Heights [px] of the runs of rows holding dark ink (the lines of a text)."""
+    rows = (img.astype(int).sum(axis=2) < 3 * 90).sum(axis=1) >= 2
+    heights, run = [], 0
+    for dark in [*rows, False]:
+        if dark:
+            run += 1
+        elif run:
+            heights.append(run)
+            run = 0
+    return heights
+
+
+def test_presentation_mode_collapses_the_panel_and_draws_the_key_figures_large(viewer):
+    from viz.scene import framing
+
+    app, page = viewer
+    page.get_by_role("combobox", name="Present").click()
+    page.get_by_role("option", name="Hoop", exact=True).click()
+    wait_until(lambda: app.presenting == "hoop", 15, "presentation mode")
+    page.get_by_role("button", name="Pause").wait_for(state="hidden", timeout=scaled(15) * 1000)
+    label = app.figures["hoop"]
+    wait_until(lambda: "ω1 =" in label.text, 15, "the key figures")
+    client = next(iter(app.server.get_clients().values()))
+    wait_until(lambda: client.camera.position[1] < -0.5, 15, "the presentation camera")
+    position, target, fov = _camera(app, client.camera.look_at)
+    share, *_ = framing.share(*app.exhibits["hoop"].bounds, position, target, *PAGE, fov)
+    assert share >= 0.55, f"presented: {share:.0%} of the height"
+    x, y = framing.project([label.position], position, target, *PAGE, fov)[0]
+    lines = len(label.text.split("\n"))
+
+    def drawn():
+        img = browser.screenshot_array(page)[int(y) : int(y) + 60 * lines, int(x) : int(x) + 700]
+        heights = _ink_lines(img)
+        return len(heights) >= lines and heights
+
+    heights = wait_until(drawn, 30, "the key figures on the page", poll_s=0.5)
+    # the tallest ink of a line ("(", "ω", digits) is about the font's size
+    assert max(heights) >= 28, heights
+    print(f"key figures: ink heights {heights} px; presented exhibit {share:.0%} of the height")
+    app.enqueue("app", {"op": "present", "value": "Off"})
+    page.get_by_role("button", name="Pause").wait_for(timeout=scaled(15) * 1000)
+
+
+def _red_pixels(page) -> int:
+    """Pixels of the energy-error line (red) in the visible tab's chart."""
+    import io
+
+    from PIL import Image
+
+    chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
+    chart.evaluate("e => e.scrollIntoView({block: 'center'})")
+    img = np.asarray(Image.open(io.BytesIO(page.screenshot(clip=chart.bounding_box()))))
+    img = img[..., :3].astype(int)
+    return int(((img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)).sum())
+
+
+def test_a_chart_keeps_its_history_when_the_window_changes(viewer):
+    app, page = viewer
+    hoop = app.exhibits["hoop"]
+    page.get_by_role("tab", name="Hoop").click()
+    wait_until(lambda: np.ptp(hoop.chart_data()[0]) >= 8.0, 60, "ten seconds of chart")
+    wait_until(lambda: _red_pixels(page) > 50, 30, "the error line", poll_s=0.5)
+    first = hoop.chart_data()[0][0]
+    page.get_by_role("combobox", name="Chart window").click()
+    page.get_by_role("option", name="10 min", exact=True).click()
+    wait_until(lambda: app.chart_window == 600.0, 15, "the 10-minute window")
+    t = hoop.chart_data()[0]
+    assert t[0] <= first  # nothing thrown away: the points of the 10 s window are still there
+    # what the page's chart is given starts there too, and its line is drawn (short: ten
+    # seconds of a ten-minute axis)
+    chart = app.w["hoop.chart"]
+    wait_until(lambda: chart.data[0][0] <= first, 15, "the chart to be given the long window")
+    wait_until(lambda: _red_pixels(page) > 5, 30, "the error line in the long window", poll_s=0.5)
+    page.get_by_role("combobox", name="Chart window").click()
+    page.get_by_role("option", name="10 s", exact=True).click()
+    wait_until(lambda: app.chart_window == 10.0, 15, "the 10-second window")
