@@ -1,5 +1,7 @@
-"""The long history behind the charts: the last ten minutes of chart points, whatever window
-the chart shows, so a change of window keeps what was drawn (:class:`LongHistory`)."""
+"""The samples an exhibit keeps: :class:`Ring` (the last rows in one preallocated buffer), the
+chart points (:class:`History`), a run's motion for the estimators (:class:`Motion`), and the
+long history behind the charts, the last ten minutes of chart points whatever window the chart
+shows, so a change of window keeps what was drawn (:class:`LongHistory`)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,96 @@ import numpy as np
 
 LONG_SECONDS = 600.0  # s of simulated time every chart window can draw on (the longest window)
 LONG_SPACING = 0.05  # s between the long history's points at most (20 a second at 1x)
+
+
+class Ring:
+    """The last ``maxlen`` rows of shape ``shape`` in one preallocated buffer written twice (at
+    ``i`` and ``i + maxlen``), so the newest rows are always one contiguous slice: adding a row
+    allocates nothing and :meth:`array` copies one block. ``version`` changes on every change."""
+
+    def __init__(self, shape: tuple[int, ...], maxlen: int) -> None:
+        self.shape = tuple(shape)  # of one row
+        self.maxlen = max(2, int(maxlen))
+        self._buf = np.full((2 * self.maxlen, *shape), math.nan)
+        self._i = self._n = 0
+        self.count = 0  # rows ever added since the last clear
+        self.version = 0
+
+    def __len__(self) -> int:
+        return self._n
+
+    def clear(self) -> None:
+        self._i = self._n = self.count = 0
+        self.version += 1
+
+    def add(self, row) -> None:
+        i, m = self._i, self.maxlen
+        self._buf[i] = row
+        self._buf[i + m] = row
+        self._i = (i + 1) % m
+        self._n = min(self._n + 1, m)
+        self.count += 1
+        self.version += 1
+
+    def array(self) -> np.ndarray:
+        """The rows held, oldest first, as a fresh array."""
+        end = self._i + self.maxlen
+        return self._buf[end - self._n : end].copy()
+
+
+class History:
+    """Chart points: ``t`` and named series, the last ``maxlen`` of them (:class:`Ring`)."""
+
+    def __init__(self, names: tuple[str, ...], maxlen: int = 600) -> None:
+        self.names = tuple(names)
+        self._ring = Ring((1 + len(self.names),), maxlen)
+        self.maxlen = self._ring.maxlen
+
+    def __len__(self) -> int:
+        return len(self._ring)
+
+    @property
+    def version(self) -> int:
+        return self._ring.version
+
+    def clear(self) -> None:
+        self._ring.clear()
+
+    def add(self, t: float, **values: float) -> None:
+        self._ring.add([t, *(values.get(n, math.nan) for n in self.names)])
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays()[0]
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """``(t, *series)`` oldest first, as fresh arrays."""
+        return tuple(self._ring.array().T)
+
+
+class Motion:
+    """Samples of a run's motion since it started or last jumped: the times and one array per
+    sample (a velocity, the angles, ...), the newest ``maxlen``. The estimators of
+    :mod:`dynamics.measure` read them, exactly as the recorder reads its frames."""
+
+    def __init__(self, shape: tuple[int, ...], maxlen: int = 1800) -> None:
+        self.shape = tuple(shape)
+        self._t = Ring((), maxlen)
+        self._x = Ring(self.shape, maxlen)
+
+    def __len__(self) -> int:
+        return len(self._t)
+
+    def clear(self) -> None:
+        self._t.clear()
+        self._x.clear()
+
+    def add(self, t: float, x) -> None:
+        self._t.add(t)
+        self._x.add(x)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._t.array(), self._x.array()
 
 
 class LongHistory:
