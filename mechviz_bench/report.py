@@ -106,7 +106,11 @@ def targets_summary(result: dict) -> str:
     t = result["targets"]
     lines = []
     h2h = result.get("peer_head_to_head") or {}
-    if h2h:
+    if result.get("fastest_peers"):
+        from .fastest_report import verdict_line
+
+        lines.append(verdict_line(result["fastest_peers"]))
+    elif h2h:
         met, missed, unmeasured = _tally(t["ours_at_least_as_fast_as_every_peer"])
         figures = []
         for name in missed:
@@ -287,6 +291,37 @@ def ensemble_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def _peer_sections(result: dict) -> list[str]:
+    """The peers' sections: in their fastest form (when run), then their sweeps."""
+    sweeps = [
+        "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
+        "interleaved rounds.",
+        peer_table(result),
+    ]
+    if not result.get("fastest_peers"):
+        return [
+            "## Peers: their time over our fastest (below 1, in bold: the peer is faster)"
+        ] + sweeps
+    return [
+        "## Peers in their fastest form: their time over ours (below 1, in bold: the peer is "
+        "faster)",
+        fastest_section(result),
+        "## Peers' sweeps (CyRK called from Python, heyoka without fast_math; the verdict is "
+        "the fastest form's, above)",
+        *sweeps,
+    ]
+
+
+def fastest_section(result: dict) -> str:
+    """The peers in their fastest form (:mod:`.fastest`)."""
+    from .fastest import __doc__ as how
+    from .fastest_report import markdown as fastest_markdown
+
+    return (
+        how.split("\n\n")[1].replace("\n", " ") + "\n\n" + fastest_markdown(result["fastest_peers"])
+    )
+
+
 def markdown(result: dict) -> str:
     head = (
         f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
@@ -304,10 +339,7 @@ def markdown(result: dict) -> str:
         "interleaved rounds; *sweep ratio* is the figure from the sweeps alone. Problems ending "
         "in `-untuned` are the cases the methods were not tuned on.",
         ratio_table(result),
-        "## Peers: their time over our fastest (below 1, in bold: the peer is faster)",
-        "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
-        "interleaved rounds.",
-        peer_table(result),
+        *_peer_sections(result),
         "## First answer and construction",
         first_answer_table(result),
         "## Time per method to reach each accuracy",

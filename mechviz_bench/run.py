@@ -174,6 +174,8 @@ def run_bench(
     exhibit_cases: dict | None = None,
     phases: dict | None = None,
     interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
+    seed: int | None = None,
+    random_cases: int = 21,
 ) -> dict:
     """Run everything; write ``out/results.json``, ``tables.md`` and the charts as one set;
     return the result dict.
@@ -185,13 +187,24 @@ def run_bench(
     bench`` passes them); ``None`` skips that part. ``phases``: wall seconds of the caller's own
     measurements made before this call, listed first in ``phases_s``. ``interruptible``: a
     context manager around everything but the writing (the command line's makes Ctrl-C end
-    the run even inside numba's compiler, which swallows ``KeyboardInterrupt``).
+    the run even inside numba's compiler, which swallows ``KeyboardInterrupt``). ``seed`` and
+    ``random_cases``: with ``peers``, the random cases of :mod:`.fastest` (a new seed when
+    ``None``; the seed is in the results).
     """
     out = Path(out)
     with interruptible():
         result, pictures = _measure(
             quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases
         )
+        if peers:
+            result["fastest_peers"] = _fastest(seed, random_cases, quick, result["phases_s"])
+            result["targets"] = _targets(
+                result["ratios"],
+                result["per_step"],
+                {},
+                result["first_answer"],
+                result["fastest_peers"],
+            )
     from dynamics.files import write_files_atomically
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
@@ -413,11 +426,32 @@ def _json_default(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
+def _fastest(seed: int | None, n: int, quick: bool, phases: dict) -> dict:
+    """The peers in their fastest form against ours (:mod:`.fastest`), with the load."""
+    import secrets
+
+    from . import fastest
+
+    seed = secrets.randbits(32) if seed is None else seed
+    before = _load()
+    t0 = time.perf_counter()
+    out = fastest.run(seed, n, rounds=3 if quick else 5)
+    phases["peers in their fastest form"] = round(time.perf_counter() - t0, 2)
+    out["load_average"] = {"before": before, "after": _load()}
+    return out
+
+
 def _targets(
-    ratios: dict, per_step: dict | None, peer_ratios: dict, first_answer: dict | None = None
+    ratios: dict,
+    per_step: dict | None,
+    peer_ratios: dict,
+    first_answer: dict | None = None,
+    fastest: dict | None = None,
 ) -> dict:
     """Each speed target, met (True), missed (False) or not measurable (None), and the lists of
-    what was missed with the figure that missed."""
+    what was missed with the figure that missed. With ``fastest`` (:mod:`.fastest`'s results)
+    the peers' verdict is its own: every case where a peer in its fastest form is faster than
+    ours, kept or fresh (the sweeps' peer figures, ``peer_ratios``, are then not judged)."""
     speed = {}
     missed = []
     for key, row in ratios.items():
@@ -435,6 +469,16 @@ def _targets(
                 peers[f"{peer} {key} {target}"] = ok
                 if ok is False:
                     missed.append(f"{peer} {key} {target}: {peer} / ours = {e['ratio']:.2f} < 1")
+    if fastest is not None:
+        from .fastest_report import loss_lines
+
+        for key, case in fastest["cases"].items():
+            for target, row in case["targets"].items():
+                for name, r in (row.get("ratios") or {}).items():
+                    peers[f"{name.replace('/', ' ')} {key} {target}"] = (
+                        None if r is None else r >= 1.0
+                    )
+        missed += [f"fastest form: {line}" for line in loss_lines(fastest)]
     first = None
     if first_answer:
         ours = min(first_answer["taylor"]["median_s"], first_answer["dop853"]["median_s"])
@@ -593,4 +637,11 @@ def summary(result: dict) -> dict:
         },
         "viewer": result.get("viewer"),
         "charts": result.get("charts"),
+        "fastest_peers": None
+        if not result.get("fastest_peers")
+        else {
+            "seed": result["fastest_peers"]["seed"],
+            "distribution": result["fastest_peers"]["distribution"],
+            "losses": len(result["fastest_peers"]["losses"]),
+        },
     }

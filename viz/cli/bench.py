@@ -84,6 +84,8 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError(
             f"--clients: must be a whole number from 1 to {MAX_CLIENTS}, got {args.clients}"
         )
+    if args.random_cases < 0:
+        raise CliError(f"--random-cases: must be 0 or more, got {args.random_cases}")
     if args.endurance is not None:
         return _endurance(args)
     from mechviz_bench import PROBLEMS, peers, run_bench, summary
@@ -109,6 +111,8 @@ def _run(args: argparse.Namespace) -> int:
         peers=args.peers,
         exhibit_cases=bench_cases(),
         interruptible=ctrl_c_within_a_second,
+        seed=args.seed,
+        random_cases=args.random_cases,
         phases={
             (
                 f"compile ahead ({processes} processes and this one)"
@@ -150,6 +154,13 @@ def _run(args: argparse.Namespace) -> int:
                     f"{t}: {'n/a' if r is None else f'{r:.2f}'}" for t, r in row.items()
                 )
                 print(f"  {peer:14s} {key:7s} {cells}")
+    if result.get("fastest_peers"):
+        from mechviz_bench.fastest_report import case_table, distribution_table
+
+        fast = result["fastest_peers"]
+        print(f"peers in their fastest form (seed {fast['seed']}; peer / ours, kept, fresh):")
+        print(case_table(fast))
+        print(distribution_table(fast))
     fa = s.get("first_answer")
     if fa:
         print(
@@ -189,6 +200,19 @@ def add_commands(sub) -> None:
         action="store_true",
         help="also run CyRK and heyoka (pip install -e '.[peers]'); each not installed is skipped "
         "with the reason",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="with --peers: the seed of the random untuned cases (default: a new one, recorded "
+        "in results.json)",
+    )
+    p.add_argument(
+        "--random-cases",
+        type=int,
+        default=21,
+        help="with --peers: how many random untuned cases (default 21)",
     )
     p.add_argument(
         "--out",
