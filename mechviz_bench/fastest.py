@@ -11,8 +11,10 @@ each pick's fastest round is kept), and the ratios are peer / ours: below 1 the 
 Contenders, by family (a family's time is its fastest member's):
 
 - ours, **kept**: a :class:`~dynamics.simulation.Simulation` built once and ``restart()``-ed per
-  solve (``taylor`` and ``dop853``); ours, **fresh**: a new ``Simulation`` per solve (the cost
-  of a user who builds one for every problem);
+  solve (``taylor`` and ``dop853``), and a :class:`~dynamics.solver.Solver` built once per
+  system kind and tolerance and handed each case's start and parameters; ours, **fresh**: a new
+  ``Simulation`` (or ``Solver``) per solve (the cost of a user who builds one for every
+  problem);
 - heyoka: ``taylor_adaptive`` with and without ``fast_math``; CyRK: ``nbsolve2_ivp`` from an
   ``njit`` caller, DOP853, Vern8 and Vern7; scipy: ``odeint`` (:mod:`.fast_peers`).
 
@@ -85,6 +87,36 @@ def _ours_fresh(pb: Problem, method: str):
     return make
 
 
+def _solver_kept(pb: Problem):
+    """One :class:`~dynamics.solver.Solver` per system kind and tolerance, handed the case's
+    start and parameters at every solve (as heyoka's integrator is)."""
+    from dynamics.solver import Solver
+
+    p = np.ascontiguousarray(pb.system.kernel_params(), dtype=np.float64)
+
+    def make(tol: float):
+        solver = _SOLVERS.get((pb.system.sys_id, tol))
+        if solver is None:
+            solver = _SOLVERS[(pb.system.sys_id, tol)] = Solver(pb.system, rtol=tol, atol=tol)
+        y0, t_end = pb.y0, pb.t_end
+        return lambda: solver.solve(t_end, y0, p)
+
+    return make
+
+
+def _solver_fresh(pb: Problem):
+    from dynamics.solver import Solver
+
+    def make(tol: float):
+        system, y0, t_end = pb.system, pb.y0, pb.t_end
+        return lambda: Solver(system, rtol=tol, atol=tol).solve(t_end, y0)
+
+    return make
+
+
+_SOLVERS: dict = {}
+
+
 def _heyoka(pb: Problem, fast_math: bool):
     sid, y0 = pb.system.sys_id, pb.y0
     pars = fp.heyoka_pars(sid, pb.system.kernel_params())
@@ -119,6 +151,8 @@ def contenders(pb: Problem, peers: dict[str, str | None]) -> list[Contender]:
     """Every contender on ``pb``; a peer whose package is missing is left out."""
     out = [Contender(f"{m} kept", "ours-kept", _ours_kept(pb, m)) for m in OURS]
     out += [Contender(f"{m} fresh", "ours-fresh", _ours_fresh(pb, m)) for m in OURS]
+    out.append(Contender("taylor solver kept", "ours-kept", _solver_kept(pb)))
+    out.append(Contender("taylor solver fresh", "ours-fresh", _solver_fresh(pb)))
     if peers.get("heyoka") is None:
         out += [
             Contender(f"heyoka{' fast_math' if fm else ''}", "heyoka", _heyoka(pb, fm))

@@ -16,7 +16,7 @@ def _r(r) -> str:
 
 
 def _us(e: dict | None) -> str:
-    return "n/a" if e is None else f"{e['who'].split()[0]} {1e6 * e['seconds']:.0f} us"
+    return "n/a" if e is None else f"{e['who']} {1e6 * e['seconds']:.0f} us"
 
 
 def case_table(result: dict, random: bool = False) -> str:

@@ -37,6 +37,7 @@ from numba import prange
 from .. import cyclotron, disk, hoop
 from .._jit import njit
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, report
+from .taylor_linear import charge_eval, charge_steps
 
 MAX_ORDER = 40
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
@@ -58,9 +59,13 @@ _THREADS = numba.config.NUMBA_NUM_THREADS
 # Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, per system: the step size and loop
 # (c0), Horner's evaluation and the linear recurrences (c1), the Cauchy products (c2). Measured
 # with the compiled pieces on a 2-core x86-64 VM; only their ratios matter.
-STEP_COST = {CYCLOTRON: (45.0, 5.6, 0.08), HOOP: (50.0, 17.3, 0.67), FREE_BODY: (55.0, 5.8, 1.0)}
+STEP_COST = {CYCLOTRON: (60.0, 1.0, 0.0), HOOP: (50.0, 17.3, 0.67), FREE_BODY: (55.0, 5.8, 1.0)}
 
 
+# Systems whose solutions are entire functions with coefficients falling as 1/k! (the charge's
+# sines and cosines): the last two coefficients put the radius of convergence at about
+# (p!)^(1/p) / |Omega|, growing with the order, so the step grows with it (:func:`order_for`).
+ENTIRE = frozenset({CYCLOTRON})
 TIGHT_TOL = 1e-14
 TIGHT_A_MIN = 1.25
 
@@ -87,7 +92,10 @@ def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> tuple[int, float]
     a_min = 1.0 if tol >= TIGHT_TOL else TIGHT_A_MIN
 
     def work(p: int) -> float:
-        return (c0 + c1 * p + c2 * p * p) * math.exp(max(a_min, L / (p - 1)))
+        steps = math.exp(max(a_min, L / (p - 1)))
+        if sys_id in ENTIRE:  # the radius estimate grows as (p!)^(1/p): longer steps
+            steps /= math.exp(math.lgamma(p + 1.0) / p)
+        return (c0 + c1 * p + c2 * p * p) * steps
 
     p = min(range(3, MAX_ORDER + 1), key=work)
     return p, max(a_min, L / (p - 1))
@@ -263,6 +271,16 @@ def _horner(A, d, order, h, y):
 
 
 @njit(cache=True)
+def _eval_kept(sys_id, K, p, d, order, h, y):
+    """The kept step at ``h`` into ``y``: the charge's in closed form (:mod:`.taylor_linear`),
+    the others by Horner's rule."""
+    if sys_id == CYCLOTRON:
+        charge_eval(K, p[0], order, h, y)
+    else:
+        _horner(K, d, order, h, y)
+
+
+@njit(cache=True)
 def _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor):
     """Jorba and Zou's step from the last two orders (``inv_a = 1/(p-1)``, ``inv_b = 1/p``),
     as ``exp(min(log(s/|a|)/(p-1), log(s/|b|)/p))``: two logarithms and one exponential cost
@@ -323,7 +341,7 @@ def _advance_member(
             if y[j] != last[i, j]:
                 same = False
     if same and t1 <= base[i] + span[i]:
-        _horner(K, d, order, (t1 - base[i]) - comp[i], y)
+        _eval_kept(sys_id, K, p, d, order, (t1 - base[i]) - comp[i], y)
     else:
         # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
         # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
@@ -332,14 +350,23 @@ def _advance_member(
         if same:  # finish the kept step, then go on from its end
             t, c = _two_sum(base[i], span[i])
             c += comp[i]
-            _horner(K, d, order, span[i], y)
+            _eval_kept(sys_id, K, p, d, order, span[i], y)
         else:
             t = t0
             c = 0.0
+        if sys_id == CYCLOTRON:  # the linear flow's series in closed form
+            n, base[i], comp[i], span[i] = charge_steps(
+                y, p[0], t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K
+            )
+            stats[i, 0] += n
+            stats[i, 1] += n
+            if span[i] < 0.0:
+                span[i] = 0.0
+                return NONFINITE
         # The series of a step, auxiliary rows included, in scratch that fits in the L1 cache;
         # only the state's rows of the last step are kept (every entry is written before read).
         A = np.empty((N_ROWS, order + 1))
-        while True:
+        while sys_id != CYCLOTRON:
             for j in range(d):
                 A[j, 0] = y[j]
             _expand(sys_id, A, p, order)
