@@ -165,7 +165,8 @@ def _run(args: argparse.Namespace) -> int:
     if fa:
         print(
             f"first answer in a fresh process (hoop, 1e-9): taylor {fa['taylor']['median_s']} s, "
-            f"dop853 {fa['dop853']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s"
+            f"dop853 {fa['dop853']['median_s']} s, taylor compiled ahead of time "
+            f"{fa['taylor-aot']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s"
         )
     print("ns per compiled step (numba / C, same run):")
     for k, v in s["per_step_ns"].items():
