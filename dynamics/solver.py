@@ -16,6 +16,8 @@ evaluated at ``t_end`` by its series): the same final state as a ``Simulation`` 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import params as _v
@@ -33,8 +35,17 @@ __all__ = ["Solver", "solve_taylor"]
 def solve_taylor(sys_id, y0, p, t_end, rtol, atol, order, a, out):
     """``out`` = the state at ``t_end`` from ``y0`` at 0 (kernel parameters ``p``), Taylor's
     method at ``order`` with steps ``rho exp(-a - 0.7 / (order - 1))``; returns the steps taken,
-    or ``-1`` if the state stopped being finite (``out`` then holds the last finite state)."""
+    ``-1`` if the state stopped being finite (``out`` then holds the last state reached), ``-2``
+    if ``y0``, ``p`` or ``t_end`` is not finite (``out`` untouched)."""
     d = y0.size
+    if not math.isfinite(t_end):
+        return -2
+    for v in y0:
+        if not math.isfinite(v):
+            return -2
+    for v in p:
+        if not math.isfinite(v):
+            return -2
     Y = np.empty((1, d))
     for j in range(d):
         Y[0, j] = y0[j]
@@ -120,9 +131,9 @@ class Solver:
     @staticmethod
     def _array(name: str, value, size: int) -> np.ndarray:
         arr = np.ascontiguousarray(value, dtype=np.float64)
-        if arr.shape != (size,) or not np.all(np.isfinite(arr)):
+        if arr.shape != (size,):
             raise ValueError(f"{name} must be {size} finite numbers; got {value!r}")
-        return arr
+        return arr  # finiteness is checked in the compiled solve
 
     def solve(self, t_end: float, state=None, params=None) -> np.ndarray:
         y0 = self.state0 if state is None else self._array("state", state, self._out.size)
@@ -130,6 +141,8 @@ class Solver:
         steps = solve_taylor(
             self.sys_id, y0, p, float(t_end), self.rtol, self.atol, self.order, self.a, self._out
         )
+        if steps == -2:
+            raise ValueError("state, params and t_end must be finite")
         if steps < 0:
             raise FloatingPointError(f"taylor at rtol {self.rtol:g}: the state is not finite")
         self.steps = int(steps)

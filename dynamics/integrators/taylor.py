@@ -134,6 +134,7 @@ def hoop_expand(A, p, order):
     mg = (M + m) * ga
     # rows 0-3: th1, th2, w1, w2
     SU, CU, S1, C1, S2, C2, Q1, Q2, R1, R2, DET, A1, A2 = range(4, 17)
+    inv_det = 0.0
     for k in range(order):
         if k == 0:
             s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
@@ -200,8 +201,11 @@ def hoop_expand(A, p, order):
         A[R2, k] = r2
         n1 += A[CU, 0] * r2
         n2 += A[CU, 0] * r1
-        a1 = (r1 - m * n1 - d1) / A[DET, 0]
-        a2 = (m11 * r2 - n2 - d2) / A[DET, 0]
+        if k == 0:
+            # one division per step: the two quotients' sums are on the chain from order to order
+            inv_det = 1.0 / A[DET, 0]
+        a1 = (r1 - m * n1 - d1) * inv_det
+        a2 = (m11 * r2 - n2 - d2) * inv_det
         A[A1, k] = a1
         A[A2, k] = a2
         inv = 1.0 / (k + 1)
