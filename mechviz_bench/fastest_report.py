@@ -1,9 +1,11 @@
 """Markdown and terminal text for :mod:`mechviz_bench.fastest`'s results: the ratios per case,
-their distribution over the random cases, and every case where a peer is faster."""
+their distribution over the random cases, and every case where a peer is faster; and the
+comparison alone from the command line (``python -m mechviz_bench.fastest_report``: exit
+status 1 when a peer is faster in any case)."""
 
 from __future__ import annotations
 
-from .fastest import PEERS
+from .fastest import PEERS, run
 
 
 def _r(r) -> str:
@@ -128,3 +130,45 @@ def verdict_line(result: dict) -> str:
     if not losses:
         return head + ".**"
     return head + f", slower in {len(losses)}**: " + "; ".join(losses) + "."
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m mechviz_bench.fastest_report``: :mod:`.fastest`'s comparison alone; exit
+    status 1 if a peer is faster in any case (each listed), 2 on bad input."""
+    import argparse
+    import json
+    import os
+    import secrets
+    import sys
+
+    from dynamics.files import write_json_atomically
+
+    parser = argparse.ArgumentParser(
+        prog="python -m mechviz_bench.fastest_report", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument("--seed", type=int, default=None, help="random cases' seed (default: new)")
+    parser.add_argument("--cases", type=int, default=21, help="random cases (default 21)")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default 5)")
+    parser.add_argument("--out", default=None, help="write the results here (JSON)")
+    args = parser.parse_args(argv)
+    if args.cases < 0:
+        parser.error("--cases: must be 0 or more")
+    if args.rounds < 1:
+        parser.error("--rounds: must be 1 or more")
+    seed = secrets.randbits(32) if args.seed is None else args.seed
+    load = [round(x, 2) for x in os.getloadavg()]
+    result = run(seed, args.cases, args.rounds, progress=lambda k: print(k, file=sys.stderr))
+    result["load_average"] = {"before": load, "after": [round(x, 2) for x in os.getloadavg()]}
+    if args.out:
+        write_json_atomically(args.out, result, indent=1)
+    print(markdown(result))
+    losses_ = loss_lines(result)
+    if losses_:
+        print(f"\ntargets missed ({len(losses_)}):")
+        print("\n".join(f"  {line}" for line in losses_))
+    print(json.dumps({"seed": seed, "losses": len(losses_)}))
+    return 1 if losses_ else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
