@@ -428,6 +428,7 @@ def _json_default(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
+@_quiet_scipy
 def _fastest(seed: int | None, n: int, quick: bool, phases: dict) -> dict:
     """The peers in their fastest form against ours (:mod:`.fastest`), with the load."""
     import secrets
