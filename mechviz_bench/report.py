@@ -298,6 +298,23 @@ def ensemble_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def peers_block(result: dict) -> str:
+    """The README's peers block: the peers in their fastest form when the run has them, else
+    the sweeps' head-to-head table."""
+    if result.get("fastest_peers"):
+        from .fastest_report import case_table, distribution_table
+
+        fast = result["fastest_peers"]
+        return "\n\n".join(
+            [
+                case_table(fast),
+                f"Random untuned cases (seed {fast['seed']}), peer / ours:",
+                distribution_table(fast),
+            ]
+        )
+    return peer_table(result)
+
+
 def _peer_sections(result: dict) -> list[str]:
     """The peers' sections: in their fastest form (when run), then their sweeps."""
     sweeps = [
