@@ -77,6 +77,18 @@ def _endurance(args: argparse.Namespace) -> int:
     return 0 if result["targets"]["met"] else 1
 
 
+def _whole(flag: str, text: str, lo: int, hi: int) -> int:
+    from .errors import CliError
+
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise CliError(f"{flag}: must be a whole number, got {text!r}") from None
+    if not lo <= value <= hi:
+        raise CliError(f"{flag}: must be from {lo} to {hi}, got {value}")
+    return value
+
+
 def _run(args: argparse.Namespace) -> int:
     from .errors import CliError
 
@@ -84,8 +96,10 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError(
             f"--clients: must be a whole number from 1 to {MAX_CLIENTS}, got {args.clients}"
         )
-    if args.random_cases < 0:
-        raise CliError(f"--random-cases: must be 0 or more, got {args.random_cases}")
+    # Whole numbers read here (any value of either can be meant, 0 included), refused by name.
+    args.random_cases = _whole("--random-cases", args.random_cases, 0, 1000)
+    if args.seed is not None:
+        args.seed = _whole("--seed", args.seed, 0, 2**32 - 1)
     if args.endurance is not None:
         return _endurance(args)
     from mechviz_bench import PROBLEMS, peers, run_bench, summary
@@ -204,15 +218,13 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--seed",
-        type=int,
         default=None,
         help="with --peers: the seed of the random untuned cases (default: a new one, recorded "
         "in results.json)",
     )
     p.add_argument(
         "--random-cases",
-        type=int,
-        default=21,
+        default="21",
         help="with --peers: how many random untuned cases (default 21)",
     )
     p.add_argument(
