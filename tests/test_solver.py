@@ -78,7 +78,7 @@ def test_the_closed_form_sums_are_the_truncated_series(order):
     """C, S, C1, S1 are the cosine's and sine's Taylor polynomials of order p (and of p - 1
     divided by the next factorial), as the generic recurrences give them."""
     for theta in (0.1, 1.3, 4.0):
-        c, s, c1, s1 = taylor_linear.series_at(theta, order)
+        c, s, c1, s1 = taylor_linear._series(theta, order)
 
         def term(k, extra=0, theta=theta):
             return (-1) ** (k // 2) * theta**k / math.factorial(k + extra)
@@ -99,3 +99,19 @@ def test_the_charge_lands_on_the_exact_helix_from_any_start():
         got = Solver(system, rtol=1e-12).solve(T, y0)
         exact = system.exact(y0, T)
         assert float(system.error(got[None], np.asarray(exact)[None])[0]) < 1e-11
+
+
+@pytest.mark.parametrize("theta", [0.3, -0.9, 2.5, 5.7, -11.0])
+def test_a_long_phase_is_summed_as_substeps_that_land_on_the_rotation(theta):
+    """Beyond a phase of 1 the series are those of 2^n substeps, composed: at order 40 that is
+    the rotation and its integral to round-off (the plain sums at 5.7 lose two digits)."""
+    c, s, c1, s1 = taylor_linear.series_at(theta, 40)
+    exact = (
+        math.cos(theta),
+        math.sin(theta),
+        math.sin(theta) / theta,
+        (1.0 - math.cos(theta)) / theta,
+    )
+    np.testing.assert_allclose((c, s, c1, s1), exact, rtol=0, atol=4e-16 * max(1.0, abs(theta)))
+    if abs(theta) <= 1.0:
+        assert (c, s, c1, s1) == taylor_linear._series(theta, 40)

@@ -312,16 +312,20 @@ def _advance_member(
         # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
         # A kept step carries its start's compensation, so calls that end inside steps (samples,
         # chunks) do the arithmetic of one call.
+        e0 = e1 = e2 = 0.0  # the charge's positions' compensations (:mod:`.taylor_linear`)
         if same:  # finish the kept step, then go on from its end
             t, c = _two_sum(base[i], span[i])
             c += comp[i]
-            _eval_kept(sys_id, K, p, d, order, span[i], y)
+            if sys_id == CYCLOTRON:
+                e0, e1, e2 = charge_eval(K, p[0], order, span[i], y)
+            else:
+                _horner(K, d, order, span[i], y)
         else:
             t = t0
             c = 0.0
         if sys_id == CYCLOTRON:  # the linear flow's series in closed form
             n, base[i], comp[i], span[i] = charge_steps(
-                y, p[0], t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K
+                y, p[0], t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K, e0, e1, e2
             )
             stats[i, 0] += n
             stats[i, 1] += n

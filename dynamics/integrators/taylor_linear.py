@@ -7,7 +7,10 @@ is therefore ``C v + S J v``, with ``C`` and ``S`` the cosine's and sine's serie
 ``p``; the position's is ``r + h (C1 v + S1 J v)`` with ``C1 = sum theta^k / (k+1)!`` over the
 even ``k < p`` (alternating) and ``S1`` over the odd; ``z`` moves by ``h vz``. The same
 polynomial as the generic expansion and Horner's evaluation (:mod:`.taylor`), in four
-scalar series of ``theta^2`` and a 2x2 update per step, instead of six series of ``p`` terms.
+scalar series of ``theta^2`` and a 2x2 update per step, instead of six series of ``p`` terms. A
+step whose phase exceeds 1 is taken as ``2^n`` equal substeps of that polynomial (composed in
+closed form, :func:`series_at`), which keeps the alternating sums from cancelling; the
+positions are summed with compensation (:func:`_flow`).
 
 The step is Jorba and Zou's rule of :mod:`.taylor` with the transverse speed's Euclidean norm
 ``|v_perp|`` in place of the largest component of the last two orders' coefficients: the
@@ -35,9 +38,9 @@ SIGNED_INV_FACT = np.array(
 
 
 @njit(cache=True)
-def series_at(theta, order):
-    """``(C, S, C1, S1)`` at ``theta`` (module docstring): Horner's rule in ``theta^2`` on three
-    sums (``S = theta C1``: the same terms)."""
+def _series(theta, order):
+    """``(C, S, C1, S1)`` at ``theta``: Horner's rule in ``theta^2`` on three sums
+    (``S = theta C1``: the same terms)."""
     u = theta * theta
     f = SIGNED_INV_FACT
     c = 0.0
@@ -54,20 +57,23 @@ def series_at(theta, order):
 
 
 @njit(cache=True)
-def _flow(x0, x1, x2, vx, vy, vz, h, C, S, C1, S1, y):
-    y[0] = x0 + h * (C1 * vx + S1 * vy)
-    y[1] = x1 + h * (C1 * vy - S1 * vx)
-    y[2] = x2 + h * vz
-    y[3] = C * vx + S * vy
-    y[4] = C * vy - S * vx
-    y[5] = vz
-
-
-@njit(cache=True)
-def charge_eval(K, w, order, h, y):
-    """``y`` = the step kept in ``K`` (its start in ``K[:, 0]``) evaluated at ``h`` into it."""
-    C, S, C1, S1 = series_at(w * h, order)
-    _flow(K[0, 0], K[1, 0], K[2, 0], K[3, 0], K[4, 0], K[5, 0], h, C, S, C1, S1, y)
+def series_at(theta, order):
+    """``(C, S, C1, S1)`` of a step of phase ``theta`` (module docstring). A phase beyond 1 is
+    taken as ``2^n`` equal substeps of the series, composed (``R = C + S J``, ``P = C1 + S1 J``:
+    two substeps give ``R'^2`` and ``P' (1 + R') / 2``): the alternating sums then never cancel
+    more than a few units of round-off, where at a phase of 5 their terms reach 10^2 and the
+    error repeated over every step of a long run stops the error from falling below 1e-12."""
+    n = 0
+    t = theta
+    while abs(t) > 1.0:
+        t *= 0.5
+        n += 1
+    c, s, c1, s1 = _series(t, order)
+    for _ in range(n):
+        # (c1 + s1 J)(1 + c + s J) / 2, then (c + s J)^2, with J^2 = -1
+        c1, s1 = 0.5 * (c1 * (1.0 + c) - s1 * s), 0.5 * (c1 * s + s1 * (1.0 + c))
+        c, s = c * c - s * s, 2.0 * c * s
+    return c, s, c1, s1
 
 
 @njit(cache=True)
@@ -78,9 +84,33 @@ def _two_sum(a, b):
 
 
 @njit(cache=True)
-def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K):
-    """Steps from ``y`` at ``t + c`` (time and its compensation) until the step that passes
-    ``t1``; that step is kept (its start in ``K[:, 0]``) and ``y`` is left at ``t1``. Returns
+def _flow(K, h, C, S, C1, S1, y):
+    """``y`` = the step that starts at ``K[:, 0]`` (positions' compensations in ``K[0:3, 1]``)
+    after ``h``; returns the positions' new compensations. The positions are summed with
+    Knuth's two-sum: over hundreds of steps of a large position (the drift along the field) the
+    rounding of each sum would otherwise add up to more than the tightest tolerance."""
+    vx, vy, vz = K[3, 0], K[4, 0], K[5, 0]
+    y[0], e0 = _two_sum(K[0, 0], h * (C1 * vx + S1 * vy) + K[0, 1])
+    y[1], e1 = _two_sum(K[1, 0], h * (C1 * vy - S1 * vx) + K[1, 1])
+    y[2], e2 = _two_sum(K[2, 0], h * vz + K[2, 1])
+    y[3] = C * vx + S * vy
+    y[4] = C * vy - S * vx
+    y[5] = vz
+    return e0, e1, e2
+
+
+@njit(cache=True)
+def charge_eval(K, w, order, h, y):
+    """``y`` = the step kept in ``K`` evaluated at ``h``; returns the positions' compensations."""
+    C, S, C1, S1 = series_at(w * h, order)
+    return _flow(K, h, C, S, C1, S1, y)
+
+
+@njit(cache=True)
+def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K, e0, e1, e2):
+    """Steps from ``y`` (its positions' compensations ``e0, e1, e2``) at ``t + c`` (time and its
+    compensation) until the step that passes ``t1``; that step is kept (its start in
+    ``K[:, 0]``, the compensations in ``K[0:3, 1]``) and ``y`` is left at ``t1``. Returns
     ``(steps, base, comp, span)``, the kept step's start and length; ``span`` is ``-1`` for a
     step that is not finite or lost in round-off (``y`` then holds the last state reached)."""
     aw = abs(w)
@@ -97,8 +127,12 @@ def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, 
     h = 0.0
     C = S = C1 = S1 = 0.0
     while True:
-        x0, x1, x2, vx, vy, vz = y[0], y[1], y[2], y[3], y[4], y[5]
-        m = max(abs(x0), abs(x1), abs(x2), abs(vx), abs(vy), abs(vz))
+        for j in range(6):
+            K[j, 0] = y[j]
+        K[0, 1], K[1, 1], K[2, 1] = e0, e1, e2
+        m = 0.0
+        for j in range(6):
+            m = max(m, abs(y[j]))
         ls = math.log(max(scale_a, scale_r * m))
         if ls != ls_last:
             e = math.inf
@@ -113,10 +147,8 @@ def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, 
             return steps, t, c, -1.0
         rest = (t1 - t) - c
         if h >= rest:
-            for j in range(6):
-                K[j, 0] = y[j]
             charge_eval(K, w, order, rest, y)
             return steps, t, c, h
-        _flow(x0, x1, x2, vx, vy, vz, h, C, S, C1, S1, y)
-        t, e2 = _two_sum(t, h)
-        c += e2
+        e0, e1, e2 = _flow(K, h, C, S, C1, S1, y)
+        t, et = _two_sum(t, h)
+        c += et
