@@ -10,19 +10,40 @@ viewer and the recorder).
 This package never imports viser.
 """
 
-from . import (
-    _jit,  # noqa: F401  (sets up numba's cache before any kernel is defined)
-    measure,
-)
-from . import cyclotron as cyclotron  # the physics modules, by the explicit re-export idiom
-from . import disk as disk
-from . import hoop as hoop
-from .integrators import METHODS, IntegrationError, Method, get_method, methods_for
-from .params import SettingError, parse_number
-from .simulation import Sample, Simulation, Trajectory
-from .spec import Setting, Setup, SystemSpec
-from .steps import Exact, Fixed, Step, Tolerance, step_control
-from .systems import SPECS, SYSTEMS, Cyclotron, DrivenDisk, Hoop, ReleasedDisk
+import importlib
+
+# Loaded when first used (PEP 562), so that ``import dynamics.aot`` and ``dynamics.ids`` cost no
+# numba: every compiled module imports :mod:`._jit` (numba's cache set-up) itself.
+_WHERE = {
+    **dict.fromkeys(
+        ("METHODS", "IntegrationError", "Method", "get_method", "methods_for"), ".integrators"
+    ),
+    **dict.fromkeys(("SettingError", "parse_number"), ".params"),
+    **dict.fromkeys(("Sample", "Simulation", "Trajectory"), ".simulation"),
+    **dict.fromkeys(("Setting", "Setup", "SystemSpec"), ".spec"),
+    **dict.fromkeys(("Exact", "Fixed", "Step", "Tolerance", "step_control"), ".steps"),
+    **dict.fromkeys(
+        ("SPECS", "SYSTEMS", "Cyclotron", "DrivenDisk", "Hoop", "ReleasedDisk"), ".systems"
+    ),
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+        globals()[name] = value
+        return value
+    try:  # a module of the package (dynamics.hoop, dynamics.measure, ...)
+        return importlib.import_module(f".{name}", __name__)
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":  # the module exists; something it imports does not
+            raise
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)
+
 
 __all__ = [
     "METHODS",

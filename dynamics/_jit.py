@@ -11,36 +11,16 @@ plain Python for debugging.
 
 from __future__ import annotations
 
-import hashlib
 import os
-from pathlib import Path
 
-# Left out of the hash: the atlas defines no cached function and nothing compiled imports it, so
-# an edit there must not throw away (and make the next run recompile) every cached kernel. A
-# cached function added there would have to come back in. (The benchmark, mechviz_bench, lives
-# outside this package and is not hashed either.)
-UNCACHED = ("atlas",)
-
-
-def _source_hash(root: Path = Path(__file__).parent) -> str:
-    digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        if path.relative_to(root).parts[0] in UNCACHED:
-            continue
-        digest.update(str(path.relative_to(root)).encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
-
-
-def _cache_dir() -> str:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "mechviz", f"numba-{_source_hash()}")
-
+from ._cachedir import UNCACHED  # noqa: F401  (re-exported: what the hash leaves out)
+from ._cachedir import cache_dir as _cache_dir
+from ._cachedir import source_hash as _source_hash  # noqa: F401  (re-exported)
 
 if "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = _cache_dir()
 
-import numba  # noqa: E402  (must follow the environment set-up above)
+import numba  # (must follow the environment set-up above)
 
 # numba reads NUMBA_CACHE_DIR at import; if it was imported before us, set it directly.
 if not numba.config.CACHE_DIR:

@@ -178,8 +178,7 @@ class Simulation:
         self.state0 = np.atleast_2d(s0).astype(np.float64).copy()
         self.state = self.state0.copy()
         self.p = system.kernel_params()
-        self.E0 = np.asarray(system.energy(self.state0), dtype=float)
-        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
+        self._start_energy: tuple[np.ndarray, np.ndarray] | None = None  # see _energies
         self.t0 = 0.0  # time at which state0 holds (moves with a jump)
         self.t = 0.0  # time reached (fixed step: steps * dt)
         self.clock = 0.0  # time asked for; fixed-step runs carry clock - t to the next call
@@ -191,7 +190,7 @@ class Simulation:
         self._F = np.zeros_like(self.state)
         self._stats = np.zeros((n, 3), dtype=np.int64)
         self._status = np.zeros(3, dtype=np.int64)
-        self._has_exact = system.has_exact(self.state0)
+        self._exact_known: bool | None = None  # see _has_exact
         # the compiled adaptive method's kept steps (made on its first call)
         self._carry: TaylorCarry | Dop853Carry | None = None
         self._taylor_h: float | None = None  # mean Taylor step of the last chunk [s]
@@ -217,6 +216,34 @@ class Simulation:
     def _checked_state(self, state) -> np.ndarray:
         return checked_state(self.system, state)
 
+    @property
+    def E0(self) -> np.ndarray:
+        """The start's energy [J] (N,), against which the energy error is measured."""
+        return self._energies()[0]
+
+    @property
+    def _moving0(self) -> np.ndarray:
+        """The start's energy above the system's floor [J] (N,) (module docstring)."""
+        return self._energies()[1]
+
+    @property
+    def _has_exact(self) -> bool:
+        """Whether the system has a closed form from the start (asked when first needed: a run
+        without a reference may never need it)."""
+        if self._exact_known is None:
+            self._exact_known = bool(self.system.has_exact(self.state0))
+        return self._exact_known
+
+    def _energies(self) -> tuple[np.ndarray, np.ndarray]:
+        # Worked out when first asked for, not when built: a solve that never samples the
+        # energy (a parameter scan) does not pay for it.
+        if self._start_energy is None:
+            self._start_energy = (
+                np.asarray(self.system.energy(self.state0), dtype=float),
+                np.asarray(self.system.energy_above_floor(self.state0), dtype=float),
+            )
+        return self._start_energy
+
     def jump(self, state: np.ndarray) -> None:
         """Replace the state at the current time ``t`` without restarting the run: an impulse
         (a kick) or a new configuration that keeps the clock.
@@ -233,9 +260,8 @@ class Simulation:
         self.state0 = s.copy()
         self.state = s.copy()
         self.t0 = self.t
-        self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
-        self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
-        self._has_exact = self.system.has_exact(self.state0)
+        self._start_energy = None
+        self._exact_known = None
         if self._carry is not None:
             self._carry.forget()  # a kept step and its series or interpolant belong to the old state
         self._taylor_h = None
@@ -259,8 +285,7 @@ class Simulation:
             if not np.all(np.isfinite(s0)):
                 raise ValueError("state must be finite")
             self.state0 = s0.copy()
-            self.E0 = np.asarray(self.system.energy(self.state0), dtype=float)
-            self._moving0 = np.asarray(self.system.energy_above_floor(self.state0), dtype=float)
+            self._start_energy = None
             self._taylor_h = None
         self.state = self.state0.copy()
         self.t = self.clock = self.t0 = 0.0

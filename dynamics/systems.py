@@ -27,6 +27,7 @@ import numpy as np
 
 from . import cyclotron, disk, hoop, measure
 from . import params as _v
+from .ids import NAMES
 from .integrators import kernels
 from .spec import Setting, SystemSpec, param
 
@@ -83,9 +84,9 @@ class Cyclotron(_Adapter):
     """Charge in a uniform field (:mod:`dynamics.cyclotron`)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
-    name = "cyclotron"
-    Params: ClassVar[type] = cyclotron.CyclotronParams
     sys_id = kernels.CYCLOTRON
+    name = NAMES[sys_id]
+    Params: ClassVar[type] = cyclotron.CyclotronParams
     state_names = cyclotron.STATE_NAMES
     closed_form = True
     symmetric_step = "boris"
@@ -161,9 +162,9 @@ class Hoop(_Adapter):
     """Bead on a hanging hoop (:mod:`dynamics.hoop`)."""
 
     params: hoop.HoopParams = hoop.HoopParams()
-    name = "hoop"
-    Params: ClassVar[type] = hoop.HoopParams
     sys_id = kernels.HOOP
+    name = NAMES[sys_id]
+    Params: ClassVar[type] = hoop.HoopParams
     state_names = hoop.STATE_NAMES
     symmetric_step = "verlet"
     amplitude = ("rad", "amplitude A of each normal mode [rad]", (0.01, 1.5))
@@ -241,9 +242,9 @@ class ReleasedDisk(_Adapter):
 
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
-    name = "free-body"
-    Params: ClassVar[type] = disk.DiskParams
     sys_id = kernels.FREE_BODY
+    name = NAMES[sys_id]
+    Params: ClassVar[type] = disk.DiskParams
     state_names = disk.FREE_STATE_NAMES
     symmetric_step = "splitting"
     amplitude = ("rad/s", "extra spin (A, 0, A) at release [rad/s]", (0.0, 1.0))
@@ -433,7 +434,7 @@ MASSES = (1e-3, 1e3)
 RADII = (0.1, 2.0)
 
 CYCLOTRON = SystemSpec(
-    name="cyclotron",
+    name=Cyclotron.name,
     title="Charge in a uniform magnetic field",
     Params=cyclotron.CyclotronParams,
     params=(
@@ -483,7 +484,7 @@ CYCLOTRON = SystemSpec(
 )
 
 HOOP = SystemSpec(
-    name="hoop",
+    name=Hoop.name,
     title="Bead on a hanging hoop",
     Params=hoop.HoopParams,
     params=(

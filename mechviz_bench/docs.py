@@ -47,7 +47,7 @@ BLOCKS = {
     "run": run_line,
     "targets": report.targets_summary,
     "ratios": report.ratio_table,
-    "peers": report.peer_table,
+    "peers": report.peers_block,
     "long-run": report.long_run_table,
     "steps": report.step_table,
 }

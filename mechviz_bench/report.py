@@ -106,7 +106,11 @@ def targets_summary(result: dict) -> str:
     t = result["targets"]
     lines = []
     h2h = result.get("peer_head_to_head") or {}
-    if h2h:
+    if result.get("fastest_peers"):
+        from .fastest_report import verdict_line
+
+        lines.append(verdict_line(result["fastest_peers"]))
+    elif h2h:
         met, missed, unmeasured = _tally(t["ours_at_least_as_fast_as_every_peer"])
         figures = []
         for name in missed:
@@ -165,13 +169,19 @@ def targets_summary(result: dict) -> str:
     first = t.get("first_answer_at_least_as_fast_as_odeint")
     measured = fa and all("median_s" in fa.get(k, {}) for k in ("taylor", "dop853", "scipy-odeint"))
     if measured and first is not None:
-        ours = min(fa["taylor"]["median_s"], fa["dop853"]["median_s"])
+        ours = min(fa[k]["median_s"] for k in ("taylor", "dop853", "taylor-aot") if k in fa)
         theirs = fa["scipy-odeint"]["median_s"]
         verdict = "met" if first else f"missed by {ours / theirs:.1f}x"
+        aot = (
+            f", {fa['taylor-aot']['median_s']} s with `taylor` compiled ahead of time "
+            "(`dynamics.aot`)"
+            if "taylor-aot" in fa
+            else ""
+        )
         lines.append(
             f"- **First answer: {verdict}.** A fresh process reaches the hoop's state at 20 s at "
             f"1e-9 in {fa['taylor']['median_s']} s with `taylor` and {fa['dop853']['median_s']} s "
-            f"with `dop853`, against {theirs} s with scipy's `odeint` (median of "
+            f"with `dop853`{aot}, against {theirs} s with scipy's `odeint` (median of "
             f"{len(fa['taylor']['runs_s'])} processes each)."
         )
     return "\n".join(lines)
@@ -205,8 +215,9 @@ def first_answer_table(result: dict) -> str:
             "| fresh process to the hoop's state at 20 s, 1e-9 | median [s] | runs [s] |",
             "|---|---|---|",
         ]
-        for k in ("taylor", "dop853", "scipy-odeint"):
-            lines.append(f"| {k} | {fa[k]['median_s']} | {fa[k]['runs_s']} |")
+        for k in ("taylor", "dop853", "taylor-aot", "scipy-odeint"):
+            if k in fa:
+                lines.append(f"| {k} | {fa[k]['median_s']} | {fa[k]['runs_s']} |")
     if cons:
         lines += ["", "| problem | new Simulation [us] | restart() [us] |", "|---|---|---|"]
         for k, v in cons.items():
@@ -287,6 +298,54 @@ def ensemble_table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def peers_block(result: dict) -> str:
+    """The README's peers block: the peers in their fastest form when the run has them, else
+    the sweeps' head-to-head table."""
+    if result.get("fastest_peers"):
+        from .fastest_report import case_table, distribution_table
+
+        fast = result["fastest_peers"]
+        return "\n\n".join(
+            [
+                case_table(fast),
+                f"Random untuned cases (seed {fast['seed']}), peer / ours:",
+                distribution_table(fast),
+            ]
+        )
+    return peer_table(result)
+
+
+def _peer_sections(result: dict) -> list[str]:
+    """The peers' sections: in their fastest form (when run), then their sweeps."""
+    sweeps = [
+        "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
+        "interleaved rounds.",
+        peer_table(result),
+    ]
+    if not result.get("fastest_peers"):
+        return [
+            "## Peers: their time over our fastest (below 1, in bold: the peer is faster)"
+        ] + sweeps
+    return [
+        "## Peers in their fastest form: their time over ours (below 1, in bold: the peer is "
+        "faster)",
+        fastest_section(result),
+        "## Peers' sweeps (CyRK called from Python, heyoka without fast_math; the verdict is "
+        "the fastest form's, above)",
+        *sweeps,
+    ]
+
+
+def fastest_section(result: dict) -> str:
+    """The peers in their fastest form (:mod:`.fastest`)."""
+    from .fastest import __doc__ as how
+    from .fastest_report import markdown as fastest_markdown
+
+    return (
+        how.split("\n\n")[1].replace("\n", " ") + "\n\n" + fastest_markdown(result["fastest_peers"])
+    )
+
+
 def markdown(result: dict) -> str:
     head = (
         f"Command: `{result['command']}`; date {result['date']}; {result['duration_s']} s; "
@@ -304,10 +363,7 @@ def markdown(result: dict) -> str:
         "interleaved rounds; *sweep ratio* is the figure from the sweeps alone. Problems ending "
         "in `-untuned` are the cases the methods were not tuned on.",
         ratio_table(result),
-        "## Peers: their time over our fastest (below 1, in bold: the peer is faster)",
-        "Our contenders and the peer's fastest point at each accuracy re-timed head to head in "
-        "interleaved rounds.",
-        peer_table(result),
+        *_peer_sections(result),
         "## First answer and construction",
         first_answer_table(result),
         "## Time per method to reach each accuracy",

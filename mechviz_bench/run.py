@@ -14,7 +14,6 @@ import json
 import math
 import os
 import platform
-import sys
 import time
 import warnings
 from collections.abc import Callable
@@ -25,6 +24,8 @@ from dynamics.simulation import Simulation
 from viz.progress import progress_bar
 
 from . import exhibits, experiments
+from .first_answer import construction_costs as _construction_costs
+from .first_answer import first_answer as _first_answer
 from .peer_sweeps import flag_outliers, peer_table, sweep_peer
 from .problems import (
     ADAPTIVE_OURS,
@@ -157,6 +158,8 @@ def run_bench(
     exhibit_cases: dict | None = None,
     phases: dict | None = None,
     interruptible: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext,
+    seed: int | None = None,
+    random_cases: int = 21,
 ) -> dict:
     """Run everything; write ``out/results.json``, ``tables.md`` and the charts as one set;
     return the result dict.
@@ -168,13 +171,27 @@ def run_bench(
     bench`` passes them); ``None`` skips that part. ``phases``: wall seconds of the caller's own
     measurements made before this call, listed first in ``phases_s``. ``interruptible``: a
     context manager around everything but the writing (the command line's makes Ctrl-C end
-    the run even inside numba's compiler, which swallows ``KeyboardInterrupt``).
+    the run even inside numba's compiler, which swallows ``KeyboardInterrupt``). ``seed`` and
+    ``random_cases``: with ``peers``, the random cases of :mod:`.fastest` (a new seed when
+    ``None``; the seed is in the results).
     """
     out = Path(out)
     with interruptible():
         result, pictures = _measure(
             quick, out, extras, show_progress, charts, peers, extra, exhibit_cases, phases
         )
+        if peers:
+            result["fastest_peers"] = _fastest(seed, random_cases, quick, result["phases_s"])
+            result["duration_s"] = round(
+                result["duration_s"] + result["phases_s"]["peers in their fastest form"], 1
+            )
+            result["targets"] = _targets(
+                result["ratios"],
+                result["per_step"],
+                {},
+                result["first_answer"],
+                result["fastest_peers"],
+            )
     from dynamics.files import write_files_atomically
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
@@ -396,11 +413,33 @@ def _json_default(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
+@_quiet_scipy
+def _fastest(seed: int | None, n: int, quick: bool, phases: dict) -> dict:
+    """The peers in their fastest form against ours (:mod:`.fastest`), with the load."""
+    import secrets
+
+    from . import fastest
+
+    seed = secrets.randbits(32) if seed is None else seed
+    before = _load()
+    t0 = time.perf_counter()
+    out = fastest.run(seed, n, rounds=3 if quick else 5)
+    phases["peers in their fastest form"] = round(time.perf_counter() - t0, 2)
+    out["load_average"] = {"before": before, "after": _load()}
+    return out
+
+
 def _targets(
-    ratios: dict, per_step: dict | None, peer_ratios: dict, first_answer: dict | None = None
+    ratios: dict,
+    per_step: dict | None,
+    peer_ratios: dict,
+    first_answer: dict | None = None,
+    fastest: dict | None = None,
 ) -> dict:
     """Each speed target, met (True), missed (False) or not measurable (None), and the lists of
-    what was missed with the figure that missed."""
+    what was missed with the figure that missed. With ``fastest`` (:mod:`.fastest`'s results)
+    the peers' verdict is its own: every case where a peer in its fastest form is faster than
+    ours, kept or fresh (the sweeps' peer figures, ``peer_ratios``, are then not judged)."""
     speed = {}
     missed = []
     for key, row in ratios.items():
@@ -418,9 +457,23 @@ def _targets(
                 peers[f"{peer} {key} {target}"] = ok
                 if ok is False:
                     missed.append(f"{peer} {key} {target}: {peer} / ours = {e['ratio']:.2f} < 1")
+    if fastest is not None:
+        from .fastest_report import loss_lines
+
+        for key, case in fastest["cases"].items():
+            for target, row in case["targets"].items():
+                for name, r in (row.get("ratios") or {}).items():
+                    peers[f"{name.replace('/', ' ')} {key} {target}"] = (
+                        None if r is None else r >= 1.0
+                    )
+        missed += [f"fastest form: {line}" for line in loss_lines(fastest)]
     first = None
     if first_answer:
-        ours = min(first_answer["taylor"]["median_s"], first_answer["dop853"]["median_s"])
+        ours = min(
+            first_answer[k]["median_s"]
+            for k in ("taylor", "dop853", "taylor-aot")
+            if k in first_answer
+        )
         theirs = first_answer["scipy-odeint"]["median_s"]
         first = ours <= theirs
         if not first:
@@ -441,82 +494,6 @@ def _targets(
         "first_answer_at_least_as_fast_as_odeint": first,
         "missed": missed,
     }
-
-
-def _construction_costs() -> dict:
-    """Microseconds to build a Simulation and to restart one (median of 200, in this process)."""
-    import statistics
-
-    out = {}
-    for key, pb in PROBLEMS.items():
-        build, again = [], []
-        sim = Simulation(pb.system, "taylor", rtol=1e-9, atol=1e-9, state=pb.y0, reference=None)
-        for _ in range(200):
-            t0 = time.perf_counter()
-            Simulation(pb.system, "taylor", rtol=1e-9, atol=1e-9, state=pb.y0, reference=None)
-            t1 = time.perf_counter()
-            sim.restart()
-            t2 = time.perf_counter()
-            build.append(t1 - t0)
-            again.append(t2 - t1)
-        out[key] = {
-            "new_simulation": round(1e6 * statistics.median(build), 2),
-            "restart": round(1e6 * statistics.median(again), 2),
-        }
-    return out
-
-
-FIRST_ANSWER_OURS = """
-import time; t0 = time.perf_counter()
-from dynamics import Hoop, Simulation
-sim = Simulation(Hoop(), {method!r}, rtol=1e-9, atol=1e-9, state=[0.5, -0.3, 0.0, 0.0],
-                 reference=None)
-sim.advance_to(20.0)
-print(time.perf_counter() - t0, float(sim.state[0, 0]))
-"""
-FIRST_ANSWER_SCIPY = """
-import time; t0 = time.perf_counter()
-import math
-from scipy.integrate import odeint
-def f(y, t):
-    th1, th2, w1, w2 = y
-    s, c = math.sin(th1 - th2), math.cos(th1 - th2)
-    r1 = -0.5 * s * w2 * w2 - 1.5 * 9.81 * math.sin(th1)
-    r2 = s * w1 * w1 - 9.81 * math.sin(th2)
-    det = 2.5 - 0.5 * c * c
-    return [w1, w2, (r1 - 0.5 * c * r2) / det, (2.5 * r2 - c * r1) / det]
-y = odeint(f, [0.5, -0.3, 0.0, 0.0], [0.0, 20.0], rtol=1e-9, atol=1e-9)
-print(time.perf_counter() - t0, float(y[-1, 0]))
-"""
-
-
-def _first_answer(repeats: int = 3) -> dict:
-    """Seconds from a fresh interpreter's start to the hoop's state at t = 20 s at 1e-9, ours
-    (Taylor, DOP853) against scipy's odeint with a plain Python right-hand side; the whole
-    process is timed (interpreter start, imports, compilation or cache load, the solve). The
-    first of our runs may fill the compiled-code cache; the median of ``repeats`` is reported."""
-    import statistics
-    import subprocess
-
-    scripts = {
-        "taylor": FIRST_ANSWER_OURS.format(method="taylor"),
-        "dop853": FIRST_ANSWER_OURS.format(method="dop853"),
-        "scipy-odeint": FIRST_ANSWER_SCIPY,
-    }
-    out: dict = {}
-    for name, code in scripts.items():
-        walls = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
-            walls.append(time.perf_counter() - t0)
-        out[name] = {
-            "median_s": round(statistics.median(walls), 3),
-            "runs_s": [round(w, 3) for w in walls],
-        }
-    ours = min(out["taylor"]["median_s"], out["dop853"]["median_s"])
-    out["ours_first_at_least_as_fast_as_scipy"] = ours <= out["scipy-odeint"]["median_s"]
-    return out
 
 
 def summary(result: dict) -> dict:
@@ -576,4 +553,11 @@ def summary(result: dict) -> dict:
         },
         "viewer": result.get("viewer"),
         "charts": result.get("charts"),
+        "fastest_peers": None
+        if not result.get("fastest_peers")
+        else {
+            "seed": result["fastest_peers"]["seed"],
+            "distribution": result["fastest_peers"]["distribution"],
+            "losses": len(result["fastest_peers"]["losses"]),
+        },
     }

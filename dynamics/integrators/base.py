@@ -118,7 +118,8 @@ class Method:
                 ps = sorted({order_for(tol, tol, s)[0] for s in STEP_COST})
                 return f"{ps[0]}" if len(ps) == 1 else f"{ps[0]}-{ps[-1]}"
 
-            lo, hi = picked(0.5), picked(1e-300)
+            lo = min(order_for(0.5, 0.5, s)[0] for s in STEP_COST)
+            hi = max(order_for(1e-300, 1e-300, s)[0] for s in STEP_COST)
             return (
                 f"order from min(rtol, atol): {picked(1e-3)} at 1e-3, {picked(1e-9)} at 1e-9, "
                 f"{picked(1e-12)} at 1e-12 (by system), {lo}-{hi} over all tolerances"

@@ -30,9 +30,9 @@ import numpy as np
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
+from ..ids import CYCLOTRON, FREE_BODY, HOOP  # noqa: F401  (re-exported)
 
-# System ids: index into the tables at the bottom.
-CYCLOTRON, HOOP, FREE_BODY = 0, 1, 2
+# System ids (:mod:`dynamics.ids`): index into the tables at the bottom.
 
 # Status codes written to ``status[0]`` (``status = [code, step index, member index]``);
 # :func:`dynamics.integrators.base.integration_error` words them.

@@ -26,7 +26,6 @@ right-hand-side evaluation to count).
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 
@@ -36,9 +35,17 @@ from numba import prange
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
+from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
+    ENTIRE,
+    MAX_ORDER,
+    STEP_COST,
+    TIGHT_A_MIN,
+    TIGHT_TOL,
+    order_for,
+)
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, report
+from .taylor_linear import charge_eval, charge_steps
 
-MAX_ORDER = 40
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
 # reassociated (SUMS; the order of the terms of a Cauchy product is arbitrary). No other
 # fast-math licence: inf and nan still propagate, so a blow-up is still reported.
@@ -53,44 +60,6 @@ N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary function
 # 1000 members (calls of about 0.1 s); ``MECHVIZ_PARALLEL_MIN`` sets it, 0 turns it off.
 PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 1000) or 1 << 62
 _THREADS = numba.config.NUMBA_NUM_THREADS
-
-
-# Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, per system: the step size and loop
-# (c0), Horner's evaluation and the linear recurrences (c1), the Cauchy products (c2). Measured
-# with the compiled pieces on a 2-core x86-64 VM; only their ratios matter.
-STEP_COST = {CYCLOTRON: (45.0, 5.6, 0.08), HOOP: (50.0, 17.3, 0.67), FREE_BODY: (55.0, 5.8, 1.0)}
-
-
-TIGHT_TOL = 1e-14
-TIGHT_A_MIN = 1.25
-
-
-@functools.lru_cache(maxsize=1024)
-def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> tuple[int, float]:
-    """``(p, a)``: the order and the step ``rho exp(-a)`` that make the work over a span least.
-
-    Jorba and Zou's argument: the error estimate is ``(h / rho)^(p-1) = tol``, so with
-    ``h = rho e^-a`` the order is ``p = ln(1/tol)/a + 1`` and the work over a span is
-    ``cost(p) e^a``. For ``cost ~ p^2`` that is least at ``a = 2``, their choice (and heyoka's);
-    here ``cost(p)`` is the system's :data:`STEP_COST`, whose constant and linear parts favour
-    higher orders and longer steps (``a`` between 1 and 2; only linear terms, the charge: about
-    0.7). ``a`` is kept at least 1 (a step at most ``rho / e``): the estimate from the last two
-    coefficients is trusted only well inside the radius of convergence. Below
-    :data:`TIGHT_TOL` it is at least :data:`TIGHT_A_MIN`: there the round-off of the series' sum
-    matters, and on a long step of an entire solution (the charge's sines, whose estimated radius
-    grows with the order) the terms grow before they fall and cancel (the untuned charge's error
-    stopped at 3e-12 with a = 1, 5e-13 with 1.25).
-    """
-    tol = min(rtol, atol)
-    c0, c1, c2 = STEP_COST[sys_id]
-    L = -math.log(tol)
-    a_min = 1.0 if tol >= TIGHT_TOL else TIGHT_A_MIN
-
-    def work(p: int) -> float:
-        return (c0 + c1 * p + c2 * p * p) * math.exp(max(a_min, L / (p - 1)))
-
-    p = min(range(3, MAX_ORDER + 1), key=work)
-    return p, max(a_min, L / (p - 1))
 
 
 # --------------------------------------------------------------------------- expansions
@@ -165,6 +134,7 @@ def hoop_expand(A, p, order):
     mg = (M + m) * ga
     # rows 0-3: th1, th2, w1, w2
     SU, CU, S1, C1, S2, C2, Q1, Q2, R1, R2, DET, A1, A2 = range(4, 17)
+    inv_det = 0.0
     for k in range(order):
         if k == 0:
             s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
@@ -231,8 +201,11 @@ def hoop_expand(A, p, order):
         A[R2, k] = r2
         n1 += A[CU, 0] * r2
         n2 += A[CU, 0] * r1
-        a1 = (r1 - m * n1 - d1) / A[DET, 0]
-        a2 = (m11 * r2 - n2 - d2) / A[DET, 0]
+        if k == 0:
+            # one division per step: the two quotients' sums are on the chain from order to order
+            inv_det = 1.0 / A[DET, 0]
+        a1 = (r1 - m * n1 - d1) * inv_det
+        a2 = (m11 * r2 - n2 - d2) * inv_det
         A[A1, k] = a1
         A[A2, k] = a2
         inv = 1.0 / (k + 1)
@@ -260,6 +233,16 @@ def _horner(A, d, order, h, y):
         for k in range(order - 1, -1, -1):
             v = v * h + A[j, k]
         y[j] = v
+
+
+@njit(cache=True)
+def _eval_kept(sys_id, K, p, d, order, h, y):
+    """The kept step at ``h`` into ``y``: the charge's in closed form (:mod:`.taylor_linear`),
+    the others by Horner's rule."""
+    if sys_id == CYCLOTRON:
+        charge_eval(K, p[0], order, h, y)
+    else:
+        _horner(K, d, order, h, y)
 
 
 @njit(cache=True)
@@ -323,23 +306,36 @@ def _advance_member(
             if y[j] != last[i, j]:
                 same = False
     if same and t1 <= base[i] + span[i]:
-        _horner(K, d, order, (t1 - base[i]) - comp[i], y)
+        _eval_kept(sys_id, K, p, d, order, (t1 - base[i]) - comp[i], y)
     else:
         # The time is t + c, summed with Kahan's compensation: a rounded t would shift the
         # solution by up to half an ulp of t per step (at t ~ 10^3-10^4 s, 1e-11 over a long run).
         # A kept step carries its start's compensation, so calls that end inside steps (samples,
         # chunks) do the arithmetic of one call.
+        e0 = e1 = e2 = 0.0  # the charge's positions' compensations (:mod:`.taylor_linear`)
         if same:  # finish the kept step, then go on from its end
             t, c = _two_sum(base[i], span[i])
             c += comp[i]
-            _horner(K, d, order, span[i], y)
+            if sys_id == CYCLOTRON:
+                e0, e1, e2 = charge_eval(K, p[0], order, span[i], y)
+            else:
+                _horner(K, d, order, span[i], y)
         else:
             t = t0
             c = 0.0
+        if sys_id == CYCLOTRON:  # the linear flow's series in closed form
+            n, base[i], comp[i], span[i] = charge_steps(
+                y, p[0], t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K, e0, e1, e2
+            )
+            stats[i, 0] += n
+            stats[i, 1] += n
+            if span[i] < 0.0:
+                span[i] = 0.0
+                return NONFINITE
         # The series of a step, auxiliary rows included, in scratch that fits in the L1 cache;
         # only the state's rows of the last step are kept (every entry is written before read).
         A = np.empty((N_ROWS, order + 1))
-        while True:
+        while sys_id != CYCLOTRON:
             for j in range(d):
                 A[j, 0] = y[j]
             _expand(sys_id, A, p, order)

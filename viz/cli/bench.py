@@ -98,6 +98,18 @@ def _video(args: argparse.Namespace) -> int:
     return 0 if result["targets"]["met"] else 1
 
 
+def _whole(flag: str, text: str, lo: int, hi: int) -> int:
+    from .errors import CliError
+
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise CliError(f"{flag}: must be a whole number, got {text!r}") from None
+    if not lo <= value <= hi:
+        raise CliError(f"{flag}: must be from {lo} to {hi}, got {value}")
+    return value
+
+
 def _run(args: argparse.Namespace) -> int:
     from .errors import CliError
 
@@ -105,6 +117,10 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError(
             f"--clients: must be a whole number from 1 to {MAX_CLIENTS}, got {args.clients}"
         )
+    # Whole numbers read here (any value of either can be meant, 0 included), refused by name.
+    args.random_cases = _whole("--random-cases", args.random_cases, 0, 1000)
+    if args.seed is not None:
+        args.seed = _whole("--seed", args.seed, 0, 2**32 - 1)
     if args.endurance is not None:
         return _endurance(args)
     if args.video:
@@ -132,6 +148,8 @@ def _run(args: argparse.Namespace) -> int:
         peers=args.peers,
         exhibit_cases=bench_cases(),
         interruptible=ctrl_c_within_a_second,
+        seed=args.seed,
+        random_cases=args.random_cases,
         phases={
             (
                 f"compile ahead ({processes} processes and this one)"
@@ -173,11 +191,19 @@ def _run(args: argparse.Namespace) -> int:
                     f"{t}: {'n/a' if r is None else f'{r:.2f}'}" for t, r in row.items()
                 )
                 print(f"  {peer:14s} {key:7s} {cells}")
+    if result.get("fastest_peers"):
+        from mechviz_bench.fastest_report import case_table, distribution_table
+
+        fast = result["fastest_peers"]
+        print(f"peers in their fastest form (seed {fast['seed']}; peer / ours, kept, fresh):")
+        print(case_table(fast))
+        print(distribution_table(fast))
     fa = s.get("first_answer")
     if fa:
         print(
             f"first answer in a fresh process (hoop, 1e-9): taylor {fa['taylor']['median_s']} s, "
-            f"dop853 {fa['dop853']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s"
+            f"dop853 {fa['dop853']['median_s']} s, taylor compiled ahead of time "
+            f"{fa['taylor-aot']['median_s']} s, scipy odeint {fa['scipy-odeint']['median_s']} s"
         )
     print("ns per compiled step (numba / C, same run):")
     for k, v in s["per_step_ns"].items():
@@ -212,6 +238,17 @@ def add_commands(sub) -> None:
         action="store_true",
         help="also run CyRK and heyoka (pip install -e '.[peers]'); each not installed is skipped "
         "with the reason",
+    )
+    p.add_argument(
+        "--seed",
+        default=None,
+        help="with --peers: the seed of the random untuned cases (default: a new one, recorded "
+        "in results.json)",
+    )
+    p.add_argument(
+        "--random-cases",
+        default="21",
+        help="with --peers: how many random untuned cases (default 21)",
     )
     p.add_argument(
         "--out",

@@ -1,0 +1,149 @@
+"""A compiled problem solved many times: Taylor's method from a start to a time, nothing else.
+
+:class:`~dynamics.simulation.Simulation` is a run: it keeps time, counters, energy and the
+error against a reference, and builds all of that for each start. A user who solves the same
+system from many starts or with many parameter sets (a parameter scan, a shooting method, a
+benchmark) needs none of it: :class:`Solver` is built once for a system kind and a tolerance,
+and each :meth:`Solver.solve` is one call into compiled code that takes the start and the
+parameters as arrays, so changing them costs nothing but passing them. The same compiled
+function, :func:`solve_taylor`, can be called from a numba ``njit`` function (no Python between
+solves at all).
+
+The steps are :mod:`dynamics.integrators.taylor`'s, from ``t = 0`` to ``t_end`` (the last step
+evaluated at ``t_end`` by its series): the same final state as a ``Simulation`` advanced to
+``t_end`` in one call.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import params as _v
+from ._jit import njit
+from .integrators.kernels import OK
+from .integrators.taylor import _advance_member, order_for
+from .params import SettingError
+from .spec import checked_state
+from .systems import System
+
+__all__ = ["Solver", "solve_taylor"]
+
+
+@njit(cache=True)
+def solve_taylor(sys_id, y0, p, t_end, rtol, atol, order, a, out):
+    """``out`` = the state at ``t_end`` from ``y0`` at 0 (kernel parameters ``p``), Taylor's
+    method at ``order`` with steps ``rho exp(-a - 0.7 / (order - 1))``; returns the steps taken,
+    ``-1`` if the state stopped being finite (``out`` then holds the last state reached), ``-2``
+    if ``y0``, ``p`` or ``t_end`` is not finite (``out`` untouched)."""
+    d = y0.size
+    if not math.isfinite(t_end):
+        return -2
+    for v in y0:
+        if not math.isfinite(v):
+            return -2
+    for v in p:
+        if not math.isfinite(v):
+            return -2
+    Y = np.empty((1, d))
+    for j in range(d):
+        Y[0, j] = y0[j]
+    tol = min(rtol, atol)
+    stats = np.zeros((1, 3), np.int64)
+    kept = np.empty((1, d, order + 1))
+    span = np.zeros(1)
+    base = np.zeros(1)
+    comp = np.zeros(1)
+    last = np.empty((1, d))
+    code = _advance_member(
+        sys_id,
+        0,
+        Y,
+        p,
+        0.0,
+        t_end,
+        order,
+        rtol / tol,
+        atol / tol,
+        1.0 / (order - 1),
+        1.0 / order,
+        np.exp(-a - 0.7 / (order - 1)),
+        stats,
+        kept,
+        base,
+        comp,
+        span,
+        last,
+    )
+    for j in range(d):
+        out[j] = Y[0, j]
+    return stats[0, 1] if code == OK else -1
+
+
+class Solver:
+    """Solve ``system``'s equations with Taylor's method at ``rtol``, ``atol`` (default ``1e-9``
+    and ``rtol``), from any start and with any parameters of that system kind.
+
+    ``solve(t_end, state=None, params=None)`` returns the state at ``t_end`` [s] from ``state``
+    at 0 (default: the system's ``default_state()``), with ``params`` the system's kernel
+    parameters (``System.kernel_params()``; default: ``system``'s). The returned array is this
+    solver's own and is overwritten by the next solve (copy it to keep it). ``steps`` is the
+    last solve's step count. A start or parameters of the wrong size, or not finite, raise
+    ``ValueError``; a solve whose state stops being finite raises ``FloatingPointError``.
+    """
+
+    def __init__(
+        self,
+        system: System,
+        *,
+        rtol: float | None = None,
+        atol: float | None = None,
+    ) -> None:
+        rtol = 1e-9 if rtol is None else _v.positive("rtol", rtol)
+        atol = rtol if atol is None else _v.positive("atol", atol)
+        if system.sys_id is None:
+            raise SettingError("method", f"Taylor's method does not apply to {system.name}")
+        self.system = system
+        self.sys_id = int(system.sys_id)
+        self.rtol, self.atol = float(rtol), float(atol)
+        self.order, self.a = order_for(self.rtol, self.atol, self.sys_id)
+        self._out = np.empty(len(system.state_names))
+        self._state0: np.ndarray | None = None  # the defaults, worked out when first used
+        self._params: np.ndarray | None = None
+        self.steps = 0
+
+    @property
+    def state0(self) -> np.ndarray:
+        """The system's default start (used when ``solve`` is given none)."""
+        if self._state0 is None:
+            s = checked_state(self.system, self.system.default_state())
+            self._state0 = np.ascontiguousarray(s, dtype=np.float64)
+        return self._state0
+
+    @property
+    def params(self) -> np.ndarray:
+        """The system's kernel parameters (used when ``solve`` is given none)."""
+        if self._params is None:
+            self._params = np.ascontiguousarray(self.system.kernel_params(), dtype=np.float64)
+        return self._params
+
+    @staticmethod
+    def _array(name: str, value, size: int) -> np.ndarray:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+        if arr.shape != (size,):
+            raise ValueError(f"{name} must be {size} finite numbers; got {value!r}")
+        return arr  # finiteness is checked in the compiled solve
+
+    def solve(self, t_end: float, state=None, params=None) -> np.ndarray:
+        y0 = self.state0 if state is None else self._array("state", state, self._out.size)
+        p = self.params if params is None else self._array("params", params, self.params.size)
+        steps = solve_taylor(
+            self.sys_id, y0, p, float(t_end), self.rtol, self.atol, self.order, self.a, self._out
+        )
+        if steps == -2:
+            raise ValueError("state, params and t_end must be finite")
+        if steps < 0:
+            raise FloatingPointError(f"taylor at rtol {self.rtol:g}: the state is not finite")
+        self.steps = int(steps)
+        return self._out
