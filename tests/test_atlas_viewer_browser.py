@@ -96,7 +96,9 @@ def test_the_stability_map_marks_the_current_step(viewer):
     for dt in ("0.05", "0.2"):
         # the text box of the row labelled "Step dt" (viser links the label to its row)
         label = page.locator("label", has_text="Step dt").first
-        label.locator("xpath=ancestor::div[.//input][1]//input").first.fill(dt)
+        box = label.locator("xpath=ancestor::div[.//input][1]//input").first
+        box.fill(dt)
+        box.press("Enter")  # a typed number applies on Enter, never half-typed
         wait_until(lambda d=float(dt): ex.config.dt == d, 20, f"dt = {dt}")
         drawn = wait_until(
             lambda d=float(dt): (

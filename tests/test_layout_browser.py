@@ -165,8 +165,9 @@ def _red_pixels(page) -> int:
     from PIL import Image
 
     chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
-    chart.evaluate("e => e.scrollIntoView({block: 'center'})")
-    img = np.asarray(Image.open(io.BytesIO(page.screenshot(clip=chart.bounding_box()))))
+    # the element's own picture: playwright scrolls it into the panel's view and waits for it
+    # to stand still (the hoop's tab is long: its maps come before the chart)
+    img = np.asarray(Image.open(io.BytesIO(chart.screenshot())))
     img = img[..., :3].astype(int)
     return int(((img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)).sum())
 
