@@ -163,11 +163,16 @@ def _red_pixels(page) -> int:
     import io
 
     from PIL import Image
+    from playwright.sync_api import Error as PlaywrightError
 
-    chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
+    chart = next((u for u in page.locator(".uplot").all() if u.is_visible()), None)
     # the element's own picture: playwright scrolls it into the panel's view and waits for it
-    # to stand still (the hoop's tab is long: its maps come before the chart)
-    img = np.asarray(Image.open(io.BytesIO(chart.screenshot())))
+    # to stand still (the hoop's tab is long: its maps come before the chart). The client
+    # mounts the chart anew when its data change: a picture of one that went away is none.
+    try:
+        img = np.asarray(Image.open(io.BytesIO(chart.screenshot(timeout=5000))))
+    except (PlaywrightError, AttributeError):
+        return 0
     img = img[..., :3].astype(int)
     return int(((img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)).sum())
 
