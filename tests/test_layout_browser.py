@@ -163,16 +163,25 @@ def _red_pixels(page) -> int:
     import io
 
     from PIL import Image
-    from playwright.sync_api import Error as PlaywrightError
 
-    chart = next((u for u in page.locator(".uplot").all() if u.is_visible()), None)
-    # the element's own picture: playwright scrolls it into the panel's view and waits for it
-    # to stand still (the hoop's tab is long: its maps come before the chart). The client
-    # mounts the chart anew when its data change: a picture of one that went away is none.
-    try:
-        img = np.asarray(Image.open(io.BytesIO(chart.screenshot(timeout=5000))))
-    except (PlaywrightError, AttributeError):
+    # The client mounts the chart anew as its data change, so no element handle lasts: the
+    # visible chart is found, scrolled into the panel's view and measured in one call, and the
+    # page's picture cropped there (a new chart takes the old one's place).
+    box = page.evaluate(
+        """() => {
+            const u = [...document.querySelectorAll('.uplot')].find(e => e.offsetParent);
+            if (!u) return null;
+            u.scrollIntoView({block: 'center'});
+            const r = u.getBoundingClientRect();
+            return [r.left, r.top, r.width, r.height];
+        }"""
+    )
+    if not box or box[2] < 10 or box[3] < 10:
         return 0
+    x, y, w, h = (int(round(v)) for v in box)
+    img = np.asarray(Image.open(io.BytesIO(page.screenshot())))[
+        max(y, 0) : y + h, max(x, 0) : x + w
+    ]
     img = img[..., :3].astype(int)
     return int(((img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)).sum())
 

@@ -257,7 +257,9 @@ class HoopMapsView:
         """Take finished maps, ask for missing ones, and draw what changed."""
         ex = self.exhibit
         changed = self.maps.update(ex.params, ex.config.method)
-        self.status.content = f"<small>{self.maps.status}</small>" if self.maps.status else ""
+        status = f"<small>{self.maps.status}</small>" if self.maps.status else ""
+        if self.status.content != status:  # an assignment is sent to every client, even unchanged
+            self.status.content = status
         start = tuple(float(x) for x in ex.sim.state0[0, :2])
         dark = getattr(self.app, "theme", "light") == "dark"
         key = (
