@@ -151,7 +151,7 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
             img = browser.screenshot_array(page)
             h, w = img.shape[:2]
             x, y = framing.project([label.position], cam.position, cam.look_at, w, h, cam.fov)[0]
-            crop = img[int(y) : int(y) + 200, int(x) : int(x) + 500].astype(int)
+            crop = img[int(y) : int(y) + 360, int(x) : int(x) + 500].astype(int)
             rows = (crop.sum(axis=2) < 270).sum(axis=1) >= 2
             starts = np.flatnonzero(rows[1:] & ~rows[:-1])
             return len(starts) >= len(label.text.split("\n"))

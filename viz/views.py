@@ -145,7 +145,13 @@ class Views:
     def _show_figures(self) -> None:
         key = self.presenting
         if key is not None and key in self.figures:
-            lines = (f"{name} = {value}" for name, value in self.exhibits[key].key_figures())
+            lines = []
+            for name, value in self.exhibits[key].key_figures():
+                # the theory on a line of its own: drawn large, a whole line runs off the page
+                shown, _, theory = value.partition(" (theory ")
+                lines.append(f"{name} = {shown}")
+                if theory:
+                    lines.append(f"   (theory {theory}")
             self.figures[key].text = "\n".join(lines)
 
     def _move_camera(self, client, view: str, *, present: bool = False) -> None:

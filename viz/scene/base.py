@@ -41,6 +41,15 @@ def brief(x, digits: int = 4) -> str:
     return fmt(x, digits)
 
 
+def against_theory(x, unit: str, theory: float) -> str:
+    """A measured figure beside its theory, short enough to show large: ``2.208 rad/s (theory
+    2.215)``, or ``not resolved (theory 3.836 rad/s)``, the unit never after "not resolved"."""
+    shown = brief(x)
+    if shown == "not resolved":
+        return f"not resolved (theory {fmt(theory, 4)} {unit})"
+    return f"{shown} {unit} (theory {fmt(theory, 4)})"
+
+
 class Exhibit(ExhibitModel):
     """A model drawn: subclasses add ``icon``, ``_build``, ``_started``, ``draw``, ``readout``,
     ``camera``, ``_extent`` and ``build_panel`` to a model class."""

@@ -20,7 +20,7 @@ from dynamics import cyclotron as cy
 
 from .. import geometry as geo
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
-from .base import Exhibit, brief, fmt
+from .base import Exhibit, against_theory, fmt
 
 
 class BeamTrails:
@@ -238,8 +238,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         m = self.measured()
         w_th = cy.gyrofrequency(self.params)
         return [
-            ("ω", f"{brief(m['gyrofrequency'])} rad/s (theory {fmt(w_th, 4)})"),
-            ("r", f"{brief(m['radius'])} m (theory {fmt(self.theory_radius, 4)})"),
+            ("ω", against_theory(m["gyrofrequency"], "rad/s", w_th)),
+            ("r", against_theory(m["radius"], "m", self.theory_radius)),
             *super().key_figures(),
         ]
 

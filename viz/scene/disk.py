@@ -23,7 +23,7 @@ from dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
-from .base import Exhibit, brief, fmt
+from .base import Exhibit, against_theory, fmt
 
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
@@ -381,13 +381,13 @@ class DiskExhibit(DiskModel, Exhibit):
     def key_figures(self) -> list[tuple[str, str]]:
         if self.config.mode == "driven":
             meas = self.measured()["bearing_force"]
-            force = f"{brief(meas)} N (theory {fmt(self.force_amplitude, 4)})"
+            force = against_theory(meas, "N", self.force_amplitude)
             return [("|F_B|", force), ("t", f"{self.t:.1f} s")]
         meas = self.measured()
         return [
             (
                 "polhode period",
-                f"{brief(meas['polhode_period'])} s (theory {fmt(self.polhode_period(), 4)})",
+                against_theory(meas["polhode_period"], "s", self.polhode_period()),
             ),
             *super().key_figures(),
         ]

@@ -20,7 +20,7 @@ from dynamics import hoop as hp
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import add_maps
-from .base import Exhibit, brief, fmt
+from .base import Exhibit, against_theory, fmt
 from .panel import number_text
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -270,7 +270,7 @@ class HoopExhibit(HoopModel, Exhibit):
     def key_figures(self) -> list[tuple[str, str]]:
         freqs, meas = self.mode_frequencies, self.measured()["mode_frequencies"]
         return [
-            *((f"ω{k + 1}", f"{brief(meas[k])} rad/s (theory {fmt(freqs[k], 4)})") for k in (0, 1)),
+            *((f"ω{k + 1}", against_theory(meas[k], "rad/s", freqs[k])) for k in (0, 1)),
             *super().key_figures(),
         ]
 
