@@ -226,7 +226,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     def _extent(self):
         H = self.config.height
-        return (-1.7, -1.7, 0.0), (1.7, 1.7, H + 0.3)
+        # up to the title above the field (its text stands on H + 0.5): framed, it is in the picture
+        return (-1.7, -1.7, 0.0), (1.7, 1.7, H + 0.8)
 
     @property
     def camera(self):
