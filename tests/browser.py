@@ -113,6 +113,24 @@ def open_page(
         shutil.rmtree(profile, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def open_viewer(width: int = 1280, height: int = 800):
+    """The viewer on a free port with its page open in Chromium, as ``(app, page)``; stopped
+    on exit. No environment map: these are geometry checks, and SwiftShader draws lit meshes
+    slowly with it."""
+    require_browser()
+    from viz.app import MechvizApp, warm_up
+
+    warm_up("defaults")
+    app = MechvizApp(port=0, environment_map=False)
+    try:
+        with open_page(app.url, width=width, height=height, timeout_s=60) as page:
+            dismiss_webgl_alert(page)
+            yield app, page
+    finally:
+        app.stop()
+
+
 def canvas(page):
     """viser's WebGL canvas (the first bare ``canvas`` in the DOM is a 0x0 helper)."""
     return page.locator('canvas[data-engine^="three.js"]')

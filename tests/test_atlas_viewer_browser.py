@@ -21,18 +21,9 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 @pytest.fixture(scope="module")
 def viewer():
-    browser.require_browser()
-    from viz.app import MechvizApp, warm_up
-
-    warm_up("defaults")
-    app = MechvizApp(port=0, environment_map=False)
-    try:
-        with browser.open_page(app.url, width=1280, height=800, timeout_s=60) as page:
-            browser.dismiss_webgl_alert(page)
-            page.get_by_role("tab", name=app.exhibits["hoop"].name).click()
-            yield app, page
-    finally:
-        app.stop()
+    with browser.open_viewer() as (app, page):
+        page.get_by_role("tab", name=app.exhibits["hoop"].name).click()
+        yield app, page
 
 
 def project(camera, point, width: float, height: float) -> tuple[float, float]:

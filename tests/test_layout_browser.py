@@ -22,17 +22,8 @@ PAGE = (1280, 800)
 
 @pytest.fixture(scope="module")
 def viewer():
-    browser.require_browser()
-    from viz.app import MechvizApp, warm_up
-
-    warm_up("defaults")
-    app = MechvizApp(port=0, environment_map=False)
-    try:
-        with browser.open_page(app.url, width=PAGE[0], height=PAGE[1], timeout_s=60) as page:
-            browser.dismiss_webgl_alert(page)
-            yield app, page
-    finally:
-        app.stop()
+    with browser.open_viewer(*PAGE) as (app, page):
+        yield app, page
 
 
 def _camera(app, target):

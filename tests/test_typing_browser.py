@@ -20,17 +20,8 @@ TYPED = [("2.5e-2", 0.025), ("1E-2", 0.01), ("1e-3", 0.001), ("abc", None)]
 
 @pytest.fixture(scope="module")
 def viewer():
-    browser.require_browser()
-    from viz.app import MechvizApp, warm_up
-
-    warm_up("defaults")
-    app = MechvizApp(port=0, environment_map=False)
-    try:
-        with browser.open_page(app.url, width=1280, height=800, timeout_s=60) as page:
-            browser.dismiss_webgl_alert(page)
-            yield app, page
-    finally:
-        app.stop()
+    with browser.open_viewer() as (app, page):
+        yield app, page
 
 
 def _box(page, label: str):

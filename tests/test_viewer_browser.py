@@ -23,18 +23,8 @@ pytestmark = pytest.mark.browser
 
 @pytest.fixture(scope="module")
 def viewer():
-    browser.require_browser()
-    from viz.app import MechvizApp, warm_up
-
-    warm_up("defaults")
-    # geometry checks only: no environment map (SwiftShader draws lit meshes slowly with it)
-    app = MechvizApp(port=0, environment_map=False)
-    try:
-        with browser.open_page(app.url, width=1280, height=800, timeout_s=60) as page:
-            browser.dismiss_webgl_alert(page)
-            yield app, page, None
-    finally:
-        app.stop()
+    with browser.open_viewer() as (app, page):
+        yield app, page, None
 
 
 def _hues(img: np.ndarray) -> dict[str, np.ndarray]:
