@@ -55,6 +55,14 @@ class _Adapter:
     general methods.
     """
 
+    #: The system's name (from its compiled id, :data:`dynamics.ids.NAMES`, unless it says one)
+    #: and its parameter dataclass (the type of its default ``params``): both derived when the
+    #: adapter is defined.
+    name: ClassVar[str]
+    Params: ClassVar[type]
+    #: Each state component's label with its unit, in state order (a plot's axis, a CSV
+    #: column's description); the names alone unless the system says more.
+    state_labels: ClassVar[dict[str, str]] = {}
     closed_form: ClassVar[bool] = False
     symmetric_step: ClassVar[str | None] = None
     #: The one-amplitude family of starts the stability atlas sweeps: its unit, its axis label
@@ -68,6 +76,20 @@ class _Adapter:
     def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
         """Each of :attr:`quantity_labels` for states ``(..., d)``, shaped ``(...)``."""
         return {}
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "name" not in cls.__dict__:
+            cls.name = NAMES[cls.sys_id]
+        cls.Params = type(cls.__dict__["params"])
+        labels = cls.__dict__.get("state_labels") or {n: n for n in cls.state_names}
+        if tuple(labels) != tuple(cls.state_names):
+            raise TypeError(f"{cls.__name__}: state_labels must name {cls.state_names} in order")
+        cls.state_labels = labels
+
+    def kernel_params(self) -> np.ndarray:
+        """The parameters as the compiled kernels take them (the physics module's layout)."""
+        return self.params.kernel_params()
 
     def report(self, t: float) -> dict[str, list[float]]:
         """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
@@ -85,15 +107,13 @@ class Cyclotron(_Adapter):
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
     sys_id = kernels.CYCLOTRON
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = cyclotron.CyclotronParams
     state_names = cyclotron.STATE_NAMES
+    state_labels: ClassVar[dict[str, str]] = {
+        n: f"{n} [{'m' if n[0] != 'v' else 'm/s'}]" for n in cyclotron.STATE_NAMES
+    }
     closed_form = True
     symmetric_step = "boris"
     amplitude = ("m/s", "speed across the field [m/s]", (0.1, 2.0))
-
-    def kernel_params(self) -> np.ndarray:
-        return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
         """The start of :data:`CYCLOTRON`: the circle of transverse speed 1 m/s about the axis."""
@@ -163,14 +183,15 @@ class Hoop(_Adapter):
 
     params: hoop.HoopParams = hoop.HoopParams()
     sys_id = kernels.HOOP
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = hoop.HoopParams
     state_names = hoop.STATE_NAMES
+    state_labels: ClassVar[dict[str, str]] = {
+        "theta1": "hoop angle θ1 [rad]",
+        "theta2": "bead angle θ2 [rad]",
+        "omega1": "hoop rate θ1' [rad/s]",
+        "omega2": "bead rate θ2' [rad/s]",
+    }
     symmetric_step = "verlet"
     amplitude = ("rad", "amplitude A of each normal mode [rad]", (0.01, 1.5))
-
-    def kernel_params(self) -> np.ndarray:
-        return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
         """The start of :data:`HOOP`: both normal modes, at rest."""
@@ -243,9 +264,12 @@ class ReleasedDisk(_Adapter):
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
     sys_id = kernels.FREE_BODY
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = disk.DiskParams
     state_names = disk.FREE_STATE_NAMES
+    # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
+    state_labels: ClassVar[dict[str, str]] = {
+        **{f"w{k}": f"body ω{'₁₂₃'[k - 1]} [rad/s]" for k in (1, 2, 3)},
+        **{f"q{k}": f"quaternion q{k}" for k in range(4)},
+    }
     symmetric_step = "splitting"
     amplitude = ("rad/s", "extra spin (A, 0, A) at release [rad/s]", (0.0, 1.0))
 
@@ -327,9 +351,12 @@ class DrivenDisk(_Adapter):
 
     params: disk.DiskParams = disk.DiskParams()
     name = "driven-disk"
-    Params: ClassVar[type] = disk.DiskParams
     sys_id = None
     state_names = ("angle", "omega")
+    state_labels: ClassVar[dict[str, str]] = {
+        "angle": "angle about the axle [rad]",
+        "omega": "spin ω [rad/s]",
+    }
     closed_form = True
 
     def kernel_params(self) -> np.ndarray:
