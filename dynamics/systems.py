@@ -103,7 +103,8 @@ def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Cyclotron(_Adapter):
-    """Charge in a uniform field (:mod:`dynamics.cyclotron`)."""
+    """Charge in a uniform field along +z (:mod:`dynamics.cyclotron`): state ``(x, y, z, vx, vy,
+    vz)`` [m, m/s]; its exact flow is a helix, known from every state (the ``exact`` method)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
     sys_id = kernels.CYCLOTRON
@@ -465,23 +466,9 @@ CYCLOTRON = SystemSpec(
     title="Charge in a uniform magnetic field",
     Params=cyclotron.CyclotronParams,
     params=(
-        param(
-            cyclotron.CyclotronParams,
-            "charge",
-            "Charge q",
-            "C",
-            "charge q [C] (signed, nonzero)",
-            span=(-1e3, 1e3),
-        ),
-        param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]", span=MASSES),
-        param(
-            cyclotron.CyclotronParams,
-            "field",
-            "Field B",
-            "T",
-            "field B [T] along +z (nonzero)",
-            span=(-1e3, 1e3),
-        ),
+        param("charge", "Charge q", "C", "charge q [C] (signed, nonzero)", span=(-1e3, 1e3)),
+        param("mass", "Mass m", "kg", span=MASSES),
+        param("field", "Field B", "T", "field B [T] along +z (nonzero)", span=(-1e3, 1e3)),
     ),
     start=(
         Setting(
@@ -515,12 +502,10 @@ HOOP = SystemSpec(
     title="Bead on a hanging hoop",
     Params=hoop.HoopParams,
     params=(
-        param(hoop.HoopParams, "hoop_mass", "Hoop mass M", "kg", "hoop mass M [kg]", span=MASSES),
-        param(hoop.HoopParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
-        param(hoop.HoopParams, "radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
-        param(
-            hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]", span=(1e-2, 1e3)
-        ),
+        param("hoop_mass", "Hoop mass M", "kg", span=MASSES),
+        param("bead_mass", "Bead mass m", "kg", span=MASSES),
+        param("radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
+        param("gravity", "Gravity g", "m/s²", span=(1e-2, 1e3)),
     ),
     start=(
         Setting(
@@ -544,17 +529,10 @@ DISK = SystemSpec(
     title="Spinning disk with a bead",
     Params=disk.DiskParams,
     params=(
-        param(disk.DiskParams, "disk_mass", "Disk mass M", "kg", "disk mass M [kg]", span=MASSES),
-        param(disk.DiskParams, "radius", "Radius R", "m", "disk radius R [m]", span=RADII),
-        param(disk.DiskParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
-        param(
-            disk.DiskParams,
-            "omega",
-            "Spin ω",
-            "rad/s",
-            "spin rate about the axle [rad/s]",
-            span=(-50.0, 50.0),
-        ),
+        param("disk_mass", "Disk mass M", "kg", span=MASSES),
+        param("radius", "Radius R", "m", "disk radius R [m]", span=RADII),
+        param("bead_mass", "Bead mass m", "kg", span=MASSES),
+        param("omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]", span=(-50.0, 50.0)),
     ),
     start=(
         Setting(
