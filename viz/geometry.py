@@ -20,7 +20,7 @@ with sigint_held():  # trimesh swallows a KeyboardInterrupt raised while it impo
 
 def lines(scene, name: str, segments, colors, thickness: float, **kwargs):
     """viser line segments ``(N, 2, 3)`` [m] under ``name``, ``thickness`` in screen pixels (a
-    line reads the same at every zoom and on a projector); ``colors`` one RGB or one a point."""
+    line reads the same at every zoom and on a projector); ``colors`` one RGB, or one per point."""
     return scene.add_line_segments(
         name,
         segments,
