@@ -109,7 +109,8 @@ def test_the_plot_shows_the_motion_and_its_exact_curve(
         app.enqueue(key, command)
     frames_later(app, 2)  # the commands are applied at the start of a frame
     _choose(app, key, *pair)
-    wait_until(lambda: len(app.exhibits[key].trace) >= 200, 20, "the path to grow")
+    # 200 points are 600 frames (a point each measured frame, every third): 10 s at 60 fps
+    wait_until(lambda: len(app.exhibits[key].trace) >= 200, 60, "the path to grow")
     img = _plot(page, tab)
     assert app.panels[key].plot_choice == pair
     _save(img, name, tmp_path)

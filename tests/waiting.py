@@ -3,7 +3,8 @@
 A time limit only says how long a test waits before it calls a condition that never came a
 failure, so it scales with the machine: ``MECHVIZ_TIMEOUT_FACTOR`` multiplies every limit (set
 it on a slow or shared machine), and a load average above the number of cores raises it
-further, as measured when the tests start.
+further: the load when the tests started or the load now, whichever is higher (another job
+that starts halfway through a run slows every test after it).
 """
 
 from __future__ import annotations
@@ -16,31 +17,34 @@ from typing import TypeVar
 
 T = TypeVar("T")
 
+_SET = float(os.environ.get("MECHVIZ_TIMEOUT_FACTOR", "1") or 1)
 
-def _factor() -> float:
-    factor = float(os.environ.get("MECHVIZ_TIMEOUT_FACTOR", "1") or 1)
+
+def _load() -> float:
+    """The load average per core, at least 1."""
     try:
-        load = os.getloadavg()[0] / (os.cpu_count() or 1)
+        return max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
     except OSError:
-        load = 1.0
-    return factor * max(1.0, load)
+        return 1.0
 
 
-FACTOR = _factor()
+FACTOR = _SET * _load()  # as the tests started
 
 
 def scaled(seconds: float) -> float:
-    """A time limit of ``seconds`` on a quiet machine, scaled for this one."""
-    return seconds * FACTOR
+    """A time limit of ``seconds`` on a quiet machine, scaled for this one as it is now."""
+    return seconds * max(FACTOR, _SET * _load())
 
 
 def wait_until(condition: Callable[[], T], timeout_s: float, what: str, poll_s: float = 0.05) -> T:
     """Poll ``condition()`` until it returns something true and return that; ``TimeoutError``
-    naming ``what`` after :func:`scaled` (``timeout_s``) seconds."""
-    deadline = time.monotonic() + scaled(timeout_s)
+    naming ``what`` after :func:`scaled` (``timeout_s``) seconds, the limit scaled afresh at
+    every poll."""
+    start = time.monotonic()
     while not (value := condition()):
-        if time.monotonic() > deadline:
-            raise TimeoutError(f"timed out after {scaled(timeout_s):.0f} s waiting for {what}")
+        limit = scaled(timeout_s)
+        if time.monotonic() - start > limit:
+            raise TimeoutError(f"timed out after {limit:.0f} s waiting for {what}")
         time.sleep(poll_s)
     return value
 
