@@ -6,10 +6,15 @@ frame runs unless told). A picture of playback time ``t`` is made by *seeking* t
 ``t`` (its time box: every recorded message up to ``t`` is applied, exactly, whatever the
 machine's speed), running one animation frame of the fake clock (one WebGL render), and copying
 the canvas into an image inside the page (JPEG for video frames, PNG for stills), which is the
-only thing that crosses to Python. The player draws a frame on the animation frame *after* the
-one that applies a seek, so a video's frames are pipelined: each animation frame draws frame
-``k`` and applies the seek to frame ``k + 1``, one WebGL render per frame, and one call to the
-page per frame both takes the picture and queues the next seek.
+only thing that crosses to Python. The page is told it is hidden: viser then applies a seek's
+messages at once, as the seek is made (a visible page applies them inside the next animation
+frame, where the updates that go through React reach the picture one frame after the poses,
+so that frame would mix two moments). One call to the page per frame takes the picture and
+makes the next seek.
+
+A video's frames can be drawn by several copies of the page in turn (:meth:`Player.jpegs`):
+software WebGL draws a frame on every core, but a page's own work (its scripts, copying the
+canvas, encoding the JPEG) runs on one, and meanwhile another page's frame can be drawn.
 
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
@@ -41,11 +46,14 @@ JPEG_QUALITY = 0.92
 # One step of the fake clock: one animation frame (the player's rAF loop)
 TICK_MS = 16
 
-# Installed before the page's own scripts: the WebGL canvas keeps its picture after it is shown
-# (so it can be copied between animation frames), a seek goes through the time box's React
-# handler, and a picture is the canvas painted over the page's background.
+# Installed before the page's own scripts: the page reports itself hidden (see the module
+# docstring), the WebGL canvas keeps its picture after it is shown (so it can be copied between
+# animation frames), a seek goes through the time box's React handler, and a picture is the
+# canvas painted over the page's background.
 _INIT = """
 (() => {
+  Object.defineProperty(Document.prototype, "hidden", { get: () => true });
+  Object.defineProperty(Document.prototype, "visibilityState", { get: () => "hidden" });
   const getContext = HTMLCanvasElement.prototype.getContext;
   HTMLCanvasElement.prototype.getContext = function (type, attrs) {
     if (type === "webgl2" || type === "webgl") {
@@ -107,7 +115,8 @@ class Player:
     temporary folder removed on exit, whatever ends the block (Ctrl-C and SIGTERM included).
 
     ``antialias``: the WebGL canvas's multisampling (smoother lines; in software WebGL it costs
-    about as much as the rest of a frame)."""
+    about as much as the rest of a frame). ``pages``: copies of the page that draw a video's
+    frames in turn (see :meth:`jpegs`)."""
 
     def __init__(
         self,
@@ -116,9 +125,13 @@ class Player:
         *,
         camera: Camera | None = None,
         antialias: bool = True,
+        pages: int = 1,
         executable: str | None = None,
     ) -> None:
+        if pages < 1:
+            raise ValueError(f"pages: at least 1, got {pages}")
         self.page_html = page_html
+        self.pages = int(pages)
         self.size = (int(size[0]), int(size[1]))
         self.camera = camera or Camera()
         self.antialias = antialias
@@ -126,6 +139,7 @@ class Player:
         self.load_seconds = 0.0
         self._stack = contextlib.ExitStack()
         self._page = None
+        self._all: list = []  # every page; ``_page`` is the first
 
     # ------------------------------------------------------------------ set-up
     def __enter__(self) -> Player:
@@ -147,10 +161,15 @@ class Player:
                 pw, str(Path(tmp) / "profile"), self.executable, W / scale, H / scale, scale
             )
             self._stack.callback(_close_quietly, context)
-            page = first_page(context)
-            page.add_init_script(_INIT.replace("ANTIALIAS", "true" if self.antialias else "false"))
-            self._page = page
-            self._load(html, scale)
+            init = _INIT.replace("ANTIALIAS", "true" if self.antialias else "false")
+            for i in range(self.pages):
+                page = first_page(context) if i == 0 else context.new_page()
+                page.add_init_script(init)
+                self._all.append(page)
+            for page in self._all:
+                self._page = page
+                self._load(html, scale)
+            self._page = self._all[0]
         except PlaywrightError as exc:
             self._stack.close()
             raise PlayerError(f"Chromium failed while loading the recording: {exc}") from None
@@ -194,11 +213,11 @@ class Player:
             page.clock.run_for(100)
 
     # ------------------------------------------------------------------ pictures
-    def _seek(self, t: float) -> None:
-        self._page.evaluate(f"window.__mechvizSeek({float(t)!r})")
+    def _seek(self, t: float, page=None) -> None:
+        (page or self._page).evaluate(f"window.__mechvizSeek({float(t)!r})")
 
-    def _tick(self) -> None:
-        self._page.clock.run_for(TICK_MS)
+    def _tick(self, page=None) -> None:
+        (page or self._page).clock.run_for(TICK_MS)
 
     def _picture(self, mime: str) -> bytes:
         W, H = self.size
@@ -207,25 +226,30 @@ class Player:
 
     def jpegs(self, times: Sequence[float]) -> Iterator[bytes]:
         """JPEG pictures of the recording at each playback time in ``times`` (ascending), one
-        WebGL render each (see the module docstring)."""
+        WebGL render each (see the module docstring), in the order of ``times``.
+
+        With ``n`` pages, page ``i`` draws frames ``i, i + n, i + 2n, ...``, and the pages are
+        called in turn: page ``p`` is asked for its picture of frame ``k`` (and seeks to frame
+        ``k + n``) only after the other pages were each given a frame to draw, so its frame
+        was drawn meanwhile; then an animation frame starts the drawing of frame ``k + n``."""
         from playwright.sync_api import Error as PlaywrightError
 
         W, H = self.size
+        count = len(times)
+        n = min(len(self._all), count)
+        pages = self._all[:n]
         try:
-            if not len(times):
-                return
-            self._seek(times[0])
-            self._tick()  # applies the seek to frame 0
-            if len(times) > 1:
-                self._seek(times[1])
-            for k in range(len(times)):
-                # draws frame k (applied one animation frame ago), applies the seek to k + 1;
-                # then the picture of frame k is taken and the seek to k + 2 queued
-                self._tick()
-                t = repr(float(times[k + 2])) if k + 2 < len(times) else "null"
-                url = self._page.evaluate(
+            for i, page in enumerate(pages):
+                self._seek(times[i], page)
+                self._tick(page)  # draws frame i
+            for k in range(count):
+                page = pages[k % n]
+                t = repr(float(times[k + n])) if k + n < count else "null"
+                url = page.evaluate(
                     f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t})"
                 )
+                if k + n < count:
+                    self._tick(page)  # draws frame k + n
                 yield base64.b64decode(url.split(",", 1)[1])
         except PlaywrightError as exc:
             raise PlayerError(f"Chromium failed while drawing the frames: {exc}") from None

@@ -38,6 +38,7 @@ from .chromium import find_chromium
 from .encoders import GifWriter, Mp4Writer, gif_delays_ms
 from .overlay import Overlay
 from .player import Player, PlayerError, decode
+from .recording_edit import page_without_shadows
 
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
@@ -47,6 +48,9 @@ MAX_FPS = 60
 # Multisampling doubles the cost of a frame in software WebGL: videos go without it (at 960x540
 # and above the lines stay clean enough), stills have it.
 ANTIALIAS = False
+# Copies of the page drawing a video's frames in turn: while one encodes its picture, the other's
+# frame is drawn (software WebGL spreads one frame over the cores, but not the page's own work).
+PAGES = 2
 
 ProgressFn = Callable[[int, int], None]
 
@@ -361,6 +365,7 @@ def write_video(
     look: Look = Look(),
     progress: ProgressFn | None = None,
     antialias: bool = ANTIALIAS,
+    pages: int = PAGES,
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
 
@@ -373,6 +378,7 @@ def write_video(
     times = clip.playback_times()
     overlay = _overlay(clip, look, size, [clip.simulated(t) for t in times])
     camera = camera_for(clip, look, size, overlay)
+    page = page_without_shadows(clip.page)
     require_chromium()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
@@ -380,7 +386,7 @@ def write_video(
     post = None
     try:
         writer = (Mp4Writer if fmt == "mp4" else GifWriter)(tmp, size, clip.fps)
-        with Player(clip.page, size, camera=camera, antialias=antialias) as player:
+        with Player(page, size, camera=camera, antialias=antialias, pages=pages) as player:
             t0 = time.perf_counter()
             post = _Finisher(writer, overlay, clip, times, progress)
             # a little past each frame's time: its messages are in, the next frame's are not
