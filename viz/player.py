@@ -68,6 +68,16 @@ _INIT = """
     setValue.call(box, t.toFixed(9));
     box.dispatchEvent(new Event("input", { bubbles: true }));
   };
+  // The player starts playing as soon as it has the recording: its time box is marked and the
+  // player held at 0 the moment the box appears, before any timer can run.
+  const hold = new MutationObserver(() => {
+    const box = document.querySelector("input.mantine-NumberInput-input");
+    if (box === null) return;
+    hold.disconnect();
+    box.setAttribute("data-mechviz-time", "");
+    window.__mechvizSeek(1e-9);
+  });
+  hold.observe(document, { childList: true, subtree: true });
   let out = null;
   window.__mechvizPicture = (type, quality, width, height) => {
     const src = document.querySelector('canvas[data-engine^="three.js"]');
@@ -83,12 +93,17 @@ _INIT = """
     ctx.drawImage(src, 0, 0, width, height);
     return out.toDataURL(type, quality);
   };
-  // one call per frame: the picture the last animation frame drew, then the next seek
-  window.__mechvizPictureThenSeek = (type, quality, width, height, t) => {
+  // one call per frame: the picture the last animation frame drew, then the next seek and
+  // (tickMs > 0) the animation frame that draws it, run by this page's own fake clock
+  window.__mechvizPictureThenSeek = async (type, quality, width, height, t, tickMs) => {
     const picture = window.__mechvizPicture(type, quality, width, height);
-    if (t !== null) window.__mechvizSeek(t);
+    if (t !== null) {
+      window.__mechvizSeek(t);
+      if (tickMs > 0) await globalThis.__pwClock.controller.runFor(tickMs);
+    }
     return picture;
   };
+  window.__mechvizTick = (tickMs) => globalThis.__pwClock.controller.runFor(tickMs);
 })();
 """
 
@@ -140,6 +155,7 @@ class Player:
         self._stack = contextlib.ExitStack()
         self._page = None
         self._all: list = []  # every page; ``_page`` is the first
+        self._own_clock = False  # see _load
 
     # ------------------------------------------------------------------ set-up
     def __enter__(self) -> Player:
@@ -166,10 +182,15 @@ class Player:
                 page = first_page(context) if i == 0 else context.new_page()
                 page.add_init_script(init)
                 self._all.append(page)
-            for page in self._all:
-                self._page = page
-                self._load(html, scale)
             self._page = self._all[0]
+            self._load(html, scale)
+            # playwright's clock steps every page of the browser at once (and keeps a log of
+            # every step); where the page's own end of it can be reached, each page is stepped
+            # alone, in the same call that takes its picture
+            self._own_clock = all(
+                p.evaluate("typeof globalThis.__pwClock?.controller?.runFor === 'function'")
+                for p in self._all
+            )
         except PlaywrightError as exc:
             self._stack.close()
             raise PlayerError(f"Chromium failed while loading the recording: {exc}") from None
@@ -183,45 +204,71 @@ class Player:
         self._stack.close()
 
     def _load(self, html: Path, scale: float) -> None:
-        page = self._page
-        page.clock.install(time=0)
+        """Every page loaded together: playwright's clock is one for all the pages of the
+        browser (installed once, every step stepping them all), so they load side by side."""
+        pages, clock = self._all, self._all[0].clock
+        clock.install(time=0)
+        clock.pause_at(1)  # from the start: no timer runs unless stepped
         query = {"fixedDpr": f"{scale:.6g}", **self.camera.query()}
-        page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
-        page.clock.pause_at(page.evaluate("() => Date.now()") + 100)
-        canvas = page.locator('canvas[data-engine^="three.js"]')
-        time_box = page.get_by_role("textbox")
+        for page in pages:
+            page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
         deadline = time.monotonic() + LOAD_TIMEOUT_S
-        # Short steps: the player starts playing as soon as it has the recording, and must not
-        # get past its first frame before the seek below holds it at 0.
-        while not time_box.count():
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's page did not load in Chromium (no player)")
-            page.clock.run_for(TICK_MS)
-        time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
+
+        def wait(ready, step_ms: int, what: str) -> None:
+            waiting = list(pages)
+            while True:
+                waiting = [page for page in waiting if not ready(page)]
+                if not waiting:
+                    return
+                if time.monotonic() > deadline:
+                    raise PlayerError(what)
+                clock.run_for(step_ms)
+
+        wait(self._hold, TICK_MS, "the recording's page did not load in Chromium (no player)")
+        canvas = 'canvas[data-engine^="three.js"]'
+        wait(
+            lambda page: page.locator(canvas).count(),
+            100,
+            "the recording's page did not load in Chromium (no canvas)",
+        )
+        wait(
+            lambda page: drawn(decode(self._picture("image/jpeg", page))),
+            100,
+            "the recording's scene was never drawn in Chromium",
+        )
+
+    def _hold(self, page) -> bool:
+        """Once the player is there: its time box marked and the player held at 0 (the page's
+        own script does both as the box appears; here, if it did not know the box, as soon as
+        it is seen), and the page made invisible. False while the player is not there yet."""
+        if not page.locator("input[data-mechviz-time]").count():
+            time_box = page.get_by_role("textbox")
+            if not time_box.count():
+                return False
+            time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
         # Nothing on the page is ever shown (pictures are copied from the canvas's own buffer):
         # hidden, the playback bar costs no layout or paint when a seek re-renders it, and the
         # page's compositor has nothing to draw.
         page.add_style_tag(content=".mantine-Paper-root, canvas { visibility: hidden !important; }")
-        self._seek(1e-9)  # seeking pauses the player: from now on only our seeks move it
-        while not canvas.count():
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's page did not load in Chromium (no canvas)")
-            page.clock.run_for(100)
-        while not drawn(decode(self._picture("image/jpeg"))):
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's scene was never drawn in Chromium")
-            page.clock.run_for(100)
+        self._seek(1e-9, page)  # seeking pauses the player: from now on only our seeks move it
+        return True
 
     # ------------------------------------------------------------------ pictures
     def _seek(self, t: float, page=None) -> None:
         (page or self._page).evaluate(f"window.__mechvizSeek({float(t)!r})")
 
     def _tick(self, page=None) -> None:
-        (page or self._page).clock.run_for(TICK_MS)
+        page = page or self._page
+        if self._own_clock:
+            page.evaluate(f"window.__mechvizTick({TICK_MS})")
+        else:
+            page.clock.run_for(TICK_MS)
 
-    def _picture(self, mime: str) -> bytes:
+    def _picture(self, mime: str, page=None) -> bytes:
         W, H = self.size
-        url = self._page.evaluate(f"window.__mechvizPicture({mime!r}, {JPEG_QUALITY}, {W}, {H})")
+        url = (page or self._page).evaluate(
+            f"window.__mechvizPicture({mime!r}, {JPEG_QUALITY}, {W}, {H})"
+        )
         return base64.b64decode(url.split(",", 1)[1])
 
     def jpegs(self, times: Sequence[float]) -> Iterator[bytes]:
@@ -242,13 +289,15 @@ class Player:
             for i, page in enumerate(pages):
                 self._seek(times[i], page)
                 self._tick(page)  # draws frame i
+            tick = TICK_MS if self._own_clock else 0
             for k in range(count):
                 page = pages[k % n]
                 t = repr(float(times[k + n])) if k + n < count else "null"
                 url = page.evaluate(
-                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t})"
-                )
-                if k + n < count:
+                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, "
+                    f"{t}, {tick})"
+                )  # with the page's own clock, its animation frame drew frame k + n too
+                if k + n < count and not tick:
                     self._tick(page)  # draws frame k + n
                 yield base64.b64decode(url.split(",", 1)[1])
         except PlaywrightError as exc:

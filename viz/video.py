@@ -366,8 +366,13 @@ def write_video(
     progress: ProgressFn | None = None,
     antialias: bool = ANTIALIAS,
     pages: int = PAGES,
+    shadows: bool = False,
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
+
+    ``antialias``, ``pages`` (:class:`viz.player.Player`) and ``shadows`` (the default lights'
+    shadow maps, :mod:`viz.recording_edit`) say how the frames are drawn; the defaults are the
+    fastest way that gives the same picture.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`, the camera),
     :class:`NoChromium` without a browser, :class:`VideoError` if drawing or encoding fails;
@@ -378,7 +383,7 @@ def write_video(
     times = clip.playback_times()
     overlay = _overlay(clip, look, size, [clip.simulated(t) for t in times])
     camera = camera_for(clip, look, size, overlay)
-    page = page_without_shadows(clip.page)
+    page = clip.page if shadows else page_without_shadows(clip.page)
     require_chromium()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
