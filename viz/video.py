@@ -50,7 +50,8 @@ MAX_FPS = 60
 ANTIALIAS = False
 # Copies of the page drawing a video's frames in turn: while one encodes its picture, the other's
 # frame is drawn (software WebGL spreads one frame over the cores, but not the page's own work).
-PAGES = 2
+# On one core there is nothing to overlap.
+PAGES = 2 if (os.cpu_count() or 1) > 1 else 1
 
 ProgressFn = Callable[[int, int], None]
 
