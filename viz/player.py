@@ -12,9 +12,10 @@ frame, where the updates that go through React reach the picture one frame after
 so that frame would mix two moments). One call to the page per frame takes the picture and
 makes the next seek.
 
-A video's frames can be drawn by several copies of the page in turn (:meth:`Player.jpegs`):
-software WebGL draws a frame on every core, but a page's own work (its scripts, copying the
-canvas, encoding the JPEG) runs on one, and meanwhile another page's frame can be drawn.
+A video's frames can be drawn by several copies of the page in turn, each in a browser of its
+own (:meth:`Player.jpegs`): software WebGL draws a frame on every core, but a page's own work
+(its scripts, copying the canvas, encoding the JPEG) runs on one, and meanwhile another page's
+frame can be drawn.
 
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
@@ -173,20 +174,22 @@ class Player:
             pw = self._stack.enter_context(sync_playwright())
             W, H = self.size
             scale = H / LAYOUT_HEIGHT
-            context = launch(
-                pw, str(Path(tmp) / "profile"), self.executable, W / scale, H / scale, scale
-            )
-            self._stack.callback(_close_quietly, context)
             init = _INIT.replace("ANTIALIAS", "true" if self.antialias else "false")
+            # one browser per page: each has a GPU process (software WebGL) of its own, so the
+            # pages' first frames (shaders compiled, the environment map prepared) are made
+            # side by side, and a page's fake clock steps that page alone
             for i in range(self.pages):
-                page = first_page(context) if i == 0 else context.new_page()
+                profile = str(Path(tmp) / f"profile{i}")
+                context = launch(pw, profile, self.executable, W / scale, H / scale, scale)
+                self._stack.callback(_close_quietly, context)
+                page = first_page(context)
                 page.add_init_script(init)
                 self._all.append(page)
             self._page = self._all[0]
             self._load(html, scale)
-            # playwright's clock steps every page of the browser at once (and keeps a log of
-            # every step); where the page's own end of it can be reached, each page is stepped
-            # alone, in the same call that takes its picture
+            # playwright's clock keeps a log of every step it makes (and replays it into every
+            # page); where the page's own end of it can be reached, the page is stepped by it,
+            # in the same call that takes its picture
             self._own_clock = all(
                 p.evaluate("typeof globalThis.__pwClock?.controller?.runFor === 'function'")
                 for p in self._all
@@ -204,13 +207,12 @@ class Player:
         self._stack.close()
 
     def _load(self, html: Path, scale: float) -> None:
-        """Every page loaded together: playwright's clock is one for all the pages of the
-        browser (installed once, every step stepping them all), so they load side by side."""
-        pages, clock = self._all, self._all[0].clock
-        clock.install(time=0)
-        clock.pause_at(1)  # from the start: no timer runs unless stepped
+        """Every page loaded side by side, each on its own fake clock."""
+        pages = self._all
         query = {"fixedDpr": f"{scale:.6g}", **self.camera.query()}
         for page in pages:
+            page.clock.install(time=0)
+            page.clock.pause_at(1)  # from the start: no timer runs unless stepped
             page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
         deadline = time.monotonic() + LOAD_TIMEOUT_S
 
@@ -222,7 +224,8 @@ class Player:
                     return
                 if time.monotonic() > deadline:
                     raise PlayerError(what)
-                clock.run_for(step_ms)
+                for page in waiting:
+                    page.clock.run_for(step_ms)
 
         wait(self._hold, TICK_MS, "the recording's page did not load in Chromium (no player)")
         canvas = 'canvas[data-engine^="three.js"]'
