@@ -75,6 +75,22 @@ def test_a_file_that_is_not_a_recording_is_refused(capsys, tmp_path):
     assert not (tmp_path / "fake.mp4").exists()
 
 
+def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_and_data(tmp_path):
+    from viz import recording_edit
+
+    res = rec.record(rec.load_demo("helix").with_overrides(duration=0.5, fps=10), tmp_path)
+    page = res.paths[".html"].read_bytes()
+    edited = recording_edit.page_without_shadows(page)
+    head, buffers = recording_edit.read(video.recording_of_page(page))
+    head2, buffers2 = recording_edit.read(video.recording_of_page(edited))
+    assert head2["messages"][0] == [head["messages"][0][0], recording_edit.NO_SHADOWS]
+    assert head2["messages"][1:] == head["messages"]
+    assert buffers2 == buffers and len(buffers) > 5
+    assert head2["durationSeconds"] == head["durationSeconds"]
+    with pytest.raises(ValueError, match="not a viser recording"):
+        recording_edit.page_without_shadows(b"<html></html>")
+
+
 # --------------------------------------------------------------------------- browser
 def _mp4_frames(path) -> tuple[dict, list[np.ndarray]]:
     import imageio_ffmpeg

@@ -36,9 +36,9 @@ def _offsets(lengths: list[int], start: int) -> list[int]:
     return out
 
 
-def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
-    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
-    at the same time. ``ValueError`` if it is not a recording."""
+def read(viser_bytes: bytes) -> tuple[dict[str, Any], list[bytes]]:
+    """The header of a ``.viser`` recording and its binary buffers, in order. ``ValueError`` if
+    it is not a recording."""
     import msgspec
     import zstandard
 
@@ -49,10 +49,21 @@ def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> b
         head = msgspec.msgpack.decode(inner[8 : 8 + n])
         lengths = [int(x) for x in head.get("binaryBufferLengths") or []]
         buffers = [inner[o : o + m] for o, m in zip(_offsets(lengths, 8 + n), lengths, strict=True)]
-        first = head["messages"][0][0] if head["messages"] else 0.0
+        head["messages"] = list(head["messages"])
     except Exception as exc:  # zstd, msgpack or a missing key: the bytes are not a recording
         raise ValueError(f"not a viser recording ({type(exc).__name__})") from None
-    head["messages"] = [[first, dict(m)] for m in messages] + list(head["messages"])
+    return head, buffers
+
+
+def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
+    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
+    at the same time. ``ValueError`` if it is not a recording."""
+    import msgspec
+    import zstandard
+
+    head, buffers = read(viser_bytes)
+    first = head["messages"][0][0] if head["messages"] else 0.0
+    head["messages"] = [[first, dict(m)] for m in messages] + head["messages"]
     header = msgspec.msgpack.encode(head)
     parts = [len(header).to_bytes(8, "little"), header]
     offset = 8 + len(header)
