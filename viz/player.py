@@ -6,10 +6,16 @@ frame runs unless told). A picture of playback time ``t`` is made by *seeking* t
 ``t`` (its time box: every recorded message up to ``t`` is applied, exactly, whatever the
 machine's speed), running one animation frame of the fake clock (one WebGL render), and copying
 the canvas into an image inside the page (JPEG for video frames, PNG for stills), which is the
-only thing that crosses to Python. The player draws a frame on the animation frame *after* the
-one that applies a seek, so a video's frames are pipelined: each animation frame draws frame
-``k`` and applies the seek to frame ``k + 1``, one WebGL render per frame, and one call to the
-page per frame both takes the picture and queues the next seek.
+only thing that crosses to Python. The page is told it is hidden: viser then applies a seek's
+messages at once, as the seek is made (a visible page applies them inside the next animation
+frame, where the updates that go through React reach the picture one frame after the poses,
+so that frame would mix two moments). One call to the page per frame takes the picture and
+makes the next seek.
+
+A video's frames can be drawn by several copies of the page in turn, each in a browser of its
+own (:meth:`Player.jpegs`): software WebGL draws a frame on every core, but a page's own work
+(its scripts, copying the canvas, encoding the JPEG) runs on one, and meanwhile another page's
+frame can be drawn.
 
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
@@ -41,11 +47,14 @@ JPEG_QUALITY = 0.92
 # One step of the fake clock: one animation frame (the player's rAF loop)
 TICK_MS = 16
 
-# Installed before the page's own scripts: the WebGL canvas keeps its picture after it is shown
-# (so it can be copied between animation frames), a seek goes through the time box's React
-# handler, and a picture is the canvas painted over the page's background.
+# Installed before the page's own scripts: the page reports itself hidden (see the module
+# docstring), the WebGL canvas keeps its picture after it is shown (so it can be copied between
+# animation frames), a seek goes through the time box's React handler, and a picture is the
+# canvas painted over the page's background.
 _INIT = """
 (() => {
+  Object.defineProperty(Document.prototype, "hidden", { get: () => true });
+  Object.defineProperty(Document.prototype, "visibilityState", { get: () => "hidden" });
   const getContext = HTMLCanvasElement.prototype.getContext;
   HTMLCanvasElement.prototype.getContext = function (type, attrs) {
     if (type === "webgl2" || type === "webgl") {
@@ -60,6 +69,16 @@ _INIT = """
     setValue.call(box, t.toFixed(9));
     box.dispatchEvent(new Event("input", { bubbles: true }));
   };
+  // The player starts playing as soon as it has the recording: its time box is marked and the
+  // player held at 0 the moment the box appears, before any timer can run.
+  const hold = new MutationObserver(() => {
+    const box = document.querySelector("input.mantine-NumberInput-input");
+    if (box === null) return;
+    hold.disconnect();
+    box.setAttribute("data-mechviz-time", "");
+    window.__mechvizSeek(1e-9);
+  });
+  hold.observe(document, { childList: true, subtree: true });
   let out = null;
   window.__mechvizPicture = (type, quality, width, height) => {
     const src = document.querySelector('canvas[data-engine^="three.js"]');
@@ -75,12 +94,17 @@ _INIT = """
     ctx.drawImage(src, 0, 0, width, height);
     return out.toDataURL(type, quality);
   };
-  // one call per frame: the picture the last animation frame drew, then the next seek
-  window.__mechvizPictureThenSeek = (type, quality, width, height, t) => {
+  // one call per frame: the picture the last animation frame drew, then the next seek and
+  // (tickMs > 0) the animation frame that draws it, run by this page's own fake clock
+  window.__mechvizPictureThenSeek = async (type, quality, width, height, t, tickMs) => {
     const picture = window.__mechvizPicture(type, quality, width, height);
-    if (t !== null) window.__mechvizSeek(t);
+    if (t !== null) {
+      window.__mechvizSeek(t);
+      if (tickMs > 0) await globalThis.__pwClock.controller.runFor(tickMs);
+    }
     return picture;
   };
+  window.__mechvizTick = (tickMs) => globalThis.__pwClock.controller.runFor(tickMs);
 })();
 """
 
@@ -107,7 +131,8 @@ class Player:
     temporary folder removed on exit, whatever ends the block (Ctrl-C and SIGTERM included).
 
     ``antialias``: the WebGL canvas's multisampling (smoother lines; in software WebGL it costs
-    about as much as the rest of a frame)."""
+    about as much as the rest of a frame). ``pages``: copies of the page that draw a video's
+    frames in turn (see :meth:`jpegs`)."""
 
     def __init__(
         self,
@@ -116,9 +141,13 @@ class Player:
         *,
         camera: Camera | None = None,
         antialias: bool = True,
+        pages: int = 1,
         executable: str | None = None,
     ) -> None:
+        if pages < 1:
+            raise ValueError(f"pages: at least 1, got {pages}")
         self.page_html = page_html
+        self.pages = int(pages)
         self.size = (int(size[0]), int(size[1]))
         self.camera = camera or Camera()
         self.antialias = antialias
@@ -126,6 +155,8 @@ class Player:
         self.load_seconds = 0.0
         self._stack = contextlib.ExitStack()
         self._page = None
+        self._all: list = []  # every page; ``_page`` is the first
+        self._own_clock = False  # see _load
 
     # ------------------------------------------------------------------ set-up
     def __enter__(self) -> Player:
@@ -143,14 +174,26 @@ class Player:
             pw = self._stack.enter_context(sync_playwright())
             W, H = self.size
             scale = H / LAYOUT_HEIGHT
-            context = launch(
-                pw, str(Path(tmp) / "profile"), self.executable, W / scale, H / scale, scale
-            )
-            self._stack.callback(_close_quietly, context)
-            page = first_page(context)
-            page.add_init_script(_INIT.replace("ANTIALIAS", "true" if self.antialias else "false"))
-            self._page = page
+            init = _INIT.replace("ANTIALIAS", "true" if self.antialias else "false")
+            # one browser per page: each has a GPU process (software WebGL) of its own, so the
+            # pages' first frames (shaders compiled, the environment map prepared) are made
+            # side by side, and a page's fake clock steps that page alone
+            for i in range(self.pages):
+                profile = str(Path(tmp) / f"profile{i}")
+                context = launch(pw, profile, self.executable, W / scale, H / scale, scale)
+                self._stack.callback(_close_quietly, context)
+                page = first_page(context)
+                page.add_init_script(init)
+                self._all.append(page)
+            self._page = self._all[0]
             self._load(html, scale)
+            # playwright's clock keeps a log of every step it makes (and replays it into every
+            # page); where the page's own end of it can be reached, the page is stepped by it,
+            # in the same call that takes its picture
+            self._own_clock = all(
+                p.evaluate("typeof globalThis.__pwClock?.controller?.runFor === 'function'")
+                for p in self._all
+            )
         except PlaywrightError as exc:
             self._stack.close()
             raise PlayerError(f"Chromium failed while loading the recording: {exc}") from None
@@ -164,68 +207,101 @@ class Player:
         self._stack.close()
 
     def _load(self, html: Path, scale: float) -> None:
-        page = self._page
-        page.clock.install(time=0)
+        """Every page loaded side by side, each on its own fake clock."""
+        pages = self._all
         query = {"fixedDpr": f"{scale:.6g}", **self.camera.query()}
-        page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
-        page.clock.pause_at(page.evaluate("() => Date.now()") + 100)
-        canvas = page.locator('canvas[data-engine^="three.js"]')
-        time_box = page.get_by_role("textbox")
+        for page in pages:
+            page.clock.install(time=0)
+            page.clock.pause_at(1)  # from the start: no timer runs unless stepped
+            page.goto(html.as_uri() + "?" + urllib.parse.urlencode(query, safe=","))
         deadline = time.monotonic() + LOAD_TIMEOUT_S
-        # Short steps: the player starts playing as soon as it has the recording, and must not
-        # get past its first frame before the seek below holds it at 0.
-        while not time_box.count():
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's page did not load in Chromium (no player)")
-            page.clock.run_for(TICK_MS)
-        time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
+
+        def wait(ready, step_ms: int, what: str) -> None:
+            waiting = list(pages)
+            while True:
+                waiting = [page for page in waiting if not ready(page)]
+                if not waiting:
+                    return
+                if time.monotonic() > deadline:
+                    raise PlayerError(what)
+                for page in waiting:
+                    page.clock.run_for(step_ms)
+
+        wait(self._hold, TICK_MS, "the recording's page did not load in Chromium (no player)")
+        canvas = 'canvas[data-engine^="three.js"]'
+        wait(
+            lambda page: page.locator(canvas).count(),
+            100,
+            "the recording's page did not load in Chromium (no canvas)",
+        )
+        wait(
+            lambda page: drawn(decode(self._picture("image/jpeg", page))),
+            100,
+            "the recording's scene was never drawn in Chromium",
+        )
+
+    def _hold(self, page) -> bool:
+        """Once the player is there: its time box marked and the player held at 0 (the page's
+        own script does both as the box appears; here, if it did not know the box, as soon as
+        it is seen), and the page made invisible. False while the player is not there yet."""
+        if not page.locator("input[data-mechviz-time]").count():
+            time_box = page.get_by_role("textbox")
+            if not time_box.count():
+                return False
+            time_box.first.evaluate("el => el.setAttribute('data-mechviz-time', '')")
         # Nothing on the page is ever shown (pictures are copied from the canvas's own buffer):
         # hidden, the playback bar costs no layout or paint when a seek re-renders it, and the
         # page's compositor has nothing to draw.
         page.add_style_tag(content=".mantine-Paper-root, canvas { visibility: hidden !important; }")
-        self._seek(1e-9)  # seeking pauses the player: from now on only our seeks move it
-        while not canvas.count():
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's page did not load in Chromium (no canvas)")
-            page.clock.run_for(100)
-        while not drawn(decode(self._picture("image/jpeg"))):
-            if time.monotonic() > deadline:
-                raise PlayerError("the recording's scene was never drawn in Chromium")
-            page.clock.run_for(100)
+        self._seek(1e-9, page)  # seeking pauses the player: from now on only our seeks move it
+        return True
 
     # ------------------------------------------------------------------ pictures
-    def _seek(self, t: float) -> None:
-        self._page.evaluate(f"window.__mechvizSeek({float(t)!r})")
+    def _seek(self, t: float, page=None) -> None:
+        (page or self._page).evaluate(f"window.__mechvizSeek({float(t)!r})")
 
-    def _tick(self) -> None:
-        self._page.clock.run_for(TICK_MS)
+    def _tick(self, page=None) -> None:
+        page = page or self._page
+        if self._own_clock:
+            page.evaluate(f"window.__mechvizTick({TICK_MS})")
+        else:
+            page.clock.run_for(TICK_MS)
 
-    def _picture(self, mime: str) -> bytes:
+    def _picture(self, mime: str, page=None) -> bytes:
         W, H = self.size
-        url = self._page.evaluate(f"window.__mechvizPicture({mime!r}, {JPEG_QUALITY}, {W}, {H})")
+        url = (page or self._page).evaluate(
+            f"window.__mechvizPicture({mime!r}, {JPEG_QUALITY}, {W}, {H})"
+        )
         return base64.b64decode(url.split(",", 1)[1])
 
     def jpegs(self, times: Sequence[float]) -> Iterator[bytes]:
         """JPEG pictures of the recording at each playback time in ``times`` (ascending), one
-        WebGL render each (see the module docstring)."""
+        WebGL render each (see the module docstring), in the order of ``times``.
+
+        With ``n`` pages, page ``i`` draws frames ``i, i + n, i + 2n, ...``, and the pages are
+        called in turn: page ``p`` is asked for its picture of frame ``k`` (and seeks to frame
+        ``k + n``) only after the other pages were each given a frame to draw, so its frame
+        was drawn meanwhile; then an animation frame starts the drawing of frame ``k + n``."""
         from playwright.sync_api import Error as PlaywrightError
 
         W, H = self.size
+        count = len(times)
+        n = min(len(self._all), count)
+        pages = self._all[:n]
         try:
-            if not len(times):
-                return
-            self._seek(times[0])
-            self._tick()  # applies the seek to frame 0
-            if len(times) > 1:
-                self._seek(times[1])
-            for k in range(len(times)):
-                # draws frame k (applied one animation frame ago), applies the seek to k + 1;
-                # then the picture of frame k is taken and the seek to k + 2 queued
-                self._tick()
-                t = repr(float(times[k + 2])) if k + 2 < len(times) else "null"
-                url = self._page.evaluate(
-                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t})"
-                )
+            for i, page in enumerate(pages):
+                self._seek(times[i], page)
+                self._tick(page)  # draws frame i
+            tick = TICK_MS if self._own_clock else 0
+            for k in range(count):
+                page = pages[k % n]
+                t = repr(float(times[k + n])) if k + n < count else "null"
+                url = page.evaluate(
+                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, "
+                    f"{t}, {tick})"
+                )  # with the page's own clock, its animation frame drew frame k + n too
+                if k + n < count and not tick:
+                    self._tick(page)  # draws frame k + n
                 yield base64.b64decode(url.split(",", 1)[1])
         except PlaywrightError as exc:
             raise PlayerError(f"Chromium failed while drawing the frames: {exc}") from None

@@ -38,6 +38,7 @@ from .chromium import find_chromium
 from .encoders import GifWriter, Mp4Writer, gif_delays_ms
 from .overlay import Overlay
 from .player import Player, PlayerError, decode
+from .recording_edit import page_without_shadows
 
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
@@ -47,6 +48,10 @@ MAX_FPS = 60
 # Multisampling doubles the cost of a frame in software WebGL: videos go without it (at 960x540
 # and above the lines stay clean enough), stills have it.
 ANTIALIAS = False
+# Copies of the page drawing a video's frames in turn: while one encodes its picture, the other's
+# frame is drawn (software WebGL spreads one frame over the cores, but not the page's own work).
+# On one core there is nothing to overlap.
+PAGES = 2 if (os.cpu_count() or 1) > 1 else 1
 
 ProgressFn = Callable[[int, int], None]
 
@@ -361,8 +366,14 @@ def write_video(
     look: Look = Look(),
     progress: ProgressFn | None = None,
     antialias: bool = ANTIALIAS,
+    pages: int = PAGES,
+    shadows: bool = False,
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
+
+    ``antialias``, ``pages`` (:class:`viz.player.Player`) and ``shadows`` (the default lights'
+    shadow maps, :mod:`viz.recording_edit`) say how the frames are drawn; the defaults are the
+    fastest way that gives the same picture.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`, the camera),
     :class:`NoChromium` without a browser, :class:`VideoError` if drawing or encoding fails;
@@ -373,6 +384,7 @@ def write_video(
     times = clip.playback_times()
     overlay = _overlay(clip, look, size, [clip.simulated(t) for t in times])
     camera = camera_for(clip, look, size, overlay)
+    page = clip.page if shadows else page_without_shadows(clip.page)
     require_chromium()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
@@ -380,7 +392,7 @@ def write_video(
     post = None
     try:
         writer = (Mp4Writer if fmt == "mp4" else GifWriter)(tmp, size, clip.fps)
-        with Player(clip.page, size, camera=camera, antialias=antialias) as player:
+        with Player(page, size, camera=camera, antialias=antialias, pages=pages) as player:
             t0 = time.perf_counter()
             post = _Finisher(writer, overlay, clip, times, progress)
             # a little past each frame's time: its messages are in, the next frame's are not

@@ -10,9 +10,9 @@ least 50x faster than scipy's fastest and at least as fast as every peer, at eac
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
 ``--video`` runs only the video benchmark (:mod:`mechviz_bench.video_speed`: a 10 s helix at
-960x540 and 30 fps, today's path beside the replaced one, as ratios to real time; 3 s with
-``--quick``), writes ``video.json`` to ``--out``; the exit status is 1 if videos are made slower
-than real time.
+960x540 and 30 fps, today's path beside one page with and without shadow maps, as ratios to real
+time; 3 s with ``--quick``), writes ``video.json`` to ``--out``; the exit status is 1 if videos
+are made slower than real time.
 
 ``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
 (:func:`mechviz_bench.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
@@ -272,8 +272,8 @@ def add_commands(sub) -> None:
         "--video",
         action="store_true",
         help="run only the video benchmark (Chromium; pip install -e '.[video]'): a 10 s "
-        "960x540 video, as a ratio to real time beside the replaced path; writes video.json; "
-        "exit status 1 if slower than real time",
+        "960x540 video, as a ratio to real time beside one page with and without shadow maps; "
+        "writes video.json; exit status 1 if slower than real time",
     )
     p.add_argument(
         "--clients",

@@ -1,0 +1,90 @@
+"""Messages put in front of a viser recording, and the player page that plays it so.
+
+A ``.viser`` recording (what viser's scene serializer writes, and what its self-contained page
+embeds in base64) is: 8 bytes (little-endian) giving the size of the rest once decompressed, then
+zstd of: 8 bytes giving the length ``N`` of a msgpack header, the header (``durationSeconds``,
+``messages`` as ``[time, message]`` pairs, ``viserVersion``, ``binaryBufferLengths``), then the
+binary buffers the messages point to, each starting on a multiple of 8 bytes counted from the
+start of the decompressed data. A header that grows moves the buffers, so they are laid out
+again.
+
+Videos use this to draw a recording with the default lights' shadows off
+(:func:`page_without_shadows`): a recorded scene has no floor, so shadows fall only on the
+exhibit's own small parts (the one to be seen at all is a faint shadow of the bead on the
+tumbling disk's inertia ellipsoid), while in software WebGL the three shadow maps, redrawn
+for every frame, cost a large share of the frame.
+"""
+
+from __future__ import annotations
+
+import base64
+import re
+from typing import Any
+
+_EMBED = re.compile(rb'window\.__VISER_EMBED_DATA__="([A-Za-z0-9+/=]*)"')
+
+NO_SHADOWS: dict[str, Any] = {"type": "EnableLightsMessage", "enabled": True, "cast_shadow": False}
+
+
+def _offsets(lengths: list[int], start: int) -> list[int]:
+    """Where each binary buffer starts, the first at or after ``start``, each 8-byte aligned."""
+    out, offset = [], start
+    for n in lengths:
+        offset += (8 - offset % 8) % 8
+        out.append(offset)
+        offset += n
+    return out
+
+
+def read(viser_bytes: bytes) -> tuple[dict[str, Any], list[bytes]]:
+    """The header of a ``.viser`` recording and its binary buffers, in order. ``ValueError`` if
+    it is not a recording."""
+    import msgspec
+    import zstandard
+
+    try:
+        size = int.from_bytes(viser_bytes[:8], "little")
+        inner = zstandard.ZstdDecompressor().decompress(viser_bytes[8:], max_output_size=size)
+        n = int.from_bytes(inner[:8], "little")
+        head = msgspec.msgpack.decode(inner[8 : 8 + n])
+        lengths = [int(x) for x in head.get("binaryBufferLengths") or []]
+        buffers = [inner[o : o + m] for o, m in zip(_offsets(lengths, 8 + n), lengths, strict=True)]
+        head["messages"] = list(head["messages"])
+    except Exception as exc:  # zstd, msgpack or a missing key: the bytes are not a recording
+        raise ValueError(f"not a viser recording ({type(exc).__name__})") from None
+    return head, buffers
+
+
+def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
+    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
+    at the same time. ``ValueError`` if it is not a recording."""
+    import msgspec
+    import zstandard
+
+    head, buffers = read(viser_bytes)
+    first = head["messages"][0][0] if head["messages"] else 0.0
+    head["messages"] = [[first, dict(m)] for m in messages] + head["messages"]
+    header = msgspec.msgpack.encode(head)
+    parts = [len(header).to_bytes(8, "little"), header]
+    offset = 8 + len(header)
+    for buf in buffers:
+        pad = (8 - offset % 8) % 8
+        parts += [bytes(pad), buf]
+        offset += pad + len(buf)
+    data = b"".join(parts)
+    return len(data).to_bytes(8, "little") + zstandard.ZstdCompressor(level=3).compress(data)
+
+
+def page_with_messages_first(page: bytes, messages: list[dict[str, Any]]) -> bytes:
+    """A viser player page whose embedded recording plays ``messages`` first
+    (:func:`with_messages_first`). ``ValueError`` if the page embeds no recording."""
+    m = _EMBED.search(page)
+    if m is None:
+        raise ValueError("not a viser recording page (no embedded scene data)")
+    edited = with_messages_first(base64.b64decode(m.group(1)), messages)
+    return page[: m.start(1)] + base64.b64encode(edited) + page[m.end(1) :]
+
+
+def page_without_shadows(page: bytes) -> bytes:
+    """The player page with the default lights casting no shadows (see the module docstring)."""
+    return page_with_messages_first(page, [NO_SHADOWS])
