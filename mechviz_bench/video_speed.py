@@ -254,11 +254,13 @@ class _TreeCpu:
 # are made, then one change taken back at a time.
 PATHS: dict[str, dict[str, Any]] = {
     "today": {},
+    "two_pages": {"pages": 2},
     "one_page": {"pages": 1},
     "one_page_shadows": {"pages": 1, "shadows": True},
 }
 LABELS = {
-    "today": "today's path (two pages, no shadow maps)",
+    "today": "today's path (as mechviz video: pages by length, no shadow maps)",
+    "two_pages": "two pages, no shadow maps",
     "one_page": "one page, no shadow maps",
     "one_page_shadows": "one page, with the shadow maps",
     "replaced": "the replaced path (faked clock, PNG)",

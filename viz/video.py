@@ -50,8 +50,16 @@ MAX_FPS = 60
 ANTIALIAS = False
 # Copies of the page drawing a video's frames in turn: while one encodes its picture, the other's
 # frame is drawn (software WebGL spreads one frame over the cores, but not the page's own work).
-# On one core there is nothing to overlap.
-PAGES = 2 if (os.cpu_count() or 1) > 1 else 1
+# The second page's browser takes seconds to start, which its quicker frames repay only over a
+# long video: two pages from TWO_PAGES_FRAMES frames on (30 s at 30 fps), and never on one core,
+# where there is nothing to overlap.
+TWO_PAGES_FRAMES = 900
+
+
+def pages_for(frames: int) -> int:
+    """How many copies of the page draw a video of ``frames`` frames (see TWO_PAGES_FRAMES)."""
+    return 2 if frames >= TWO_PAGES_FRAMES and (os.cpu_count() or 1) > 1 else 1
+
 
 ProgressFn = Callable[[int, int], None]
 
@@ -366,14 +374,14 @@ def write_video(
     look: Look = Look(),
     progress: ProgressFn | None = None,
     antialias: bool = ANTIALIAS,
-    pages: int = PAGES,
+    pages: int | None = None,
     shadows: bool = False,
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
 
-    ``antialias``, ``pages`` (:class:`viz.player.Player`) and ``shadows`` (the default lights'
-    shadow maps, :mod:`viz.recording_edit`) say how the frames are drawn; the defaults are the
-    fastest way that gives the same picture.
+    ``antialias``, ``pages`` (:class:`viz.player.Player`; default :func:`pages_for` the video's
+    frames) and ``shadows`` (the default lights' shadow maps, :mod:`viz.recording_edit`) say how
+    the frames are drawn; the defaults are the fastest way that gives the same picture.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`, the camera),
     :class:`NoChromium` without a browser, :class:`VideoError` if drawing or encoding fails;
@@ -392,6 +400,7 @@ def write_video(
     post = None
     try:
         writer = (Mp4Writer if fmt == "mp4" else GifWriter)(tmp, size, clip.fps)
+        pages = pages_for(len(times)) if pages is None else pages
         with Player(page, size, camera=camera, antialias=antialias, pages=pages) as player:
             t0 = time.perf_counter()
             post = _Finisher(writer, overlay, clip, times, progress)
