@@ -1,4 +1,5 @@
-"""Shared by the tests: a headless viser server fixture, and the rule that a test run leaves the
+"""Shared by the tests: the live viewer driven frame by frame and a headless viser server
+(fixtures), and the rule that a test run leaves the
 checkout as it was: ``git status --porcelain`` is compared before and after the session, and a
 change fails the run (pictures and tables under ``docs/`` are refreshed only by ``make
 screenshots`` and ``make bench-docs``). Not checked outside a git checkout or under
@@ -16,6 +17,25 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def warm_viewer():
+    """The viewer's compiled kernels loaded (or compiled) once for the session."""
+    from viz.app import warm_up
+
+    warm_up("defaults")
+
+
+@pytest.fixture
+def app(warm_viewer):
+    """The live viewer on a free port without its loop thread (environment map off), driven
+    frame by frame with ``app.step_frame()``; stopped after the test."""
+    from viz.app import MechvizApp
+
+    a = MechvizApp(port=0, start_loop=False, environment_map=False)
+    yield a
+    a.stop()
 
 
 @pytest.fixture
