@@ -30,6 +30,7 @@ The whole app, headless and without its loop thread::
     app.enqueue("hoop", {"op": "set", "method": "rk4"})   # as the GUI does
     app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
+    app.enqueue("app", {"op": "scrub", "value": -10})     # paused, 10 s of the show back
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
     app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
@@ -53,6 +54,7 @@ import numpy as np
 
 from .frames import FrameLog
 from .live_record import add_record_toggle
+from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
 from .scene.fields import NumberField, Typing
 from .scene.panel import Panel, parse_number
@@ -124,6 +126,7 @@ class MechvizApp(Views):
         self.common_folder = None
         self.typing = Typing()  # number fields holding typed text not yet read
         self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
+        self.rewind_control = RewindControl(self)  # pause and scrub back (viz.rewind_control)
 
         scene = server.scene
         scene.set_up_direction("+z")
@@ -237,8 +240,11 @@ class MechvizApp(Views):
             playing = {"play": True, "pause": False, "toggle": not self.playing}[op]
             if playing != self.playing:
                 self._rtf_window.clear()  # a pause is not a slow-down
+            if playing:
+                self.rewind_control.resume()  # scrubbed back: on from the moment shown
             self.playing = playing
         elif op == "step":
+            self.rewind_control.resume()
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
@@ -255,6 +261,9 @@ class MechvizApp(Views):
                 ex.reset()
             self.sim_time = 0.0
             self._rtf_window.clear()  # the clock went back: the old samples say nothing now
+            self.rewind_control.forget()
+        elif op == "scrub":
+            self.rewind_control.scrub(cmd.get("value"))
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
         elif op == "chart_window":
@@ -277,8 +286,8 @@ class MechvizApp(Views):
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window, "
-                f"present or theme; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, scrub, camera, "
+                f"chart_window, present or theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
@@ -325,7 +334,11 @@ class MechvizApp(Views):
     # ------------------------------------------------------------------ the frame
     def _advance(self, sim_seconds: float, *, measure_all: bool = False) -> None:
         for key, ex in self.exhibits.items():
-            ex.advance(sim_seconds, measure=measure_all or self._measures_now(key))
+            ex.advance(
+                sim_seconds,
+                measure=measure_all or self._measures_now(key),
+                shown=sim_seconds / self.speed,  # seconds of the show, for the Rewind control
+            )
         self.sim_time += sim_seconds
 
     def _measures_now(self, key: str) -> bool:
@@ -424,6 +437,7 @@ class MechvizApp(Views):
             )
             w["speed"], w["speed_track"] = self.speed_field.box, self.speed_field.track
             self.number_fields["speed"] = self.speed_field
+            self.rewind_control.build(gui)
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["present"] = gui.add_dropdown(
@@ -522,9 +536,9 @@ class MechvizApp(Views):
                 self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
             self.w["status"].content = (
-                f"**t = {self.sim_time:.2f} s** simulated · real-time factor "
-                f"{'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
-                f"{'playing' if self.playing else 'paused'}  \n"
+                f"**t = {self.sim_time - self.rewind_control.sim_back():.2f} s** simulated · "
+                f"real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
+                f"{'playing' if self.playing else 'paused'}{self.rewind_control.status()}  \n"
                 f"<small>{self._cost_text} (server side)</small>"
             )
         for key, slot in self.EXHIBIT_FRAMES.items():
@@ -532,7 +546,7 @@ class MechvizApp(Views):
                 continue
             ex = self.exhibits[key]
             shown = self._shown.get(key)
-            if not force and shown == (ex.revision, ex.long_history.version):
+            if not force and shown == (ex.revision, ex.chart_version()):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
             if key == self.presenting:
@@ -540,7 +554,7 @@ class MechvizApp(Views):
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or shown is None or shown[1] != ex.long_history.version:
+            if force or shown is None or shown[1] != ex.chart_version():
                 chart = self.w[f"{key}.chart"]
                 data = ex.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
@@ -548,7 +562,7 @@ class MechvizApp(Views):
                     self.panels[key].keep_time_axis(
                         "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._shown[key] = (ex.revision, ex.long_history.version)
+            self._shown[key] = (ex.revision, ex.chart_version())
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -156,6 +156,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.ghost_ring.position = (x, y, z)
             self.ghost_ring.visible = True
 
+    def _rewound(self) -> None:
+        super()._rewound()
+        # gone back in the run: the next points start new pieces (no line back across the
+        # path already drawn); the beam's short trails start afresh
+        self.trail.lift()
+        self.compare_trail.lift()
+        if self.beam_trails is not None:
+            self.beam_trails.points[:] = np.nan
+
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
             self.beam_node.remove()

@@ -323,6 +323,12 @@ class DiskExhibit(DiskModel, Exhibit):
         self.poinsot.start(dk.free_kernel_params(p), p.radius, shown=not driven)
         self.body.position = LIFT  # A stays put while driven
 
+    def _rewound(self) -> None:
+        super()._rewound()
+        # gone back in the run: the next points start new pieces of the Poinsot curves
+        self.poinsot.polhode.lift()
+        self.poinsot.herpolhode.lift()
+
     def body_pose_world(self):
         """``(wxyz, position)`` of the body node relative to the exhibit origin."""
         rot, a = self.pose()

@@ -191,6 +191,12 @@ class HoopExhibit(HoopModel, Exhibit):
             self.cmp_label.text = f"{c.compare_method} (blue)"
         self.config_space.start(self.shapes, self.sim.state0[0, :2], c.ghost)
 
+    def _rewound(self) -> None:
+        # gone back in the run: the next points start new pieces (no line back across the
+        # path already drawn)
+        for trail in (self.trail, self.cmp_trail, self.config_space.path, self.config_space.ghost):
+            trail.lift()
+
     def _jumped(self) -> None:
         self.config_space.start(self.shapes, self.sim.state0[0, :2], self.config.ghost)
         self.trail.lift()
