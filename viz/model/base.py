@@ -42,6 +42,9 @@ from .rewind import Rewinding
 
 # |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
 DIVERGED = 24.0
+# Beyond this |dE/E0|, a run whose drawing leaves its exhibit (``_outside``) has diverged: it left
+# because the method is wrong, not because of the physics (a kick moves E0 with it).
+ESCAPED = 0.1
 LOG_FLOOR = -17.0  # log10 of an error that is exactly zero
 PAUSED_HINT = "Paused; press Reset (or pick another method or a smaller step)."
 
@@ -276,12 +279,20 @@ class ExhibitModel(Rewinding):
             if smp is None:
                 continue
             grown = float(np.max(np.abs(smp.energy_error)))
-            if not math.isfinite(grown) or grown > DIVERGED:
+            where = self._outside(sim) if grown > ESCAPED else None
+            if not math.isfinite(grown) or grown > DIVERGED or where:
                 reason = f"{label}run diverged: the energy changed by a factor {1 + grown:.3g}"
+                if where:
+                    reason = f"{label}run diverged: {where}, its energy changed by a factor {1 + grown:.3g}"
                 self._fail(
                     dynamics.IntegrationError(sim.method.name, sim.step_label(), sim.t, reason)
                 )
                 return
+
+    def _outside(self, sim: dynamics.Simulation) -> str | None:
+        """What of ``sim``'s drawing lies outside the exhibit, in words (``None``: nothing, or
+        a model that draws nothing); a view says."""
+        return None
 
     def _fail(self, error: dynamics.IntegrationError) -> None:
         self.paused = True

@@ -31,8 +31,9 @@ class BeamTrails:
     SEGMENTS = 2400
     EVERY = 4  # frames between samples: 80 samples at 60 fps span 5.3 s, most of a period at 1x
 
-    def __init__(self, scene, name: str, colors: np.ndarray, height: float) -> None:
+    def __init__(self, scene, name: str, colors: np.ndarray, height: float, box=None) -> None:
         n = len(colors)
+        self.box = box  # (lo, hi) where trails are drawn
         self.k = int(max(8, min(80, self.SEGMENTS // n)))
         self.height = height
         self.points = np.full((n, self.k, 3), np.nan)
@@ -53,6 +54,9 @@ class BeamTrails:
             return
         self.points[:, :-1] = self.points[:, 1:]
         self.points[:, -1] = positions
+        if self.box is not None:  # a charge outside the exhibit draws no trail there
+            lo, hi = self.box
+            self.points[:, -1][np.any((positions < lo) | (positions > hi), axis=-1)] = np.nan
         a, b = self.points[:, :-1], self.points[:, 1:]
         # no segment from a point not yet sampled, nor across the height's wrap-around
         cut = np.isnan(a).any(axis=-1) | (np.abs(b[..., 2] - a[..., 2]) > 0.5 * self.height)
@@ -142,6 +146,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         self._drawn_circle = None
         self.trail.clear()
         self.compare_trail.clear()
+        box = tuple(np.asarray(v, np.float32) for v in self._extent())
+        self.trail.box = self.compare_trail.box = box  # a spiral stops at the exhibit's edge
         self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
         self._rebuild_beam_node()
         self.bodies.batched_scales = np.array([1.0, 1.0 if cmp_ is not None else 0.0, 0.5])
@@ -188,7 +194,11 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             lod="off",
         )
         self.beam_trails = BeamTrails(
-            self.scene, f"{self.root}/beam_trails", colors, self.config.height
+            self.scene,
+            f"{self.root}/beam_trails",
+            colors,
+            self.config.height,
+            box=tuple(np.asarray(v, float) for v in self._extent()),
         )
 
     # ------------------------------------------------------------------ drawing
@@ -232,6 +242,13 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             shown = self._display(self.beam.state[:, :3])
             self.beam_node.batched_positions = shown
             self.beam_trails.push(shown)
+
+    def _outside(self, sim) -> str | None:
+        lo, hi = self._extent()
+        x, y = sim.state[0, :2]
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            return None
+        return "the charge left the exhibit"
 
     def _extent(self):
         H = self.config.height

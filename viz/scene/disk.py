@@ -344,7 +344,13 @@ class DiskExhibit(DiskModel, Exhibit):
         self.body.position = pos
         omega, L, base = self.vectors_space()
         b0 = LIFT + to_world(base)
-        tips = [b0 + to_world(omega) * self.omega_scale, b0 + to_world(L) * self.momentum_scale]
+        # a run whose energy grows (explicit Euler) lengthens them: drawn up to the exhibit's
+        # edge, not across a neighbour
+        lo, hi = self._extent()
+        tips = [
+            geo.clip_segment(b0, b0 + to_world(v) * scale, lo, hi)
+            for v, scale in ((omega, self.omega_scale), (L, self.momentum_scale))
+        ]
         pts = self._vector_points
         pts[:, 0] = b0
         pts[0, 1], pts[1, 1] = tips

@@ -69,8 +69,11 @@ class ConfigurationSpace:
             scene.add_label(f"{root}/label_mode1", "mode 1", anchor="bottom-left"),
             scene.add_label(f"{root}/label_mode2", "mode 2", anchor="bottom-right"),
         ]
-        self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
-        self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
+        # the paths are drawn inside the square only: where the angles grow without bound (the
+        # bead going round, or a diverging method) they leave it, not the exhibit
+        box = (centre - (half, 0.0, half), centre + (half, 0.0, half))
+        self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap, box=box)
+        self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap, box=box)
         self.scale = 1.0
 
     def start(self, shapes: np.ndarray, angles0: np.ndarray, ghost: bool) -> None:
