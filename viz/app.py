@@ -1,7 +1,8 @@
 """The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
 
-Layout: the cyclotron at x = -4.4 m, the spinning disk at the origin, the hoop at x = +4.4 m
-(:data:`SPACING`; +z up).
+Layout (:data:`ORIGINS`, +z up): the spinning disk near the origin, the cyclotron to its left, the
+hoop to its right and nearer the first view's camera: seen from above the front left, the three
+go down the page as well as across it, so together they use its height.
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -61,8 +62,10 @@ from .scene.panel import Panel, parse_number
 from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
-ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
+# m: where each exhibit stands, in the order of viz.scene.EXHIBITS, left to right as the first
+# view sees them; staggered in depth so that view (views.OVERVIEW) shows them one below another
+# as well as side by side
+ORIGINS = dict(zip(EXHIBITS, ((-3.95, 1.7, 0.0), (0.0, 1.4, 0.0), (2.4, -3.4, 0.0)), strict=True))
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly

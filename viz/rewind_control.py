@@ -66,9 +66,14 @@ class RewindControl:
         self.show()
 
     def sim_back(self) -> float:
-        """How far back [simulated s] the scrubbed exhibits are from where they paused."""
+        """How far back [simulated s] the exhibits still scrubbed are from where they paused
+        (one changed meanwhile went on from its moment shown, or started afresh)."""
         return max(
-            (self._live_t.get(k, ex.t) - ex.t for k, ex in self.app.exhibits.items()),
+            (
+                self._live_t.get(k, ex.t) - ex.t
+                for k, ex in self.app.exhibits.items()
+                if ex.scrubbed is not None
+            ),
             default=0.0,
         )
 

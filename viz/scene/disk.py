@@ -139,7 +139,8 @@ class DiskExhibit(DiskModel, Exhibit):
         self.label = s.add_label(
             f"{r}/label",
             "Spinning disk with a bead",
-            position=(0.0, 0.0, 3.0),
+            # above the highest ω's label reaches as the released disk tumbles
+            position=(0.0, 0.0, 3.1),
             anchor="bottom-center",
         )
         # omega, L and, while driven, dL/dt = omega x L drawn at L's tip (the torque the
