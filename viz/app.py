@@ -149,7 +149,7 @@ class MechvizApp(Views):
         self.grid = scene.add_grid(
             "/floor",
             width=20.0,
-            height=8.0,
+            height=16.0,  # 4 m and more in front of the nearest exhibit (the hoop)
             cell_size=0.5,
             section_size=1.0,
             position=(0.0, 0.0, 0.0),
