@@ -94,3 +94,22 @@ def test_the_released_disks_growing_vectors_are_drawn_up_to_its_edge(app):
     # drawn as long as the box allows: a tip on its edge
     lo, hi = ex.bounds
     assert np.isclose(arrows, hi, atol=1e-3).any() or np.isclose(arrows, lo, atol=1e-3).any()
+
+
+def test_a_kick_that_sends_the_orbit_past_the_edge_still_draws_all_of_it(app):
+    """Bounding the drawing is for runaways: a kick of 1 m/s moves the exact circle 1 m off the
+    axis with radius sqrt(2) m, beyond the exhibit's box, and every turn of it is drawn."""
+    ex = app.exhibits["cyclotron"]
+    ex.apply({"op": "kick", "dv": 1.0})
+    centre = ex.theory_centre[:2] + ex.origin[:2]
+    for _ in range(420):  # a period (2 pi s) and more
+        app.step_frame(1 / 60)
+    assert not ex.paused
+    trail = _drawn(app, "cyclotron", ("/trail/",))
+    r = np.hypot(*(trail[:, :2] - centre).T)
+    after = np.isclose(r, ex.theory_radius, rtol=1e-3)
+    assert ex.theory_radius == pytest.approx(np.sqrt(2.0), rel=1e-9)
+    assert not _inside(trail[after], ex.bounds).all()  # it reaches past the exhibit's box
+    # the whole circle after the kick: points all round it
+    angles = np.arctan2(*(trail[after, :2] - centre).T[::-1])
+    assert np.ptp(np.sort(angles)) > 1.9 * np.pi and np.diff(np.sort(angles)).max() < 0.2

@@ -146,8 +146,6 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         self._drawn_circle = None
         self.trail.clear()
         self.compare_trail.clear()
-        box = tuple(np.asarray(v, np.float32) for v in self._extent())
-        self.trail.box = self.compare_trail.box = box  # a spiral stops at the exhibit's edge
         self.field_arrows.points = self._field_points(math.copysign(1.0, p.field))
         self._rebuild_beam_node()
         self.bodies.batched_scales = np.array([1.0, 1.0 if cmp_ is not None else 0.0, 0.5])
@@ -156,6 +154,12 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     def _segment_started(self) -> None:
         self.trail.lift()
         self.compare_trail.lift()
+        # trails are drawn inside the exhibit and the circles its runs are on now (a kick may
+        # send one beyond the exhibit's edge): a spiral growing out of them stops at the edge
+        box = self._trail_box()
+        self.trail.box = self.compare_trail.box = box
+        if getattr(self, "beam_trails", None) is not None:
+            self.beam_trails.box = box
         if getattr(self, "_drawn_circle", None) is not None:  # a kick: keep the old orbit
             x, y, radius, z = self._drawn_circle
             self.ghost_ring.points = geo.circle_segments(radius)
@@ -168,8 +172,10 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         # path already drawn); the beam's short trails start afresh
         self.trail.lift()
         self.compare_trail.lift()
+        self.trail.box = self.compare_trail.box = box = self._trail_box()
         if self.beam_trails is not None:
             self.beam_trails.points[:] = np.nan
+            self.beam_trails.box = box
 
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
@@ -198,7 +204,6 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             f"{self.root}/beam_trails",
             colors,
             self.config.height,
-            box=tuple(np.asarray(v, float) for v in self._extent()),
         )
 
     # ------------------------------------------------------------------ drawing
@@ -242,6 +247,16 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             shown = self._display(self.beam.state[:, :3])
             self.beam_node.batched_positions = shown
             self.beam_trails.push(shown)
+
+    def _trail_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The exhibit's box grown to hold the circle every run (beam members included) is on."""
+        lo, hi = (np.array(v, float) for v in self._extent())
+        p = self.params
+        for sim in self.simulations():
+            for s in sim.state:
+                c, r = cy.guiding_centre(p, s)[:2], 1.01 * cy.larmor_radius(p, s)
+                lo[:2], hi[:2] = np.minimum(lo[:2], c - r), np.maximum(hi[:2], c + r)
+        return lo.astype(np.float32), hi.astype(np.float32)
 
     def _outside(self, sim) -> str | None:
         lo, hi = self._extent()
