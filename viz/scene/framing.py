@@ -51,23 +51,12 @@ def corners(lo, hi) -> np.ndarray:
     )
 
 
-def frame(
-    lo,
-    hi,
-    direction,
-    width: int = 1280,
-    height: int = 800,
-    *,
-    fill: float = 0.7,
-    panel_px: int = PANEL_PX,
-    fov: float = FOV,
-) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+def frame(lo, hi, direction, *args, **kw) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """``(position, look_at)`` of a camera looking along ``direction`` at the box ``lo``..``hi``
     [m] so that the box's picture is ``fill`` of the page's height (less if it would not fit
-    the free width) and centred in the part of the page left of the panel."""
-    return frame_points(
-        corners(lo, hi), direction, width, height, fill=fill, panel_px=panel_px, fov=fov
-    )
+    the free width) and centred in the part of the page left of the panel (the arguments of
+    :func:`frame_points`)."""
+    return frame_points(corners(lo, hi), direction, *args, **kw)
 
 
 def frame_points(
