@@ -161,7 +161,9 @@ class MechvizApp(Views):
         history_len = round(CHART_SECONDS * CHART_RATE)
         self.chart_window = CHART_SECONDS
         self.exhibits: dict[str, Exhibit] = {
-            key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
+            key: cls(
+                server, cfg.get(key), origin=ORIGINS[key], history_len=history_len, bounded=True
+            )
             for key, cls in EXHIBITS.items()
         }
         for ex in self.exhibits.values():

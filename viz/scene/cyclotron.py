@@ -248,8 +248,11 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.beam_node.batched_positions = shown
             self.beam_trails.push(shown)
 
-    def _trail_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """The exhibit's box grown to hold the circle every run (beam members included) is on."""
+    def _trail_box(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The exhibit's box grown to hold the circle every run (beam members included) is on
+        (``None``: drawn anywhere, the exhibit alone)."""
+        if not self.bounded:
+            return None
         lo, hi = (np.array(v, float) for v in self._extent())
         p = self.params
         for sim in self.simulations():
@@ -259,6 +262,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         return lo.astype(np.float32), hi.astype(np.float32)
 
     def _outside(self, sim) -> str | None:
+        if not self.bounded:
+            return None
         lo, hi = self._extent()
         x, y = sim.state[0, :2]
         if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:

@@ -347,11 +347,11 @@ class DiskExhibit(DiskModel, Exhibit):
         b0 = LIFT + to_world(base)
         # a run whose energy grows (explicit Euler) lengthens them: drawn up to the exhibit's
         # edge, not across a neighbour
-        lo, hi = self._extent()
         tips = [
-            geo.clip_segment(b0, b0 + to_world(v) * scale, lo, hi)
-            for v, scale in ((omega, self.omega_scale), (L, self.momentum_scale))
+            b0 + to_world(v) * s for v, s in ((omega, self.omega_scale), (L, self.momentum_scale))
         ]
+        if self.bounded:
+            tips = [geo.clip_segment(b0, tip, *self._extent()) for tip in tips]
         pts = self._vector_points
         pts[:, 0] = b0
         pts[0, 1], pts[1, 1] = tips

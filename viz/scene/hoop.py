@@ -36,7 +36,7 @@ class ConfigurationSpace:
     and (m, -(M + m)) for mode 2 (:func:`dynamics.hoop.normal_modes`). A start on a mode line
     stays on it at small amplitude; at large amplitude the path leaves it."""
 
-    def __init__(self, scene, root: str, centre: np.ndarray, cap: int) -> None:
+    def __init__(self, scene, root: str, centre: np.ndarray, cap: int, bounded: bool) -> None:
         self.scene, self.root, self.centre = scene, root, centre
         half = 0.5 * CONFIG_SIZE
         c = [(-half, 0, -half), (half, 0, -half), (half, 0, half), (-half, 0, half)]
@@ -71,7 +71,7 @@ class ConfigurationSpace:
         ]
         # the paths are drawn inside the square only: where the angles grow without bound (the
         # bead going round, or a diverging method) they leave it, not the exhibit
-        box = (centre - (half, 0.0, half), centre + (half, 0.0, half))
+        box = (centre - (half, 0.0, half), centre + (half, 0.0, half)) if bounded else None
         self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap, box=box)
         self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap, box=box)
         self.scale = 1.0
@@ -174,7 +174,11 @@ class HoopExhibit(HoopModel, Exhibit):
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.config.trail_cap)
         if not hasattr(self, "config_space"):
             self.config_space = ConfigurationSpace(
-                s, f"{r}/configuration_space", CONFIG_CENTRE * (a, 1.0, 1.0), cap=1200
+                s,
+                f"{r}/configuration_space",
+                CONFIG_CENTRE * (a, 1.0, 1.0),
+                cap=1200,
+                bounded=self.bounded,
             )
         self.cmp_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
