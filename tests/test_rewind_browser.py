@@ -39,6 +39,8 @@ def test_pausing_and_scrubbing_back_moves_the_time_and_the_exhibits_back():
         box.click()
         box.press("Control+A")
         page.keyboard.type("-5")
+        # Enter once the server has the whole text (each keystroke reaches it on its own)
+        wait_until(lambda: app.w["rewind"].value == "-5", 15, "'-5' to reach the server")
         box.press("Enter")
         wait_until(
             lambda: (t := _page_time(page)) is not None and abs(t - (t_paused - 5.0)) < 0.05,
