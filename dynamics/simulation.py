@@ -392,26 +392,17 @@ class Simulation:
             )
             self.t = t_next
 
+    def _leg(self, t1: float) -> tuple:
+        """What every compiled adaptive loop is told first: the system, the members, the
+        kernel parameters, from ``t`` to ``t1`` [s], at ``rtol`` and ``atol``."""
+        return self.system.sys_id, self.state, self.p, self.t, t1, self.rtol, self.atol
+
     def _dop853_to(self, t1: float, land: bool = False) -> None:
         """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1`` (``land``:
         the last step cut to end at ``t1``)."""
         if self._carry is None:
             self._carry = Dop853Carry(*self.state.shape)
-        run_dop853(
-            self.system.sys_id,
-            self.state,
-            self.p,
-            self.t,
-            t1,
-            self.rtol,
-            self.atol,
-            self._H,
-            self._F,
-            self._stats,
-            self._status,
-            self._carry,
-            land,
-        )
+        run_dop853(*self._leg(t1), self._H, self._F, self._stats, self._status, self._carry, land)
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
             raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
@@ -432,18 +423,7 @@ class Simulation:
             span = self._chunk_steps * h
             t1 = t_target if not span < t_target - self.t else self.t + span
             start = time.perf_counter()
-            steps = run_taylor(
-                self.system.sys_id,
-                self.state,
-                self.p,
-                self.t,
-                t1,
-                self.rtol,
-                self.atol,
-                self._stats,
-                self._status,
-                self._carry,
-            )
+            steps = run_taylor(*self._leg(t1), self._stats, self._status, self._carry)
             elapsed = time.perf_counter() - start
             self.steps += steps
             self.nfev += steps
@@ -489,10 +469,7 @@ class Simulation:
     def _run_fixed_chunk(self, n: int) -> None:
         step, inner = step_functions(self.method, self.system.sys_id)
         before = self.state.copy()
-        if inner is None:
-            nfev = kernels.run_direct(step, self.state, self.p, self.dt, n, self._status)
-        else:
-            nfev = kernels.run_composed(step, inner, self.state, self.p, self.dt, n, self._status)
+        nfev = kernels.run_steps(step, inner, self.state, self.p, self.dt, n, self._status)
         self.nfev += int(nfev)
         code, k = int(self._status[0]), int(self._status[1])
         if code != kernels.OK:

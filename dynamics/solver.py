@@ -23,7 +23,7 @@ import numpy as np
 from . import params as _v
 from ._jit import njit
 from .integrators.kernels import OK
-from .integrators.taylor import _advance_member, order_for
+from .integrators.taylor import _advance_member, controls, order_for
 from .params import SettingError
 from .spec import checked_state
 from .systems import System
@@ -49,33 +49,10 @@ def solve_taylor(sys_id, y0, p, t_end, rtol, atol, order, a, out):
     Y = np.empty((1, d))
     for j in range(d):
         Y[0, j] = y0[j]
-    tol = min(rtol, atol)
     stats = np.zeros((1, 3), np.int64)
-    kept = np.empty((1, d, order + 1))
-    span = np.zeros(1)
-    base = np.zeros(1)
-    comp = np.zeros(1)
-    last = np.empty((1, d))
-    code = _advance_member(
-        sys_id,
-        0,
-        Y,
-        p,
-        0.0,
-        t_end,
-        order,
-        rtol / tol,
-        atol / tol,
-        1.0 / (order - 1),
-        1.0 / order,
-        np.exp(-a - 0.7 / (order - 1)),
-        stats,
-        kept,
-        base,
-        comp,
-        span,
-        last,
-    )
+    carry = (np.empty((1, d, order + 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.empty((1, d)))
+    ctl = controls(rtol, atol, order, a)
+    code = _advance_member(sys_id, 0, Y, p, 0.0, t_end, order, ctl, stats, carry)
     for j in range(d):
         out[j] = Y[0, j]
     return stats[0, 1] if code == OK else -1

@@ -16,7 +16,7 @@ for a start setting, ``method``, ``dt``, ``rtol``, ``atol``).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -64,22 +64,27 @@ class Setting:
 
 
 def param(
-    Params: type,
-    name: str,
-    label: str,
-    unit: str,
-    help: str = "",
-    span: tuple[float, float] | None = None,
+    name: str, label: str, unit: str, help: str = "", span: tuple[float, float] | None = None
 ) -> Setting:
-    """The :class:`Setting` of the physical parameter ``name`` of the dataclass ``Params``: its
-    default and its check are the dataclass's own (one default, one rule); ``span`` is the
-    range a live exhibit takes (:attr:`Setting.span`)."""
-    default = next(f.default for f in fields(Params) if f.name == name)
+    """The :class:`Setting` of the physical parameter ``name``: its default and its check are
+    the parameter dataclass's own (one default, one rule), bound by the :class:`SystemSpec` that
+    lists it; ``help`` defaults to the label with its unit; ``span`` is the range a live exhibit
+    takes (:attr:`Setting.span`)."""
+    help = help or f"{label[:1].lower()}{label[1:]} [{unit}]"
+    return Setting(name, label, unit, None, _unbound, help, span=span)
+
+
+def _unbound(name: str, value: Any) -> Any:  # pragma: no cover - replaced by SystemSpec
+    raise TypeError(f"{name}: a parameter setting not bound to its dataclass")
+
+
+def _bound(Params: type, s: Setting) -> Setting:
+    default = next(f.default for f in fields(Params) if f.name == s.name)
 
     def rule(n: str, value: Any) -> Any:
         return getattr(Params(**{n: value}), n)
 
-    return Setting(name, label, unit, default, rule, help, span=span)
+    return replace(s, default=default, rule=rule)
 
 
 @dataclass(frozen=True)
@@ -122,6 +127,8 @@ class SystemSpec:
         names = [f.name for f in fields(self.Params)]
         if [s.name for s in self.params] != names:
             raise TypeError(f"{self.name}: params must describe {names} in order")
+        bound = tuple(_bound(self.Params, s) if s.rule is _unbound else s for s in self.params)
+        object.__setattr__(self, "params", bound)
 
     # ------------------------------------------------------------------ settings
     def setting(self, name: str) -> Setting:

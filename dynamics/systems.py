@@ -55,6 +55,14 @@ class _Adapter:
     general methods.
     """
 
+    #: The system's name (from its compiled id, :data:`dynamics.ids.NAMES`, unless it says one)
+    #: and its parameter dataclass (the type of its default ``params``): both derived when the
+    #: adapter is defined.
+    name: ClassVar[str]
+    Params: ClassVar[type]
+    #: Each state component's label with its unit, in state order (a plot's axis, a CSV
+    #: column's description); the names alone unless the system says more.
+    state_labels: ClassVar[dict[str, str]] = {}
     closed_form: ClassVar[bool] = False
     symmetric_step: ClassVar[str | None] = None
     #: The one-amplitude family of starts the stability atlas sweeps: its unit, its axis label
@@ -69,6 +77,20 @@ class _Adapter:
         """Each of :attr:`quantity_labels` for states ``(..., d)``, shaped ``(...)``."""
         return {}
 
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "name" not in cls.__dict__:
+            cls.name = NAMES[cls.sys_id]
+        cls.Params = type(cls.__dict__["params"])
+        labels = cls.__dict__.get("state_labels") or {n: n for n in cls.state_names}
+        if tuple(labels) != tuple(cls.state_names):
+            raise TypeError(f"{cls.__name__}: state_labels must name {cls.state_names} in order")
+        cls.state_labels = labels
+
+    def kernel_params(self) -> np.ndarray:
+        """The parameters as the compiled kernels take them (the physics module's layout)."""
+        return self.params.kernel_params()
+
     def report(self, t: float) -> dict[str, list[float]]:
         """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
         return {}
@@ -81,19 +103,18 @@ def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Cyclotron(_Adapter):
-    """Charge in a uniform field (:mod:`dynamics.cyclotron`)."""
+    """Charge in a uniform field along +z (:mod:`dynamics.cyclotron`): state ``(x, y, z, vx, vy,
+    vz)`` [m, m/s]; its exact flow is a helix, known from every state (the ``exact`` method)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
     sys_id = kernels.CYCLOTRON
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = cyclotron.CyclotronParams
     state_names = cyclotron.STATE_NAMES
+    state_labels: ClassVar[dict[str, str]] = {
+        n: f"{n} [{'m' if n[0] != 'v' else 'm/s'}]" for n in cyclotron.STATE_NAMES
+    }
     closed_form = True
     symmetric_step = "boris"
     amplitude = ("m/s", "speed across the field [m/s]", (0.1, 2.0))
-
-    def kernel_params(self) -> np.ndarray:
-        return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
         """The start of :data:`CYCLOTRON`: the circle of transverse speed 1 m/s about the axis."""
@@ -163,14 +184,15 @@ class Hoop(_Adapter):
 
     params: hoop.HoopParams = hoop.HoopParams()
     sys_id = kernels.HOOP
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = hoop.HoopParams
     state_names = hoop.STATE_NAMES
+    state_labels: ClassVar[dict[str, str]] = {
+        "theta1": "hoop angle θ1 [rad]",
+        "theta2": "bead angle θ2 [rad]",
+        "omega1": "hoop rate θ1' [rad/s]",
+        "omega2": "bead rate θ2' [rad/s]",
+    }
     symmetric_step = "verlet"
     amplitude = ("rad", "amplitude A of each normal mode [rad]", (0.01, 1.5))
-
-    def kernel_params(self) -> np.ndarray:
-        return self.params.kernel_params()
 
     def default_state(self) -> np.ndarray:
         """The start of :data:`HOOP`: both normal modes, at rest."""
@@ -243,9 +265,12 @@ class ReleasedDisk(_Adapter):
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
     sys_id = kernels.FREE_BODY
-    name = NAMES[sys_id]
-    Params: ClassVar[type] = disk.DiskParams
     state_names = disk.FREE_STATE_NAMES
+    # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
+    state_labels: ClassVar[dict[str, str]] = {
+        **{f"w{k}": f"body ω{'₁₂₃'[k - 1]} [rad/s]" for k in (1, 2, 3)},
+        **{f"q{k}": f"quaternion q{k}" for k in range(4)},
+    }
     symmetric_step = "splitting"
     amplitude = ("rad/s", "extra spin (A, 0, A) at release [rad/s]", (0.0, 1.0))
 
@@ -327,9 +352,12 @@ class DrivenDisk(_Adapter):
 
     params: disk.DiskParams = disk.DiskParams()
     name = "driven-disk"
-    Params: ClassVar[type] = disk.DiskParams
     sys_id = None
     state_names = ("angle", "omega")
+    state_labels: ClassVar[dict[str, str]] = {
+        "angle": "angle about the axle [rad]",
+        "omega": "spin ω [rad/s]",
+    }
     closed_form = True
 
     def kernel_params(self) -> np.ndarray:
@@ -438,23 +466,9 @@ CYCLOTRON = SystemSpec(
     title="Charge in a uniform magnetic field",
     Params=cyclotron.CyclotronParams,
     params=(
-        param(
-            cyclotron.CyclotronParams,
-            "charge",
-            "Charge q",
-            "C",
-            "charge q [C] (signed, nonzero)",
-            span=(-1e3, 1e3),
-        ),
-        param(cyclotron.CyclotronParams, "mass", "Mass m", "kg", "mass m [kg]", span=MASSES),
-        param(
-            cyclotron.CyclotronParams,
-            "field",
-            "Field B",
-            "T",
-            "field B [T] along +z (nonzero)",
-            span=(-1e3, 1e3),
-        ),
+        param("charge", "Charge q", "C", "charge q [C] (signed, nonzero)", span=(-1e3, 1e3)),
+        param("mass", "Mass m", "kg", span=MASSES),
+        param("field", "Field B", "T", "field B [T] along +z (nonzero)", span=(-1e3, 1e3)),
     ),
     start=(
         Setting(
@@ -488,12 +502,10 @@ HOOP = SystemSpec(
     title="Bead on a hanging hoop",
     Params=hoop.HoopParams,
     params=(
-        param(hoop.HoopParams, "hoop_mass", "Hoop mass M", "kg", "hoop mass M [kg]", span=MASSES),
-        param(hoop.HoopParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
-        param(hoop.HoopParams, "radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
-        param(
-            hoop.HoopParams, "gravity", "Gravity g", "m/s²", "gravity g [m/s^2]", span=(1e-2, 1e3)
-        ),
+        param("hoop_mass", "Hoop mass M", "kg", span=MASSES),
+        param("bead_mass", "Bead mass m", "kg", span=MASSES),
+        param("radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
+        param("gravity", "Gravity g", "m/s²", span=(1e-2, 1e3)),
     ),
     start=(
         Setting(
@@ -517,17 +529,10 @@ DISK = SystemSpec(
     title="Spinning disk with a bead",
     Params=disk.DiskParams,
     params=(
-        param(disk.DiskParams, "disk_mass", "Disk mass M", "kg", "disk mass M [kg]", span=MASSES),
-        param(disk.DiskParams, "radius", "Radius R", "m", "disk radius R [m]", span=RADII),
-        param(disk.DiskParams, "bead_mass", "Bead mass m", "kg", "bead mass m [kg]", span=MASSES),
-        param(
-            disk.DiskParams,
-            "omega",
-            "Spin ω",
-            "rad/s",
-            "spin rate about the axle [rad/s]",
-            span=(-50.0, 50.0),
-        ),
+        param("disk_mass", "Disk mass M", "kg", span=MASSES),
+        param("radius", "Radius R", "m", "disk radius R [m]", span=RADII),
+        param("bead_mass", "Bead mass m", "kg", span=MASSES),
+        param("omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]", span=(-50.0, 50.0)),
     ),
     start=(
         Setting(

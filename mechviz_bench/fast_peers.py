@@ -11,7 +11,8 @@
   methods DOP853, Vern8 and Vern7.
 - **scipy**: ``odeint`` (LSODA in Fortran; the loop stays in Fortran and only the right-hand
   side calls back into Python, which makes it scipy's fastest here), the right-hand side in
-  plain Python over ``math``.
+  plain Python over ``math`` (the free body's: :func:`dynamics.disk.free_derivatives`, called
+  from Python).
 
 Every solver answers ``solve(y0, params, t_end, tol) -> (final state, steps)`` with
 ``rtol = atol = tol``; a failed solve raises. The benchmark measures each one's error against
@@ -27,54 +28,10 @@ import numpy as np
 
 from dynamics.integrators.kernels import CYCLOTRON, HOOP
 
+from .peer_equations import heyoka_equations
+from .peers import _cyrk_rhs, not_importable
+
 CYRK_METHODS = ("DOP853", "Vern8", "Vern7")
-
-
-# --------------------------------------------------------------------------- parameters
-def heyoka_pars(sys_id: int, params: np.ndarray) -> np.ndarray:
-    """The runtime parameters of :func:`heyoka_equations` from our kernel parameters: the
-    combinations the right-hand side uses, so that no expression of parameters is expanded."""
-    p = np.asarray(params, dtype=float)
-    if sys_id == CYCLOTRON:
-        return np.array([p[0]])
-    if sys_id == HOOP:
-        M, m, ga = p[0], p[1], p[3] / p[2]
-        return np.array([m, ga, 2.0 * M + m, (M + m) * ga])
-    i1, i2, i3 = p
-    return np.array([(i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3])
-
-
-def heyoka_equations(sys_id: int):
-    """Our right-hand sides in heyoka's expressions, parameters as ``hy.par[i]``."""
-    import heyoka as hy
-
-    par = hy.par
-    if sys_id == CYCLOTRON:
-        x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
-        return [(x, vx), (y, vy), (z, vz), (vx, par[0] * vy), (vy, -par[0] * vx), (vz, 0.0 * vz)]
-    if sys_id == HOOP:
-        th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
-        m, ga, m11, mg = par[0], par[1], par[2], par[3]
-        s, c = hy.sin(th1 - th2), hy.cos(th1 - th2)
-        r1 = -m * s * w2 * w2 - mg * hy.sin(th1)
-        r2 = s * w1 * w1 - ga * hy.sin(th2)
-        det = m11 - m * c * c
-        return [
-            (th1, w1),
-            (th2, w2),
-            (w1, (r1 - m * c * r2) / det),
-            (w2, (m11 * r2 - c * r1) / det),
-        ]
-    w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
-    return [
-        (w1, par[0] * w2 * w3),
-        (w2, par[1] * w3 * w1),
-        (w3, par[2] * w1 * w2),
-        (q0, 0.5 * (-q1 * w1 - q2 * w2 - q3 * w3)),
-        (q1, 0.5 * (q0 * w1 + q2 * w3 - q3 * w2)),
-        (q2, 0.5 * (q0 * w2 + q3 * w1 - q1 * w3)),
-        (q3, 0.5 * (q0 * w3 + q1 * w2 - q2 * w1)),
-    ]
 
 
 # --------------------------------------------------------------------------- heyoka
@@ -135,8 +92,6 @@ class CyrkSolver:
     """CyRK's ``nbsolve2_ivp`` from an ``njit`` caller, one method."""
 
     def __init__(self, sys_id: int, method: str):
-        from .peers import _cyrk_rhs
-
         self.addr = np.uint64(_cyrk_rhs(sys_id).address)
         self.method = method
         self.call = cyrk_caller()
@@ -153,7 +108,8 @@ class CyrkSolver:
 
 # --------------------------------------------------------------------------- scipy
 def odeint_rhs(sys_id: int, params: np.ndarray):
-    """The right-hand side as ``f(y, t)`` in plain Python over ``math``."""
+    """The right-hand side as ``f(y, t)``: in plain Python over ``math``, but for the free body,
+    whose Python callable is our compiled :func:`dynamics.disk.free_derivatives`."""
     p = [float(v) for v in params]
     if sys_id == CYCLOTRON:
         w = p[0]
@@ -174,20 +130,12 @@ def odeint_rhs(sys_id: int, params: np.ndarray):
             return [w1, w2, (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det]
 
     else:
+        from dynamics.disk import free_derivatives
+
         i1, i2, i3 = p
-        k1, k2, k3 = (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
 
         def f(y, t):
-            w1, w2, w3, q0, q1, q2, q3 = y
-            return [
-                k1 * w2 * w3,
-                k2 * w3 * w1,
-                k3 * w1 * w2,
-                0.5 * (-q1 * w1 - q2 * w2 - q3 * w3),
-                0.5 * (q0 * w1 + q2 * w3 - q3 * w2),
-                0.5 * (q0 * w2 + q3 * w1 - q1 * w3),
-                0.5 * (q0 * w3 + q1 * w2 - q2 * w1),
-            ]
+            return free_derivatives(*y, i1, i2, i3)
 
     return f
 
@@ -212,12 +160,5 @@ def odeint_solve(
 
 
 def available() -> dict[str, str | None]:
-    """Per peer package: ``None`` if it imports, else why not."""
-    out: dict[str, str | None] = {}
-    for name in ("heyoka", "CyRK"):
-        try:
-            __import__(name)
-            out[name] = None
-        except Exception as exc:  # not installed, or installed but broken
-            out[name] = f"{name} not importable ({exc.__class__.__name__}: {exc})"
-    return out
+    """Per peer package, by its module's name: ``None`` if it imports, else why not."""
+    return {name: not_importable(name) for name in ("heyoka", "CyRK")}

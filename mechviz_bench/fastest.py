@@ -38,6 +38,7 @@ import numpy as np
 from dynamics.simulation import Simulation
 
 from . import fast_peers as fp
+from .peer_equations import heyoka_pars
 from .problems import PROBLEMS, Problem, reference_state
 from .untuned import Reference, draw, reference
 
@@ -121,7 +122,7 @@ _SOLVERS: dict = {}
 
 def _heyoka(pb: Problem, fast_math: bool):
     sid, y0 = pb.system.sys_id, pb.y0
-    pars = fp.heyoka_pars(sid, pb.system.kernel_params())
+    pars = heyoka_pars(sid, pb.system.kernel_params())
 
     def make(tol: float):
         solver = fp.heyoka_solver(sid, len(y0), len(pars), tol, fast_math)

@@ -4,100 +4,48 @@ compares with each peer's fastest at the accuracy targets."""
 
 from __future__ import annotations
 
-import math
 import time
 
 from .peers import prepare as prepare_peer
-from .problems import Problem, reference_state
-from .sweeps import _PREPARED, Point, Settings, _stalled, head_to_head, time_to_reach
-from .timing import time_calls
+from .problems import Problem
+from .sweeps import (
+    _PREPARED,
+    Point,
+    PointFailed,
+    Settings,
+    Solved,
+    head_to_head,
+    measure_point,
+    sweep_tolerances,
+    swept_point,
+    time_to_reach,
+)
 
 
 def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) -> Point:
     """One peer at one tolerance: built and run once untimed (heyoka compiles when built, a
     CyRK callback at its first call), then timed as ours (:func:`mechviz_bench.timing.time_calls`),
     its error against the same reference."""
-    ref = reference_state(problem)
-    try:
-        prepared = prepare_peer(peer, problem, tol)
-        y = prepared.run()  # untimed: the first call compiles CyRK's C callback
-        t0 = time.perf_counter()
-        y = prepared.run()
-        first = time.perf_counter() - t0
-    except Exception as exc:  # a peer failing at one tolerance is a result, not a crash
-        return Point(
-            problem.key,
-            peer,
-            True,
-            None,
-            tol,
-            0,
-            0,
-            None,
-            None,
-            None,
-            None,
-            None,
-            0,
-            0,
-            f"failed: {exc.__class__.__name__}: {exc}",
-        )
-    _PREPARED[(problem.key, peer, None, tol)] = prepared.run
-    err = problem.error(y, ref)
-    if not math.isfinite(err):
-        return Point(
-            problem.key,
-            peer,
-            True,
-            None,
-            tol,
-            prepared.nfev(),
-            0,
-            None,
-            None,
-            None,
-            None,
-            first,
-            0,
-            0,
-            "failed: non-finite final state",
-        )
-    timing = time_calls(
-        lambda: prepared.run,
-        repeats=settings.repeats,
-        min_sample=settings.min_sample,
-        first_call=first,
-        one_sample_from=settings.one_sample_from,
-    )
-    return Point(
-        problem.key,
-        peer,
-        True,
-        None,
-        tol,
-        prepared.nfev(),
-        0,
-        err,
-        None,
-        timing.median,
-        timing.best,
-        timing.first_call,
-        timing.samples,
-        timing.calls_per_sample,
-        "ok",
-    )
+
+    def solve() -> Solved:
+        try:
+            prepared = prepare_peer(peer, problem, tol)
+            y = prepared.run()  # untimed: the first call compiles CyRK's C callback
+            t0 = time.perf_counter()
+            y = prepared.run()
+            first = time.perf_counter() - t0
+        except Exception as exc:  # a peer failing at one tolerance is a result, not a crash
+            raise PointFailed(f"failed: {exc.__class__.__name__}: {exc}") from exc
+        _PREPARED[(problem.key, peer, None, tol)] = prepared.run
+        return Solved(y, prepared.nfev(), 0, first, True, None, lambda: prepared.run)
+
+    return measure_point(problem, peer, True, None, tol, settings, solve)
 
 
 def sweep_peer(problem: Problem, peer: str, settings: Settings) -> list[Point]:
-    points: list[Point] = []
-    for tol in settings.tolerances:
-        pt = run_peer_point(problem, peer, settings, tol)
-        points.append(pt)
-        if pt.error is not None and pt.error < problem.floor:
-            break
-        if (pt.first_call or 0.0) > settings.cap or _stalled(points):
-            break
-    return points
+    return sweep_tolerances(
+        problem, settings, lambda tol: run_peer_point(problem, peer, settings, tol)
+    )
 
 
 def peer_table(
@@ -131,16 +79,7 @@ def peer_table(
                 for m in entry["ours_methods"]:
                     v = entry["per_method"].get(m)
                     if v and v["seconds"] <= 1.5 * (entry.get("sweep", entry)["ours"]["seconds"]):
-                        ours.append(
-                            next(
-                                p
-                                for p in points
-                                if p.problem == key
-                                and p.method == m
-                                and p.dt == v["dt"]
-                                and p.tol == v["tol"]
-                            )
-                        )
+                        ours.append(swept_point(points, key, m, v))
                 pts = [*ours, best]
                 secs = head_to_head(problem, pts, settings.head_to_head_rounds, settings.min_sample)
                 i_best = min(range(len(ours)), key=lambda i: secs[i])

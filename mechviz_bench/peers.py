@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .peer_equations import heyoka_equations, heyoka_pars
+
 if TYPE_CHECKING:  # for annotations only: the problems module imports this one at run time
     from .problems import Problem
 
@@ -38,16 +40,18 @@ class PeerRun:
     nfev: Callable[[], int]
 
 
+def not_importable(module: str) -> str | None:
+    """``None`` if ``module`` imports, else why not."""
+    try:
+        __import__(module)
+    except Exception as exc:  # not installed, or installed but broken
+        return f"{module} not importable ({exc.__class__.__name__}: {exc})"
+    return None
+
+
 def available() -> dict[str, str | None]:
-    """Per peer package: ``None`` if it imports, else why not."""
-    out: dict[str, str | None] = {}
-    for name, module in (("heyoka", "heyoka"), ("cyrk", "CyRK")):
-        try:
-            __import__(module)
-            out[name] = None
-        except Exception as exc:  # not installed, or installed but broken
-            out[name] = f"{module} not importable ({exc.__class__.__name__}: {exc})"
-    return out
+    """Per peer package (as :func:`package_of` names it): ``None`` if it imports, else why not."""
+    return {"heyoka": not_importable("heyoka"), "cyrk": not_importable("CyRK")}
 
 
 def package_of(peer: str) -> str:
@@ -65,58 +69,19 @@ def versions() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- heyoka
-def _heyoka_system(problem: Problem):
-    import heyoka as hy
-
-    from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
-
-    p = problem.system.kernel_params()
-    kind = problem.system.sys_id
-    if kind == CYCLOTRON:
-        x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
-        w = float(p[0])
-        return [(x, vx), (y, vy), (z, vz), (vx, w * vy), (vy, -w * vx), (vz, 0.0 * vz)]
-    if kind == HOOP:
-        th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
-        M, m, ga = float(p[0]), float(p[1]), float(p[3] / p[2])
-        s, c = hy.sin(th1 - th2), hy.cos(th1 - th2)
-        r1 = -m * s * w2 * w2 - (M + m) * ga * hy.sin(th1)
-        r2 = s * w1 * w1 - ga * hy.sin(th2)
-        m11 = 2.0 * M + m
-        det = m11 - m * c * c
-        return [
-            (th1, w1),
-            (th2, w2),
-            (w1, (r1 - m * c * r2) / det),
-            (w2, (m11 * r2 - c * r1) / det),
-        ]
-    if kind == FREE_BODY:
-        w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
-        i1, i2, i3 = (float(v) for v in p)
-        return [
-            (w1, (i2 - i3) * w2 * w3 / i1),
-            (w2, (i3 - i1) * w3 * w1 / i2),
-            (w3, (i1 - i2) * w1 * w2 / i3),
-            (q0, 0.5 * (-q1 * w1 - q2 * w2 - q3 * w3)),
-            (q1, 0.5 * (q0 * w1 + q2 * w3 - q3 * w2)),
-            (q2, 0.5 * (q0 * w2 + q3 * w1 - q1 * w3)),
-            (q3, 0.5 * (q0 * w3 + q1 * w2 - q2 * w1)),
-        ]
-    raise KeyError(problem.key)
-
-
 def heyoka_run(problem: Problem, tol: float, *, fp_type=None) -> PeerRun:
     """heyoka's ``taylor_adaptive`` at ``tol`` (built now; each ``run()`` restarts at t = 0)."""
     import heyoka as hy
 
-    sys = _heyoka_system(problem)
+    sid = problem.system.sys_id
     y0 = problem.y0
     kw = {}
     if fp_type is not None:
         kw["fp_type"] = fp_type
         y0 = np.array(problem.state0, dtype=fp_type)
         tol = fp_type(tol)
-    ta = hy.taylor_adaptive(sys, y0, tol=tol, **kw)
+    pars = heyoka_pars(sid, problem.system.kernel_params()).astype(fp_type or float)
+    ta = hy.taylor_adaptive(heyoka_equations(sid), y0, tol=tol, pars=pars, **kw)
     t_end = problem.t_end if fp_type is None else fp_type(problem.t_end)
     steps = [0]
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 #: Our fastest must be at least this many times faster than scipy's fastest.
 SCIPY_FACTOR = 50.0
 
@@ -12,11 +14,14 @@ def _ms(x: float | None) -> str:
     return f"{1e3 * x:.3g} ms"
 
 
+def _table(header: list[str], rows: Iterable[list]) -> str:
+    """A markdown table: the header, its rule, then one line per row (each cell as ``str``)."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(map(str, cells)) + " |" for cells in rows])
+
+
 def ratio_table(result: dict) -> str:
-    lines = [
-        "| problem | accuracy | fastest of ours | fastest scipy | scipy / ours | sweep ratio |",
-        "|---|---|---|---|---|---|",
-    ]
+    rows = []
     for key, row in result["ratios"].items():
         for target, e in row.items():
             ours = e.get("ours") or {}
@@ -30,11 +35,10 @@ def ratio_table(result: dict) -> str:
             )
             sw = e.get("sweep_ratio")
             sws = "-" if sw is None else f"{sw:.0f}x"
-            lines.append(
-                f"| {key} | {target} | {ours.get('method', '-')} {_ms(ours.get('seconds'))} "
-                f"| {sci_s} | {rs} | {sws} |"
-            )
-    return "\n".join(lines)
+            ours_s = f"{ours.get('method', '-')} {_ms(ours.get('seconds'))}"
+            rows.append([key, target, ours_s, sci_s, rs, sws])
+    header = ["problem", "accuracy", "fastest of ours", "fastest scipy", "scipy / ours"]
+    return _table([*header, "sweep ratio"], rows)
 
 
 def peer_table(result: dict) -> str:
@@ -45,10 +49,7 @@ def peer_table(result: dict) -> str:
         why = "; ".join(f"{k}: {v}" for k, v in skipped.items())
         return "No peers were run" + (f" ({why})." if why else " (`mechviz bench --peers`).")
     peers = list(h2h)
-    lines = [
-        "| problem | accuracy | fastest of ours | " + " | ".join(peers) + " |",
-        "|---|---|---|" + "---|" * len(peers),
-    ]
+    rows = []
     keys = list(next(iter(h2h.values())))
     for key in keys:
         targets = list(h2h[peers[0]][key])
@@ -63,8 +64,8 @@ def peer_table(result: dict) -> str:
                 else:
                     mark = "**" if e["ratio"] < 1.0 else ""
                     cells.append(f"{mark}{e['ratio']:.2f}{mark} ({_ms(e['peer']['seconds'])})")
-            lines.append(f"| {key} | {t} | {ours_s} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+            rows.append([key, t, ours_s, *cells])
+    return _table(["problem", "accuracy", "fastest of ours", *peers], rows)
 
 
 def targets_list(result: dict) -> str:
@@ -189,113 +190,117 @@ def targets_summary(result: dict) -> str:
 
 def method_table(result: dict) -> str:
     """Time each method needs to reach each accuracy (with its evaluations)."""
-    lines = []
+    parts = []
     for key, row in result["ratios"].items():
         methods = sorted({m for e in row.values() for m in e["per_method"]})
-        lines += [
-            f"\n**{key}**\n",
-            "| method | " + " | ".join(row) + " |",
-            "|---|" + "---|" * len(row),
-        ]
+        rows = []
         for m in methods:
             cells = []
             for e in row.values():
                 v = e["per_method"].get(m)
                 cells.append("-" if v is None else f"{_ms(v['seconds'])} ({v['nfev']} fev)")
-            lines.append(f"| {m} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+            rows.append([m, *cells])
+        parts.append(f"\n**{key}**\n\n" + _table(["method", *row], rows))
+    return "\n".join(parts)
 
 
 def first_answer_table(result: dict) -> str:
     fa = result.get("first_answer")
     cons = result.get("construction_us") or {}
-    lines = []
+    tables = []
     if fa:
-        lines += [
-            "| fresh process to the hoop's state at 20 s, 1e-9 | median [s] | runs [s] |",
-            "|---|---|---|",
-        ]
-        for k in ("taylor", "dop853", "taylor-aot", "scipy-odeint"):
-            if k in fa:
-                lines.append(f"| {k} | {fa[k]['median_s']} | {fa[k]['runs_s']} |")
+        header = ["fresh process to the hoop's state at 20 s, 1e-9", "median [s]", "runs [s]"]
+        runs = ("taylor", "dop853", "taylor-aot", "scipy-odeint")
+        rows = [[k, fa[k]["median_s"], fa[k]["runs_s"]] for k in runs if k in fa]
+        tables.append(_table(header, rows))
     if cons:
-        lines += ["", "| problem | new Simulation [us] | restart() [us] |", "|---|---|---|"]
-        for k, v in cons.items():
-            lines.append(f"| {k} | {v['new_simulation']} | {v['restart']} |")
-    return "\n".join(lines) or "-"
+        header = ["problem", "new Simulation [us]", "restart() [us]"]
+        rows = [[k, v["new_simulation"], v["restart"]] for k, v in cons.items()]
+        tables.append(_table(header, rows))
+    return "\n\n".join(tables) or "-"
 
 
 def step_table(result: dict) -> str:
-    lines = [
-        "| step | numba ns/step | C -O2 ns/step (same run) | numba / C | C, earlier run |",
-        "|---|---|---|---|---|",
-    ]
+    rows = []
     for name, r in result["per_step"]["rows"].items():
         c = r.get("c_ns")
         ratio = r.get("ratio_to_c")
-        lines.append(
-            f"| {name} | {r['numba_ns']:.1f} | {'-' if c is None else f'{c:.1f}'} | "
-            f"{'-' if ratio is None else f'{ratio:.2f}'} | "
-            f"{r.get('c_notes_ns') or '-'} |"
+        rows.append(
+            [
+                name,
+                f"{r['numba_ns']:.1f}",
+                "-" if c is None else f"{c:.1f}",
+                "-" if ratio is None else f"{ratio:.2f}",
+                r.get("c_notes_ns") or "-",
+            ]
         )
-    return "\n".join(lines)
+    header = ["step", "numba ns/step", "C -O2 ns/step (same run)", "numba / C"]
+    return _table([*header, "C, earlier run"], rows)
 
 
 def exhibit_table(result: dict) -> str:
-    lines = [
-        "| exhibit | method | dt [s] | steps/frame | max error / size (600 s) | "
-        "compute per simulated s | stability limit dt | passes |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for name, ex in result["exhibits"].items():
         for r in ex["rows"]:
             rel = "failed" if r["relative_error"] is None else f"{r['relative_error']:.2e}"
             lim = r["stability_limit_dt"]
-            lim_s = "none" if lim is None else f"{lim:.3g}"
             mark = (
                 "**yes (chosen)**"
                 if ex["chosen"] is r or ex["chosen"] == r
                 else ("yes" if r["passes"] else "no")
             )
-            lines.append(
-                f"| {name} | {r['method']} | {r['dt']:.5g} | {r['steps_per_frame']} | "
-                f"{rel} | {1e6 * r['seconds_per_simulated_second']:.3g} us | {lim_s} | "
-                f"{mark} |"
+            rows.append(
+                [
+                    name,
+                    r["method"],
+                    f"{r['dt']:.5g}",
+                    r["steps_per_frame"],
+                    rel,
+                    f"{1e6 * r['seconds_per_simulated_second']:.3g} us",
+                    "none" if lim is None else f"{lim:.3g}",
+                    mark,
+                ]
             )
-    return "\n".join(lines)
+    header = ["exhibit", "method", "dt [s]", "steps/frame", "max error / size (600 s)"]
+    return _table([*header, "compute per simulated s", "stability limit dt", "passes"], rows)
 
 
 def long_run_table(result: dict) -> str:
-    lines = [
-        "| problem | dt | method | max abs dE/E | mean first 10 % | mean last 10 % |",
-        "|---|---|---|---|---|---|",
+    rows = [
+        [
+            key,
+            f"{res['dt']:g}",
+            m,
+            f"{r['max_abs']:.2e}",
+            f"{r['mean_first_10pc']:.2e}",
+            f"{r['mean_last_10pc']:.2e}",
+        ]
+        for key, res in result["long_run"].items()
+        for m, r in res["methods"].items()
     ]
-    for key, res in result["long_run"].items():
-        for m, r in res["methods"].items():
-            lines.append(
-                f"| {key} | {res['dt']:g} | {m} | {r['max_abs']:.2e} | "
-                f"{r['mean_first_10pc']:.2e} | {r['mean_last_10pc']:.2e} |"
-            )
-    return "\n".join(lines)
+    header = ["problem", "dt", "method", "max abs dE/E", "mean first 10 %", "mean last 10 %"]
+    return _table(header, rows)
 
 
 def ensemble_table(result: dict) -> str:
     e = result["ensembles"]
-    lines = [
-        f"{e['note']}; {e['cores']} cores, {e['threads']} numba threads "
-        f"({e['threading_layer'] or 'no threading layer'}).",
-        "",
-        "| members N | member-steps per run | serial ns/member-step | parallel ns/member-step | "
-        "serial / parallel | bitwise equal |",
-        "|---|---|---|---|---|---|",
+    rows = [
+        [
+            r["members"],
+            r["member_steps"],
+            f"{r['serial_ns']:.0f}",
+            f"{r['parallel_ns']:.0f}",
+            f"{r['speedup']:.2f}",
+            "yes" if r["bitwise_equal"] else "**no**",
+        ]
+        for r in e["rows"].values()
     ]
-    for r in e["rows"].values():
-        lines.append(
-            f"| {r['members']} | {r['member_steps']} | {r['serial_ns']:.0f} | "
-            f"{r['parallel_ns']:.0f} | {r['speedup']:.2f} | "
-            f"{'yes' if r['bitwise_equal'] else '**no**'} |"
-        )
-    return "\n".join(lines)
+    header = ["members N", "member-steps per run", "serial ns/member-step"]
+    header += ["parallel ns/member-step", "serial / parallel", "bitwise equal"]
+    return (
+        f"{e['note']}; {e['cores']} cores, {e['threads']} numba threads "
+        f"({e['threading_layer'] or 'no threading layer'}).\n\n" + _table(header, rows)
+    )
 
 
 def peers_block(result: dict) -> str:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import gc
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -51,6 +52,39 @@ class Point:
 
     def to_json(self) -> dict:
         return asdict(self)
+
+    @classmethod
+    def failed(
+        cls,
+        problem: str,
+        method: str,
+        adaptive: bool,
+        dt: float | None,
+        tol: float | None,
+        status: str,
+        *,
+        steps: int = 0,
+        nfev: int = 0,
+        first_call: float | None = None,
+    ) -> Point:
+        """A point whose run failed (``status`` says how): no error and no timing."""
+        return cls(
+            problem,
+            method,
+            adaptive,
+            dt,
+            tol,
+            steps,
+            nfev,
+            error=None,
+            energy_error_max=None,
+            seconds=None,
+            seconds_best=None,
+            first_call=first_call,
+            samples=0,
+            calls_per_sample=0,
+            status=status,
+        )
 
 
 @dataclass(frozen=True)
@@ -107,6 +141,95 @@ def _energy(problem: Problem, y: np.ndarray) -> float:
         return float(np.asarray(problem.system.energy(np.atleast_2d(y)))[0])
 
 
+class PointFailed(Exception):
+    """A run that failed at one point of a sweep: a result (its ``status``), not a crash."""
+
+    def __init__(self, status: str):
+        super().__init__(status)
+        self.status = status
+
+
+@dataclass(frozen=True)
+class Solved:
+    """The untimed run of one point: what it reached and how to time it."""
+
+    final_state: np.ndarray
+    steps: int
+    nfev: int
+    first: float  # wall time of the untimed run [s]
+    first_is_one_call: bool  # the untimed run was one call to T (else the timing makes its own)
+    energy_error_max: float | None
+    make: Callable[[], Callable[[], object]]  # a fresh timed call (:func:`.timing.time_calls`)
+
+
+def measure_point(
+    problem: Problem,
+    method: str,
+    adaptive: bool,
+    dt: float | None,
+    tol: float | None,
+    settings: Settings,
+    solve: Callable[[], Solved],
+) -> Point:
+    """One sweep point: ``solve()`` runs it once untimed (raising :class:`PointFailed` when it
+    fails), its final state is measured against the problem's reference, and the run is timed
+    (:func:`mechviz_bench.timing.time_calls`). A non-finite final state is a failed point."""
+    ref = reference_state(problem)
+    try:
+        run = solve()
+    except PointFailed as failure:
+        return Point.failed(problem.key, method, adaptive, dt, tol, failure.status)
+    err = problem.error(run.final_state, ref)
+    if not math.isfinite(err):
+        return Point.failed(
+            problem.key,
+            method,
+            adaptive,
+            dt,
+            tol,
+            "failed: non-finite final state",
+            steps=run.steps,
+            nfev=run.nfev,
+            first_call=run.first,
+        )
+    timing = time_calls(
+        run.make,
+        repeats=settings.repeats,
+        min_sample=settings.min_sample,
+        first_call=run.first if run.first_is_one_call else None,
+        one_sample_from=settings.one_sample_from,
+    )
+    return Point(
+        problem.key,
+        method,
+        adaptive,
+        dt,
+        tol,
+        run.steps,
+        run.nfev,
+        err,
+        run.energy_error_max,
+        timing.median,
+        timing.best,
+        timing.first_call,
+        timing.samples,
+        timing.calls_per_sample,
+        "ok",
+    )
+
+
+def _energy_error_in_pieces(problem: Problem, sim: Simulation, pieces: int) -> float:
+    """Advance ``sim`` to T in ``pieces`` equal spans; the largest relative energy error at
+    their ends."""
+    T = problem.t_end
+    E0 = float(problem.system.energy(problem.y0))
+    worst = 0.0
+    for k in range(1, pieces + 1):
+        sim.advance_to(T * k / pieces)
+        worst = max(worst, abs(_energy(problem, sim.state) - E0) / abs(E0))
+    return worst
+
+
 def run_point(
     problem: Problem,
     method: str,
@@ -116,98 +239,40 @@ def run_point(
     tol: float | None = None,
 ) -> Point:
     adaptive = get_method(method).adaptive
-    ref = reference_state(problem)
     T = problem.t_end
     S = settings.energy_samples
-    E0 = float(problem.system.energy(problem.y0))
-    energy_max = 0.0
-    try:
-        sim = _simulation(problem, method, dt, tol)
-        t0 = time.perf_counter()
-        if adaptive:
-            sim.advance_to(T)
-        else:
-            for k in range(1, S + 1):
-                sim.advance_to(T * k / S)
-                e = _energy(problem, sim.state)
-                energy_max = max(energy_max, abs(e - E0) / abs(E0))
-        first = time.perf_counter() - t0
-        y, steps, nfev = sim.state[0].copy(), sim.steps, sim.nfev
-        if adaptive and first < settings.cap:
-            seg = _simulation(problem, method, dt, tol)
-            for k in range(1, S + 1):
-                seg.advance_to(T * k / S)
-                e = _energy(problem, seg.state)
-                energy_max = max(energy_max, abs(e - E0) / abs(E0))
-        elif adaptive:
-            energy_max = abs(_energy(problem, y) - E0) / abs(E0)
-    except IntegrationError as exc:
-        return Point(
-            problem.key,
-            method,
-            adaptive,
-            dt,
-            tol,
-            0,
-            0,
-            None,
-            None,
-            None,
-            None,
-            None,
-            0,
-            0,
-            f"failed: {exc.reason}",
-        )
-    err = problem.error(y, ref)
-    if not math.isfinite(err):
-        return Point(
-            problem.key,
-            method,
-            adaptive,
-            dt,
-            tol,
-            steps,
-            nfev,
-            None,
-            None,
-            None,
-            None,
+
+    def solve() -> Solved:
+        try:
+            sim = _simulation(problem, method, dt, tol)
+            t0 = time.perf_counter()
+            if adaptive:
+                sim.advance_to(T)
+            else:
+                energy_max = _energy_error_in_pieces(problem, sim, S)
+            first = time.perf_counter() - t0
+            y, steps, nfev = sim.state[0].copy(), sim.steps, sim.nfev
+            if adaptive and first < settings.cap:
+                energy_max = _energy_error_in_pieces(
+                    problem, _simulation(problem, method, dt, tol), S
+                )
+            elif adaptive:
+                E0 = float(problem.system.energy(problem.y0))
+                energy_max = abs(_energy(problem, y) - E0) / abs(E0)
+        except IntegrationError as exc:
+            raise PointFailed(f"failed: {exc.reason}") from exc
+        timed = _simulation(problem, method, dt, tol)
+        return Solved(
+            y,
+            int(steps),
+            int(nfev),
             first,
-            0,
-            0,
-            "failed: non-finite final state",
+            adaptive,
+            energy_max,
+            lambda: lambda: _restart_and_run(timed, T),
         )
 
-    timed = _simulation(problem, method, dt, tol)
-
-    def make():
-        return lambda: _restart_and_run(timed, T)
-
-    timing = time_calls(
-        make,
-        repeats=settings.repeats,
-        min_sample=settings.min_sample,
-        first_call=first if adaptive else None,
-        one_sample_from=settings.one_sample_from,
-    )
-    return Point(
-        problem.key,
-        method,
-        adaptive,
-        dt,
-        tol,
-        int(steps),
-        int(nfev),
-        err,
-        energy_max,
-        timing.median,
-        timing.best,
-        timing.first_call,
-        timing.samples,
-        timing.calls_per_sample,
-        "ok",
-    )
+    return measure_point(problem, method, adaptive, dt, tol, settings, solve)
 
 
 def sweep_fixed(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
@@ -251,10 +316,17 @@ def _stalled(points: list[Point]) -> bool:
     return points[-1].tol is not None and points[-1].tol < best.tol * 10.0**-STALL_DECADES
 
 
-def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
+def sweep_tolerances(
+    problem: Problem,
+    settings: Settings,
+    solve: Callable[[float], Point],
+    progress=None,
+) -> list[Point]:
+    """``solve(tol)`` along ``settings.tolerances``, from the loosest, until the error falls below
+    the problem's floor, a call takes longer than the cap, or the sweep stalls."""
     points: list[Point] = []
     for tol in settings.tolerances:
-        pt = run_point(problem, method, settings, tol=tol)
+        pt = solve(tol)
         points.append(pt)
         if progress:
             progress()
@@ -263,6 +335,12 @@ def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=N
         if (pt.first_call or 0.0) > settings.cap or _stalled(points):
             break
     return points
+
+
+def sweep_adaptive(problem: Problem, method: str, settings: Settings, progress=None) -> list[Point]:
+    return sweep_tolerances(
+        problem, settings, lambda tol: run_point(problem, method, settings, tol=tol), progress
+    )
 
 
 TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
@@ -276,6 +354,16 @@ def time_to_reach(points: list[Point], target: float) -> Point | None:
         if p.error is not None and p.error <= target and p.seconds and p.status == "ok"
     ]
     return min(ok, key=lambda p: p.seconds) if ok else None
+
+
+def swept_point(points: list[Point], key: str, method: str, best: dict) -> Point:
+    """The sweep point of ``method`` on problem ``key`` that a table entry ``best`` (with its
+    ``dt`` and ``tol``) was taken from."""
+    return next(
+        p
+        for p in points
+        if p.problem == key and p.method == method and p.dt == best["dt"] and p.tol == best["tol"]
+    )
 
 
 def ratio_table(points: list[Point], ours: set[str], theirs: set[str]) -> dict:
@@ -401,19 +489,7 @@ def retime_ratios(
                     and entry["per_method"][m]["seconds"] <= close * fastest
                 ]
             contenders = [(side, m) for side in ("ours", "scipy") for m in sides[side]]
-            pts = []
-            for _, m in contenders:
-                v = entry["per_method"][m]
-                pts.append(
-                    next(
-                        p
-                        for p in points
-                        if p.problem == key
-                        and p.method == m
-                        and p.dt == v["dt"]
-                        and p.tol == v["tol"]
-                    )
-                )
+            pts = [swept_point(points, key, m, entry["per_method"][m]) for _, m in contenders]
             secs = head_to_head(problem, pts, settings.head_to_head_rounds, settings.min_sample)
             best = {}
             for (side, m), t in zip(contenders, secs, strict=True):

@@ -108,7 +108,8 @@ def reference(problem: Problem) -> Reference:
     if problem.exact_reference:
         exact = np.asarray(problem.system.exact(problem.y0, problem.t_end), dtype=float)
         return Reference(exact, "exact", 0.0)
-    from .fast_peers import heyoka_pars, heyoka_solver
+    from .fast_peers import heyoka_solver
+    from .peer_equations import heyoka_pars
     from .problems import _long_double_final
 
     ref, _ = _long_double_final(problem)

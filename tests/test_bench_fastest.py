@@ -15,6 +15,7 @@ import pytest
 from dynamics.simulation import Simulation
 from mechviz_bench import fast_peers as fp
 from mechviz_bench import fastest, fastest_report, untuned
+from mechviz_bench.peer_equations import heyoka_pars
 from mechviz_bench.problems import PROBLEMS, Problem, reference_state
 
 HAVE = fp.available()
@@ -41,7 +42,7 @@ if HAVE["CyRK"] is None:
 def _solve(name: str, pb: Problem, tol: float) -> np.ndarray:
     sid, p = pb.system.sys_id, pb.system.kernel_params()
     if name.startswith("heyoka"):
-        pars = fp.heyoka_pars(sid, p)
+        pars = heyoka_pars(sid, p)
         s = fp.heyoka_solver(sid, len(pb.y0), len(pars), tol, name.endswith("fast_math"))
         return s.solve(pb.y0, pars, pb.t_end)[0]
     if name.startswith("cyrk"):

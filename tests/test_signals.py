@@ -17,7 +17,12 @@ from pathlib import Path
 import pytest
 from waiting import alive, descendants, scaled, wait_until
 
+from viz.chromium import find_chromium
+
 pytestmark = pytest.mark.slow
+needs_chromium = pytest.mark.skipif(
+    find_chromium() is None, reason="no Chromium (apt-get install chromium)"
+)
 
 
 def cpu_seconds(pid: int) -> float:
@@ -48,6 +53,21 @@ def terminate_and_check(proc: subprocess.Popen, tmp: Path) -> str:
     return err
 
 
+def start_drawing(args: list[str], tmp: Path, within: float) -> subprocess.Popen:
+    """``mechviz ARGS`` (a command that draws in Chromium), once Chromium runs and the
+    command's temporary folder exists."""
+    proc = start(args, tmp)
+    wait_until(
+        lambda: (
+            any("chrom" in name.lower() for name in descendants(proc.pid).values())
+            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
+        ),
+        within,
+        "Chromium to start drawing",
+    )
+    return proc
+
+
 def test_sigterm_ends_bench_while_its_workers_compile(tmp_path):
     cache = tmp_path / "cache"
     proc = start(
@@ -70,60 +90,28 @@ def test_sigterm_ends_record_at_work(tmp_path):
     assert not out.exists() or list(out.iterdir()) == []
 
 
+@needs_chromium
 def test_sigterm_ends_video_while_chromium_draws(tmp_path):
-    from viz.chromium import find_chromium
-
-    if find_chromium() is None:
-        pytest.skip("no Chromium (apt-get install chromium)")
     rec = tmp_path / "rec"
+    record = ["record", "helix", "--out", str(rec), "--duration", "10", "--fps", "10"]
     subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "viz.cli",
-            "record",
-            "helix",
-            "--out",
-            str(rec),
-            "--duration",
-            "10",
-            "--fps",
-            "10",
-        ],
+        [sys.executable, "-m", "viz.cli", *record],
         check=True,
         capture_output=True,
         timeout=scaled(300),
     )
     tmp = tmp_path / "tmp"
     video = tmp_path / "helix.mp4"
-    proc = start(["video", str(rec / "helix.viser"), "--out", str(video)], tmp)
-    wait_until(
-        lambda: (
-            any("chrom" in name.lower() for name in descendants(proc.pid).values())
-            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
-        ),
-        120,
-        "Chromium to start drawing",
-    )
+    proc = start_drawing(["video", str(rec / "helix.viser"), "--out", str(video)], tmp, 120)
     terminate_and_check(proc, tmp)
     assert not video.exists()
 
 
+@needs_chromium
 def test_sigterm_ends_still_while_chromium_draws(tmp_path):
-    from viz.chromium import find_chromium
-
-    if find_chromium() is None:
-        pytest.skip("no Chromium (apt-get install chromium)")
     tmp = tmp_path / "tmp"
     still = tmp_path / "helix.png"
-    proc = start(["still", "helix", "--at", "2", "--size", "1920x1080", "--out", str(still)], tmp)
-    wait_until(
-        lambda: (
-            any("chrom" in name.lower() for name in descendants(proc.pid).values())
-            and any(p.name.startswith("mechviz-video-") for p in tmp.iterdir())
-        ),
-        180,
-        "Chromium to start drawing",
-    )
+    args = ["still", "helix", "--at", "2", "--size", "1920x1080", "--out", str(still)]
+    proc = start_drawing(args, tmp, 180)
     terminate_and_check(proc, tmp)
     assert not still.exists()

@@ -152,24 +152,8 @@ def _ensemble_run(run, sys_id, Y0):
     stats = np.zeros((n, 3), dtype=np.int64)
     status = np.zeros(3, dtype=np.int64)
     order, a = taylor.order_for(1e-9, 1e-9, sys_id)
-    total = run(
-        sys_id,
-        Y,
-        system.kernel_params(),
-        0.0,
-        3.0,
-        1e-9,
-        1e-9,
-        order,
-        a,
-        stats,
-        status,
-        carry.kept,
-        carry.base,
-        carry.comp,
-        carry.span,
-        carry.last,
-    )
+    args = (Y, system.kernel_params(), 0.0, 3.0, 1e-9, 1e-9, order, a, stats, status)
+    total = run(sys_id, *args, carry.arrays)
     return Y, stats, status, total
 
 

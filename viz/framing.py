@@ -115,9 +115,9 @@ def parse_camera(text: str) -> Request:
     return Request(position=pos, look_at=look)
 
 
-def _basis(position: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, ...]:
+def axes(position, target) -> tuple[np.ndarray, ...]:
     """Camera axes (right, up, forward) for +z up; looking straight down, +y is up."""
-    fwd = target - position
+    fwd = np.asarray(target, float) - np.asarray(position, float)
     fwd = fwd / np.linalg.norm(fwd)
     right = np.cross(fwd, (0.0, 0.0, 1.0))
     if np.linalg.norm(right) < 1e-6:
@@ -131,7 +131,7 @@ def project(position, target, fov: float, aspect: float, points) -> np.ndarray:
     """Normalised device coordinates ``(x, y)`` in [-1, 1] of world ``points`` (N, 3) seen from
     ``position`` looking at ``target``; ``aspect`` is width / height."""
     p, t = np.asarray(position, float), np.asarray(target, float)
-    right, up, fwd = _basis(p, t)
+    right, up, fwd = axes(p, t)
     d = np.asarray(points, float) - p
     z = d @ fwd
     if np.any(z <= 1e-9):
@@ -141,6 +141,7 @@ def project(position, target, fov: float, aspect: float, points) -> np.ndarray:
 
 
 def corners(lo, hi) -> np.ndarray:
+    """The eight corners (8, 3) of the box from ``lo`` to ``hi``."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     return np.array(
         [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
@@ -186,7 +187,7 @@ def frame(
         xy = project(target + d * dist, target, fov, aspect, pts)
         off_x = (xy[:, 0].max() + xy[:, 0].min()) / 2
         off_y = (xy[:, 1].max() + xy[:, 1].min()) / 2 - want_mid
-        right, up, _ = _basis(target + d * dist, target)
+        right, up, _ = axes(target + d * dist, target)
         half_h = dist * math.tan(fov / 2)
         target = target + right * off_x * half_h * aspect + up * off_y * half_h
     position = target + d * dist

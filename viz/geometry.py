@@ -17,6 +17,37 @@ from .interrupts import sigint_held
 with sigint_held():  # trimesh swallows a KeyboardInterrupt raised while it imports
     import trimesh
 
+
+def lines(scene, name: str, segments, colors, thickness: float, **kwargs):
+    """viser line segments ``(N, 2, 3)`` [m] under ``name``, ``thickness`` in screen pixels (a
+    line reads the same at every zoom and on a projector); ``colors`` one RGB, or one per point."""
+    return scene.add_line_segments(
+        name,
+        segments,
+        colors=np.asarray(colors, np.uint8),
+        thickness=thickness,
+        thickness_units="screen",
+        **kwargs,
+    )
+
+
+def instances(scene, name: str, mesh, colors, **batched):
+    """One viser node drawing ``len(colors)`` copies of ``mesh`` (one draw call), unrotated, at
+    the origin until moved; ``batched``: further ``batched_*`` values by their short names
+    (``scales``, ``opacities``, ``positions``)."""
+    n = len(colors)
+    kwargs = {"wxyzs": np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)), "positions": np.zeros((n, 3))}
+    kwargs.update(batched)
+    return scene.add_batched_meshes_simple(
+        name,
+        mesh.vertices,
+        mesh.faces,
+        batched_colors=np.asarray(colors, np.uint8),
+        lod="off",
+        **{f"batched_{k}": v for k, v in kwargs.items()},
+    )
+
+
 # Colour palette (RGB uint8) shared by all exhibits. Mid-tones: every colour keeps a contrast of
 # at least 3:1 (the WCAG threshold for graphics) against the light theme's white background and
 # the dark theme's near-black one (BACKGROUNDS), so nothing vanishes on a projector in either.
@@ -263,13 +294,9 @@ class ChunkedTrail:
 
     def _new_node(self, segments: np.ndarray):
         self._counter += 1
-        return self.scene.add_line_segments(
-            f"{self.name}/c{self._counter:06d}",
-            segments.copy(),
-            colors=self.color,
-            thickness=self.thickness,
-            thickness_units="screen",
-            visible=self._visible,
+        name = f"{self.name}/c{self._counter:06d}"
+        return lines(
+            self.scene, name, segments.copy(), self.color, self.thickness, visible=self._visible
         )
 
     def _write_open(self, segments: np.ndarray) -> None:

@@ -36,7 +36,7 @@ import stat
 import urllib.parse
 from pathlib import Path
 
-from .cli.errors import CliError
+from .cli.errors import CliError, command
 from .play_server import GuardedHandler, GuardedServer
 from .printable import printable
 
@@ -44,15 +44,18 @@ DEFAULT_PLAY_PORT = 8090
 _WILDCARD = ("0.0.0.0", "", "::")
 
 
+ABOUT = """\
+serve a .viser recording (or a folder of them) with viser's client
+
+Serve PATH (a .viser file or a folder of them) on HOST:PORT with the browser client that ships
+in the viser wheel; prints the URLs; Ctrl-C stops. Only regular files inside the folder are
+served (symlinks that lead out of it are not).
+"""
+
+
 def add_command(sub) -> None:
     """Register ``play`` on the ``mechviz`` sub-parser set."""
-    q = sub.add_parser(
-        "play",
-        help="serve a .viser recording (or a folder of them) with viser's client",
-        description="Serve PATH (a .viser file or a folder of them) on HOST:PORT with the browser "
-        "client that ships in the viser wheel; prints the URLs; Ctrl-C stops. Only regular "
-        "files inside the folder are served (symlinks that lead out of it are not).",
-    )
+    q = command(sub, "play", ABOUT)
     q.add_argument("path", help=".viser file or folder")
     q.add_argument(
         "--host",

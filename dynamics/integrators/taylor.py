@@ -44,7 +44,7 @@ from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     order_for,
 )
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, report
-from .taylor_linear import charge_eval, charge_steps
+from .taylor_linear import charge_eval, charge_steps, two_sum
 
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
 # reassociated (SUMS; the order of the terms of a Cauchy product is arbitrary). No other
@@ -246,10 +246,23 @@ def _eval_kept(sys_id, K, p, d, order, h, y):
 
 
 @njit(cache=True)
-def _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor):
-    """Jorba and Zou's step from the last two orders (``inv_a = 1/(p-1)``, ``inv_b = 1/p``),
-    as ``exp(min(log(s/|a|)/(p-1), log(s/|b|)/p))``: two logarithms and one exponential cost
-    less than the two powers they replace."""
+def controls(rtol, atol, order, a):
+    """The step rule's constants for ``rtol``, ``atol`` at ``order`` with ``a``: the scales of the
+    state's norm (``rtol / tol``, ``atol / tol``), ``1/(p-1)``, ``1/p`` and the safety factor
+    ``exp(-a - 0.7 / (p - 1))`` (module docstring), in one array the loops pass along."""
+    tol = min(rtol, atol)
+    out = np.empty(5)
+    out[0], out[1] = rtol / tol, atol / tol
+    out[2], out[3] = 1.0 / (order - 1), 1.0 / order
+    out[4] = math.exp(-a - 0.7 / (order - 1))
+    return out
+
+
+@njit(cache=True)
+def _step_size(A, d, order, ctl):
+    """Jorba and Zou's step from the last two orders (``ctl``: :func:`controls`), as
+    ``exp(min(log(s/|a|)/(p-1), log(s/|b|)/p))``: two logarithms and one exponential cost less
+    than the two powers they replace."""
     y0 = 0.0
     na = 0.0
     nb = 0.0
@@ -257,46 +270,21 @@ def _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor):
         y0 = max(y0, abs(A[j, 0]))
         na = max(na, abs(A[j, order - 1]))
         nb = max(nb, abs(A[j, order]))
-    ls = math.log(max(scale_a, scale_r * y0))
+    ls = math.log(max(ctl[1], ctl[0] * y0))
     e = math.inf
     if na > 0.0:
-        e = (ls - math.log(na)) * inv_a
+        e = (ls - math.log(na)) * ctl[2]
     if nb > 0.0:
-        e = min(e, (ls - math.log(nb)) * inv_b)
-    return math.exp(e) * factor
+        e = min(e, (ls - math.log(nb)) * ctl[3])
+    return math.exp(e) * ctl[4]
 
 
 @njit(cache=True)
-def _two_sum(a, b):
-    """Knuth's two-sum: ``a + b = s + e`` exactly, ``s`` the rounded sum."""
-    s = a + b
-    bb = s - a
-    return s, (a - (s - bb)) + (b - bb)
-
-
-@njit(cache=True)
-def _advance_member(
-    sys_id,
-    i,
-    Y,
-    p,
-    t0,
-    t1,
-    order,
-    scale_r,
-    scale_a,
-    inv_a,
-    inv_b,
-    factor,
-    stats,
-    kept,
-    base,
-    comp,
-    span,
-    last,
-):
+def _advance_member(sys_id, i, Y, p, t0, t1, order, ctl, stats, carry):
     """Advance member ``i`` (row ``Y[i]``) from ``t0`` to ``t1``; returns ``OK`` or ``NONFINITE``.
-    Touches only row ``i`` of every array, so that members may run on different threads."""
+    Touches only row ``i`` of every array, so that members may run on different threads.
+    ``ctl``: :func:`controls`; ``carry``: :attr:`TaylorCarry.arrays`."""
+    kept, base, comp, span, last = carry
     d = Y.shape[1]
     y = Y[i]
     K = kept[i]
@@ -314,7 +302,7 @@ def _advance_member(
         # chunks) do the arithmetic of one call.
         e0 = e1 = e2 = 0.0  # the charge's positions' compensations (:mod:`.taylor_linear`)
         if same:  # finish the kept step, then go on from its end
-            t, c = _two_sum(base[i], span[i])
+            t, c = two_sum(base[i], span[i])
             c += comp[i]
             if sys_id == CYCLOTRON:
                 e0, e1, e2 = charge_eval(K, p[0], order, span[i], y)
@@ -325,7 +313,7 @@ def _advance_member(
             c = 0.0
         if sys_id == CYCLOTRON:  # the linear flow's series in closed form
             n, base[i], comp[i], span[i] = charge_steps(
-                y, p[0], t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K, e0, e1, e2
+                y, p[0], t, c, t1, order, ctl, K, e0, e1, e2
             )
             stats[i, 0] += n
             stats[i, 1] += n
@@ -339,7 +327,7 @@ def _advance_member(
             for j in range(d):
                 A[j, 0] = y[j]
             _expand(sys_id, A, p, order)
-            h = _step_size(A, d, order, scale_r, scale_a, inv_a, inv_b, factor)
+            h = _step_size(A, d, order, ctl)
             stats[i, 0] += 1
             stats[i, 1] += 1
             if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
@@ -355,7 +343,7 @@ def _advance_member(
                 _horner(A, d, order, rest, y)
                 break
             _horner(A, d, order, h, y)
-            t, e = _two_sum(t, h)
+            t, e = two_sum(t, h)
             c += e
     finite = True
     for j in range(d):
@@ -366,48 +354,25 @@ def _advance_member(
 
 
 @njit(cache=True)
-def run_taylor_compiled(
-    sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base, comp, span, last
-):
+def run_taylor_compiled(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry):
     """Advance every row of ``Y`` (N, d) from ``t0`` to ``t1`` in place, at order ``order`` with
     steps ``rho exp(-a - 0.7 / (order - 1))`` (module docstring), one member after another; stops
     at the first member that fails (``status = (NONFINITE, its steps, its index)``).
 
-    ``kept`` (N, d, MAX_ORDER + 1), ``base``, ``comp`` and ``span`` (N,) and ``last`` (N, d) hold
+    ``carry = (kept, base, comp, span, last)`` (:attr:`TaylorCarry.arrays`): ``kept``
+    (N, d, MAX_ORDER + 1), ``base``, ``comp`` and ``span`` (N,) and ``last`` (N, d) hold
     each member's last step (the state's series, its start ``base + comp``, its length;
     ``span <= 0``: none) and the state written at ``t1``; they carry the step over to the next
     call (module docstring). Returns the steps taken, summed over the members (also added to
     ``stats``).
     """
     n = Y.shape[0]
-    tol = min(rtol, atol)
-    scale_r, scale_a = rtol / tol, atol / tol
-    inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
-    factor = math.exp(-a - 0.7 / (order - 1))
+    ctl = controls(rtol, atol, order, a)
     status[0] = OK
     total = 0
     for i in range(n):
         before = stats[i, 1]
-        code = _advance_member(
-            sys_id,
-            i,
-            Y,
-            p,
-            t0,
-            t1,
-            order,
-            scale_r,
-            scale_a,
-            inv_a,
-            inv_b,
-            factor,
-            stats,
-            kept,
-            base,
-            comp,
-            span,
-            last,
-        )
+        code = _advance_member(sys_id, i, Y, p, t0, t1, order, ctl, stats, carry)
         total += stats[i, 1] - before
         if code != OK:
             report(status, code, stats[i, 1], i)
@@ -416,40 +381,16 @@ def run_taylor_compiled(
 
 
 @njit(cache=True, parallel=True)
-def run_taylor_parallel(
-    sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, kept, base, comp, span, last
-):
+def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry):
     """:func:`run_taylor_compiled` with the members spread over numba's threads. Each member's
     arithmetic is the serial loop's (bitwise the same result); a failure does not stop the other
     members, and ``status`` names the first member that failed."""
     n = Y.shape[0]
-    tol = min(rtol, atol)
-    scale_r, scale_a = rtol / tol, atol / tol
-    inv_a, inv_b = 1.0 / (order - 1), 1.0 / order
-    factor = math.exp(-a - 0.7 / (order - 1))
+    ctl = controls(rtol, atol, order, a)
     before = stats[:, 1].copy()
     codes = np.zeros(n, np.int64)
     for i in prange(n):
-        codes[i] = _advance_member(
-            sys_id,
-            i,
-            Y,
-            p,
-            t0,
-            t1,
-            order,
-            scale_r,
-            scale_a,
-            inv_a,
-            inv_b,
-            factor,
-            stats,
-            kept,
-            base,
-            comp,
-            span,
-            last,
-        )
+        codes[i] = _advance_member(sys_id, i, Y, p, t0, t1, order, ctl, stats, carry)
     status[0] = OK
     for i in range(n):
         if codes[i] != OK:
@@ -476,6 +417,11 @@ class TaylorCarry:
         self.span = np.zeros(n)
         self.last = np.zeros((n, d))
 
+    @property
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """``(kept, base, comp, span, last)``, as the compiled loops take them."""
+        return self.kept, self.base, self.comp, self.span, self.last
+
     def forget(self) -> None:
         """Keep no step: the next call starts a fresh one."""
         self.span[:] = 0.0
@@ -487,21 +433,4 @@ def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCar
     (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
     order, a = order_for(rtol, atol, sys_id)
     run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
-    return run(
-        sys_id,
-        Y,
-        p,
-        t0,
-        t1,
-        rtol,
-        atol,
-        order,
-        a,
-        stats,
-        status,
-        carry.kept,
-        carry.base,
-        carry.comp,
-        carry.span,
-        carry.last,
-    )
+    return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.arrays)

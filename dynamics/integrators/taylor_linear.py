@@ -77,7 +77,8 @@ def series_at(theta, order):
 
 
 @njit(cache=True)
-def _two_sum(a, b):
+def two_sum(a, b):
+    """Knuth's two-sum: ``a + b = s + e`` exactly, ``s`` the rounded sum."""
     s = a + b
     bb = s - a
     return s, (a - (s - bb)) + (b - bb)
@@ -90,9 +91,9 @@ def _flow(K, h, C, S, C1, S1, y):
     Knuth's two-sum: over hundreds of steps of a large position (the drift along the field) the
     rounding of each sum would otherwise add up to more than the tightest tolerance."""
     vx, vy, vz = K[3, 0], K[4, 0], K[5, 0]
-    y[0], e0 = _two_sum(K[0, 0], h * (C1 * vx + S1 * vy) + K[0, 1])
-    y[1], e1 = _two_sum(K[1, 0], h * (C1 * vy - S1 * vx) + K[1, 1])
-    y[2], e2 = _two_sum(K[2, 0], h * vz + K[2, 1])
+    y[0], e0 = two_sum(K[0, 0], h * (C1 * vx + S1 * vy) + K[0, 1])
+    y[1], e1 = two_sum(K[1, 0], h * (C1 * vy - S1 * vx) + K[1, 1])
+    y[2], e2 = two_sum(K[2, 0], h * vz + K[2, 1])
     y[3] = C * vx + S * vy
     y[4] = C * vy - S * vx
     y[5] = vz
@@ -107,12 +108,13 @@ def charge_eval(K, w, order, h, y):
 
 
 @njit(cache=True)
-def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, K, e0, e1, e2):
+def charge_steps(y, w, t, c, t1, order, ctl, K, e0, e1, e2):
     """Steps from ``y`` (its positions' compensations ``e0, e1, e2``) at ``t + c`` (time and its
     compensation) until the step that passes ``t1``; that step is kept (its start in
     ``K[:, 0]``, the compensations in ``K[0:3, 1]``) and ``y`` is left at ``t1``. Returns
     ``(steps, base, comp, span)``, the kept step's start and length; ``span`` is ``-1`` for a
-    step that is not finite or lost in round-off (``y`` then holds the last state reached)."""
+    step that is not finite or lost in round-off (``y`` then holds the last state reached).
+    ``ctl``: the step rule's constants (:func:`dynamics.integrators.taylor.controls`)."""
     aw = abs(w)
     # The logarithms of the last two orders' coefficients over |v_perp| (module docstring):
     # |v^[k]| = |w|^k / k! |v_perp|, |r^[k]| = |w|^(k-1) / k! |v_perp|.
@@ -133,12 +135,12 @@ def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, 
         m = 0.0
         for j in range(6):
             m = max(m, abs(y[j]))
-        ls = math.log(max(scale_a, scale_r * m))
+        ls = math.log(max(ctl[1], ctl[0] * m))
         if ls != ls_last:
             e = math.inf
             if lv > -math.inf:
-                e = min((ls - lv - la) * inv_a, (ls - lv - lb) * inv_b)
-            h = math.exp(e) * factor
+                e = min((ls - lv - la) * ctl[2], (ls - lv - lb) * ctl[3])
+            h = math.exp(e) * ctl[4]
             ls_last = ls
             if math.isfinite(h):
                 C, S, C1, S1 = series_at(w * h, order)
@@ -150,5 +152,5 @@ def charge_steps(y, w, t, c, t1, order, scale_r, scale_a, inv_a, inv_b, factor, 
             charge_eval(K, w, order, rest, y)
             return steps, t, c, h
         e0, e1, e2 = _flow(K, h, C, S, C1, S1, y)
-        t, et = _two_sum(t, h)
+        t, et = two_sum(t, h)
         c += et

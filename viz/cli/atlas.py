@@ -20,6 +20,8 @@ from pathlib import Path
 from dynamics.atlas.grid import SYSTEM_NAMES
 from dynamics.systems import SYSTEMS
 
+from .errors import command
+
 
 def _axis_text(text: str) -> tuple[float, float, int, str]:
     """argparse type for ``START:STOP:N`` or ``START:STOP:N:log``."""
@@ -265,12 +267,17 @@ def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
     return 0
 
 
+ABOUT = """\
+maps of stability, chaos and accuracy computed on a Dask cluster (Zarr + PNG/SVG)
+
+Compute the map chunk by chunk on a Dask cluster (this machine's cores, or --scheduler ADDRESS),
+writing each chunk into OUT/atlas.zarr as it finishes and, when complete, OUT/KIND.png and
+OUT/KIND.svg. Ctrl-C keeps the chunks written; --resume continues the same run.
+"""
+
+
 def add_commands(sub) -> None:
-    p = sub.add_parser(
-        "atlas",
-        help="maps of stability, chaos and accuracy computed on a Dask cluster (Zarr + PNG/SVG)",
-        description=__doc__.splitlines()[0],
-    )
+    p = command(sub, "atlas", ABOUT)
     p.add_argument(
         "kind",
         nargs="?",

@@ -7,6 +7,14 @@ import argparse
 from dynamics.params import SettingError, parse_number
 
 
+def command(sub, name: str, about: str, **kwargs) -> argparse.ArgumentParser:
+    """Register the sub-command ``name`` on ``sub``: the first paragraph of ``about`` is its
+    one-line help in ``mechviz --help``, the rest its description (``mechviz NAME --help``)."""
+    head, _, rest = about.strip().partition("\n\n")
+    head = " ".join(head.split())
+    return sub.add_parser(name, help=head, description=" ".join(rest.split()) or head, **kwargs)
+
+
 class CliError(Exception):
     """A bad flag or value: reported as one line, exit status 2."""
 

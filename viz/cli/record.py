@@ -15,17 +15,19 @@ from ..interrupts import ctrl_c_within_a_second, exit_status
 from ..play import add_command as _add_play
 from ..printable import printable
 from ..progress import ProgressBar
-from .errors import CliError, number
+from .errors import CliError, command, number
+
+ABOUT = """\
+record a built-in demo headless: .viser, .html, .csv, .png, .json
+
+Run a demo headless, faster than real time, and write DEMO.viser (scene recording), DEMO.html
+(plays from file://), DEMO.csv (traces), DEMO.png (chart) and DEMO.json (manifest) into --out.
+Files are replaced atomically.
+"""
 
 
 def add_commands(sub) -> None:
-    p = sub.add_parser(
-        "record",
-        help="record a built-in demo headless: .viser, .html, .csv, .png, .json",
-        description="Run a demo headless, faster than real time, and write DEMO.viser (scene "
-        "recording), DEMO.html (plays from file://), DEMO.csv (traces), DEMO.png (chart) and "
-        "DEMO.json (manifest) into --out. Files are replaced atomically.",
-    )
+    p = command(sub, "record", ABOUT)
     p.add_argument("demo", nargs="?", help="demo name (see --list) or path of a demo .toml file")
     p.add_argument("--list", action="store_true", help="list the built-in demos and exit")
     p.add_argument("--all", action="store_true", help="record every built-in demo")

@@ -16,22 +16,24 @@ from pathlib import Path
 
 from .. import video
 from ..printable import printable
-from .errors import CliError, number
+from .errors import CliError, command, number
 from .video import FLAGS, add_look_options, check_out, flag_error, interruptible, look_of, size_type
 
 RECORDING_SUFFIXES = (".viser", ".html", ".htm")
 
 
+ABOUT = """\
+one PNG of a demo or a recording at a chosen moment (slide resolution)
+
+Draw one picture of a built-in demo (or a demo .toml, recorded headless up to that moment) or of
+a recording (.viser or recorded .html) at playback time --at, framed on the exhibit or from
+--camera, with the title, caption and the figures true at that moment (or --no-overlay), and
+write it as a PNG atomically. Needs Chromium and pip install -e '.[video]'.
+"""
+
+
 def add_commands(sub) -> None:
-    p = sub.add_parser(
-        "still",
-        help="one PNG of a demo or a recording at a chosen moment (slide resolution)",
-        description="Draw one picture of a built-in demo (or a demo .toml, recorded headless "
-        "up to that moment) or of a recording (.viser or recorded .html) at playback time "
-        "--at, framed on the exhibit or from --camera, with the title, caption and the figures "
-        "true at that moment (or --no-overlay), and write it as a PNG atomically. Needs "
-        "Chromium and pip install -e '.[video]'.",
-    )
+    p = command(sub, "still", ABOUT)
     p.add_argument(
         "source", help="a demo name (mechviz record --list), a demo .toml, or a recording"
     )

@@ -23,7 +23,7 @@ from .. import framing, video
 from ..interrupts import exit_status
 from ..printable import printable
 from ..video_input import read_clip
-from .errors import CliError, number
+from .errors import CliError, command, number
 
 # ValueError prefixes from viz.video and viz.framing -> the flag that set the value
 FLAGS = {
@@ -103,18 +103,20 @@ def look_of(args: argparse.Namespace) -> video.Look:
     )
 
 
+ABOUT = """\
+film a recording (.viser or recorded .html) into an MP4 or a GIF
+
+Draw every frame of a recording in headless Chromium (viser's own player) and encode it as H.264
+MP4 (yuv420p: browsers, PowerPoint, Keynote) or GIF, framed on the exhibit, with the title,
+caption and the measured-against-predicted figures true at each moment drawn in. A demo manifest
+beside the file (FILE.json, as mechviz record writes it) gives the duration, fps, words and
+framing; a live session's page its title and the viewer's camera. The video is written
+atomically. Needs Chromium and pip install -e '.[video]'.
+"""
+
+
 def add_commands(sub) -> None:
-    p = sub.add_parser(
-        "video",
-        help="film a recording (.viser or recorded .html) into an MP4 or a GIF",
-        description="Draw every frame of a recording in headless Chromium (viser's own player) "
-        "and encode it as H.264 MP4 (yuv420p: browsers, PowerPoint, Keynote) or GIF, framed on "
-        "the exhibit, with the title, caption and the measured-against-predicted figures true "
-        "at each moment drawn in. A demo manifest beside the file (FILE.json, as mechviz record "
-        "writes it) gives the duration, fps, words and framing; a live session's page its "
-        "title and the viewer's camera. The video is written atomically. Needs Chromium and "
-        "pip install -e '.[video]'.",
-    )
+    p = command(sub, "video", ABOUT)
     p.add_argument("file", help="a .viser recording or a recorded .html page")
     p.add_argument(
         "--out", metavar="PATH", help="the video file (default: FILE with .mp4 or .gif, beside it)"

@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import argparse
 
+from .errors import command
+
+ABOUT = """\
+serve the live 3-D viewer of the three systems
+
+Serve the live viewer at http://HOST:PORT/ until Ctrl-C.
+"""
+
 
 def add_commands(sub) -> None:
-    p = sub.add_parser(
-        "view",
-        help="serve the live 3-D viewer of the three systems",
-        description="Serve the live viewer at http://HOST:PORT/ until Ctrl-C.",
-    )
+    p = command(sub, "view", ABOUT)
     p.add_argument(
         "--host",
         default="127.0.0.1",

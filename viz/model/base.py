@@ -212,11 +212,13 @@ class ExhibitModel(Rewinding):
         opts = m.step_options(c.dt if dt is None else dt, c.rtol if rtol is None else rtol)
         return dynamics.Simulation(system, m, state=state, reference=reference, **opts)
 
-    def _make_runs(self, system, s0) -> tuple[dynamics.Simulation, dynamics.Simulation | None]:
+    def _make_runs(self) -> tuple[dynamics.Simulation, dynamics.Simulation | None]:
         """The main run of ``config.method`` and, if the config names one, the comparison run
         of ``compare_method`` with its own ``compare_dt`` / ``compare_rtol`` (else the main
-        run's), both from ``s0``."""
+        run's), both of the config's system from its ``initial_state()``."""
         c = self.config
+        system = dynamics.SYSTEMS[self.system_for(c)](c.physics())
+        s0 = c.initial_state()
         sim = self._make_simulation(system, c.method, s0)
         cmp_ = None
         if getattr(c, "compare_method", None):
@@ -478,7 +480,7 @@ class ExhibitModel(Rewinding):
         """The quantities the exhibit can plot for ``config``, by name (:mod:`viz.model.plot`):
         at least time, the state, energy and the errors."""
         system = dynamics.SYSTEMS[cls.system_for(config)]
-        return {**common_variables({n: n for n in system.state_names}), **cls.quantities(config)}
+        return {**common_variables(system.state_labels), **cls.quantities(config)}
 
     @classmethod
     def quantities(cls, config) -> dict[str, Variable]:

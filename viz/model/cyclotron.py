@@ -22,7 +22,7 @@ from dynamics.systems import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
 from .figures import figure, keep
-from .plot import Curve, Variable, common_variables, well_axes
+from .plot import Curve, well_axes
 from .traces import Traces
 
 
@@ -106,15 +106,12 @@ class CyclotronModel(ExhibitModel):
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:
         c = self.config
-        p = c.physics()
-        system = dynamics.Cyclotron(p)
-        s0 = c.initial_state()
-        sim, cmp_ = self._make_runs(system, s0)
+        sim, cmp_ = self._make_runs()
         beam = None
         if c.beam:
-            beam = self._make_simulation(system, c.method, c.beam_states(), reference=None)
+            beam = self._make_simulation(sim.system, c.method, c.beam_states(), reference=None)
         # --- nothing above touched the model; install
-        self.params = p
+        self.params = sim.system.params
         self.sim, self.compare, self.beam = sim, cmp_, beam
         self._reset_common()
         self._started()
@@ -229,14 +226,6 @@ class CyclotronModel(ExhibitModel):
         return well(self.params, self.state)
 
     # ------------------------------------------------------------------ plots
-    @classmethod
-    def plot_variables(cls, config) -> dict[str, Variable]:
-        """The state, and the radial motion of the seed's argument: ``r``, ``p_r``, ``p_phi``
-        and ``V_eff(r)`` for the sample's own ``p_phi``."""
-        units = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s"}
-        out = common_variables({n: f"{n} [{u}]" for n, u in units.items()})
-        return {**out, **cls.quantities(config)}
-
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
         """``(r, V_eff)``: the well for the newest sample's ``p_phi`` and its level ``E_perp``

@@ -23,7 +23,7 @@ from dynamics.systems import DISK
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
-from .plot import Curve, Variable, common_variables
+from .plot import Curve
 from .traces import Traces
 
 MODES = DISK.setting("motion").choices
@@ -173,27 +173,6 @@ class DiskModel(ExhibitModel):
     @classmethod
     def system_for(cls, config) -> str:
         return "driven-disk" if config.mode == "driven" else "free-body"
-
-    @classmethod
-    def plot_variables(cls, config) -> dict[str, Variable]:
-        """Driven: the angle and rate, and L about A in space (its tip circles the axle).
-        Released: the body-frame angular velocity about the centre of mass, the quaternion, and
-        L in space (conserved)."""
-        if config.mode == "driven":
-            out = common_variables(
-                {"angle": "angle about the axle [rad]", "omega": "spin ω [rad/s]"}
-            )
-        else:
-            out = common_variables(
-                {
-                    # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
-                    "w1": "body ω₁ [rad/s]",
-                    "w2": "body ω₂ [rad/s]",
-                    "w3": "body ω₃ [rad/s]",
-                    **{f"q{k}": f"quaternion q{k}" for k in range(4)},
-                }
-            )
-        return {**out, **cls.quantities(config)}
 
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:

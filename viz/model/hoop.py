@@ -22,7 +22,7 @@ from dynamics.systems import HOOP, HOOP_MODES
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
-from .plot import Curve, Variable, common_variables
+from .plot import Curve
 from .traces import Traces
 
 MODES = ("mode 1", "mode 2", "mix", "custom")
@@ -89,12 +89,8 @@ class HoopModel(ExhibitModel):
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:
-        c = self.config
-        p = c.physics()
-        system = dynamics.Hoop(p)
-        s0 = c.initial_state()
-        sim, cmp_ = self._make_runs(system, s0)
-        self.params = p
+        sim, cmp_ = self._make_runs()
+        self.params = p = sim.system.params
         self.sim, self.compare = sim, cmp_
         self._reset_common()
         self.mode_frequencies, self.shapes = hp.normal_modes(p)
@@ -147,20 +143,6 @@ class HoopModel(ExhibitModel):
         return t, q[:, 0], q[:, 1], g[:, 0], g[:, 1]
 
     # ------------------------------------------------------------------ plots
-    @classmethod
-    def plot_variables(cls, config) -> dict[str, Variable]:
-        """The angles, their rates and the two normal-mode coordinates (the angles on the mode
-        shapes, :func:`dynamics.measure.modal_coordinates`)."""
-        out = common_variables(
-            {
-                "theta1": "hoop angle θ1 [rad]",
-                "theta2": "bead angle θ2 [rad]",
-                "omega1": "hoop rate θ1' [rad/s]",
-                "omega2": "bead rate θ2' [rad/s]",
-            }
-        )
-        return {**out, **cls.quantities(config)}
-
     @classmethod
     def plot_curves(cls, config, x: str, y: str, samples) -> list[Curve]:
         """Configuration space ``(theta1, theta2)``: the mode lines (1, 1) and (m, -(M + m)).

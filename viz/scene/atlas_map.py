@@ -17,6 +17,7 @@ import atexit
 
 import numpy as np
 
+from .. import geometry as geo
 from ..model.atlas_map import (
     CHAOS_DURATION,
     CHAOS_METHOD,
@@ -202,12 +203,8 @@ class HoopMapsView:
             receive_shadow=False,
         )
         self.node.on_click(self._clicked)
-        self.marker = s.add_line_segments(
-            f"{r}/chaos_map_start",
-            np.zeros((2, 2, 3), np.float32),
-            colors=np.array(MARKER_RGB, np.uint8),
-            thickness=3.0,
-            thickness_units="screen",
+        self.marker = geo.lines(
+            s, f"{r}/chaos_map_start", np.zeros((2, 2, 3), np.float32), MARKER_RGB, 3.0
         )
 
     def world_of(self, u: float, v: float) -> np.ndarray:

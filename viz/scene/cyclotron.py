@@ -39,12 +39,12 @@ class BeamTrails:
         self.points = np.full((n, self.k, 3), np.nan)
         self.frames = 0
         seg_colors = np.repeat(np.repeat(colors[:, None, None, :], self.k - 1, axis=1), 2, axis=2)
-        self.node = scene.add_line_segments(
+        self.node = geo.lines(
+            scene,
             name,
             np.zeros((n * (self.k - 1), 2, 3), np.float32),
-            colors=seg_colors.reshape(-1, 2, 3),
-            thickness=1.5,
-            thickness_units="screen",
+            seg_colors.reshape(-1, 2, 3),
+            1.5,
         )
 
     def push(self, positions: np.ndarray) -> None:
@@ -96,31 +96,14 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         # one batched node: instance 0 the charge, 1 the comparison run (scale 0 while there
         # is none), 2 the guiding centre
         ball = geo.sphere_mesh(0.07)
-        self.bodies = s.add_batched_meshes_simple(
-            f"{r}/charges",
-            ball.vertices,
-            ball.faces,
-            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)),
-            batched_positions=np.zeros((3, 3)),
-            batched_scales=np.array([1.0, 0.0, 0.5]),
-            batched_colors=np.array([geo.CHARGE, geo.COMPARE, geo.CENTRE], np.uint8),
-            lod="off",
+        colors = [geo.CHARGE, geo.COMPARE, geo.CENTRE]
+        self.bodies = geo.instances(
+            s, f"{r}/charges", ball, colors, scales=np.array([1.0, 0.0, 0.5])
         )
-        self.ring = s.add_line_segments(
-            f"{r}/theory_circle",
-            geo.circle_segments(1.0),
-            colors=np.array(geo.CENTRE, np.uint8),
-            thickness=2.0,
-            thickness_units="screen",
-        )
+        self.ring = geo.lines(s, f"{r}/theory_circle", geo.circle_segments(1.0), geo.CENTRE, 2.0)
         # the orbit before the last kick, faint: the kick's shift of the circle stays in view
-        self.ghost_ring = s.add_line_segments(
-            f"{r}/orbit_before_kick",
-            geo.circle_segments(1.0),
-            colors=np.array(geo.GHOST, np.uint8),
-            thickness=1.5,
-            thickness_units="screen",
-            visible=False,
+        self.ghost_ring = geo.lines(
+            s, f"{r}/orbit_before_kick", geo.circle_segments(1.0), geo.GHOST, 1.5, visible=False
         )
         self._drawn_circle: tuple | None = None  # (centre x, y, radius, height) last drawn
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
@@ -190,14 +173,12 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         sphere = geo.sphere_mesh(0.045, 1)
         t = np.linspace(0.0, 1.0, n)[:, None]
         colors = ((1 - t) * np.array(geo.BEAM[0]) + t * np.array(geo.BEAM[1])).astype(np.uint8)
-        self.beam_node = self.scene.add_batched_meshes_simple(
+        self.beam_node = geo.instances(
+            self.scene,
             f"{self.root}/beam",
-            sphere.vertices,
-            sphere.faces,
-            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
-            batched_positions=self._display(self.beam.state[:, :3]),
-            batched_colors=colors,
-            lod="off",
+            sphere,
+            colors,
+            positions=self._display(self.beam.state[:, :3]),
         )
         self.beam_trails = BeamTrails(
             self.scene,

@@ -153,12 +153,8 @@ class DiskExhibit(DiskModel, Exhibit):
             head_radius=0.06,
             head_length=0.14,
         )
-        self.cone_rim = s.add_line_segments(
-            f"{r}/L_cone_rim",
-            np.zeros((1, 2, 3), np.float32),
-            colors=np.array(geo.MOMENTUM, np.uint8),
-            thickness=1.5,
-            thickness_units="screen",
+        self.cone_rim = geo.lines(
+            s, f"{r}/L_cone_rim", np.zeros((1, 2, 3), np.float32), geo.MOMENTUM, 1.5
         )
         self.forces = s.add_arrows(
             f"{r}/bearing_forces",
@@ -193,13 +189,7 @@ class DiskExhibit(DiskModel, Exhibit):
         )
         rim = geo.circle_segments(1.004 * R, 96)  # just outside the edge: seen from both sides
         rim[..., 1] += R  # centred on the disk centre (0, R, 0)
-        self.rim_node = s.add_line_segments(
-            f"{body}/rim",
-            rim,
-            colors=np.array(geo.RIM, np.uint8),
-            thickness=2.5,
-            thickness_units="screen",
-        )
+        self.rim_node = geo.lines(s, f"{body}/rim", rim, geo.RIM, 2.5)
         self.bead_node = s.add_icosphere(
             f"{body}/bead", radius=0.09 * R, color=geo.BEAD, position=dk.bead_position(p)
         )

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from ..framing import axes, corners
+
 FOV = 1.3089969389957472  # rad: viser's default vertical field of view (75 degrees)
 PANEL_PX = 340  # px: the right edge of the page viser's panel covers ("medium" width, margins)
 SIDE_MARGIN = 0.04  # of the free width kept clear on each side
@@ -21,13 +23,8 @@ SIDE_MARGIN = 0.04  # of the free width kept clear on each side
 
 def basis(position, look_at) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward, right and up unit vectors of a camera at ``position`` looking at ``look_at``."""
-    f = np.asarray(look_at, float) - np.asarray(position, float)
-    f /= np.linalg.norm(f)
-    r = np.cross(f, (0.0, 0.0, 1.0))
-    if np.linalg.norm(r) < 1e-9:  # straight down or up: keep +y up on the page
-        r = np.array([1.0, 0.0, 0.0])
-    r /= np.linalg.norm(r)
-    return f, r, np.cross(r, f)
+    r, u, f = axes(position, look_at)
+    return f, r, u
 
 
 def project(points, position, look_at, width: int, height: int, fov: float = FOV) -> np.ndarray:
@@ -42,13 +39,6 @@ def project(points, position, look_at, width: int, height: int, fov: float = FOV
     out = np.stack([(nx + 1) / 2 * width, (1 - ny) / 2 * height], axis=1)
     out[z <= 1e-9] = np.nan
     return out
-
-
-def corners(lo, hi) -> np.ndarray:
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    return np.array(
-        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-    )
 
 
 def frame(lo, hi, direction, *args, **kw) -> tuple[tuple[float, ...], tuple[float, ...]]:

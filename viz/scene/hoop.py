@@ -42,19 +42,19 @@ class ConfigurationSpace:
         c = [(-half, 0, -half), (half, 0, -half), (half, 0, half), (-half, 0, half)]
         frame = np.array([[c[k], c[(k + 1) % 4]] for k in range(4)], np.float32)
         axes = np.array([[(-half, 0, 0), (half, 0, 0)], [(0, 0, -half), (0, 0, half)]], np.float32)
-        scene.add_line_segments(
+        geo.lines(
+            scene,
             f"{root}/frame",
             np.concatenate([frame, axes]) + centre.astype(np.float32),
-            colors=np.array(geo.AXLE, np.uint8),
-            thickness=1.0,
-            thickness_units="screen",
+            geo.AXLE,
+            1.0,
         )
-        self.modes = scene.add_line_segments(
+        self.modes = geo.lines(
+            scene,
             f"{root}/modes",
             np.zeros((2, 2, 3), np.float32),
-            colors=np.repeat(np.array(MODE_COLOURS, np.uint8)[:, None, :], 2, axis=1),
-            thickness=2.0,
-            thickness_units="screen",
+            np.repeat(np.array(MODE_COLOURS, np.uint8)[:, None, :], 2, axis=1),
+            2.0,
         )
         # its names: the title (naming the axes) under the square, each mode line at its upper
         # end (placed in start(): they depend on the masses), mode 1 right, mode 2 left of it
@@ -136,30 +136,17 @@ class HoopExhibit(HoopModel, Exhibit):
         ring = geo.torus_mesh(a, 0.025 * a)
         ring.apply_transform(geo.trimesh.transformations.rotation_matrix(math.pi / 2, (1, 0, 0)))
         bead = geo.sphere_mesh(0.08 * a)
-        ident = np.tile([1.0, 0.0, 0.0, 0.0], (3, 1))
-        colors = np.array([geo.HOOP, geo.GHOST, geo.COMPARE], np.uint8)
-        self.rings = s.add_batched_meshes_simple(
-            f"{r}/rings",
-            ring.vertices,
-            ring.faces,
-            batched_wxyzs=ident,
-            batched_positions=np.zeros((3, 3)),
-            batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=colors,
-            batched_opacities=np.array([1.0, 0.45, 1.0]),
-            lod="off",
-        )
-        bead_colors = np.array([geo.BEAD, geo.GHOST, geo.COMPARE], np.uint8)
-        self.beads = s.add_batched_meshes_simple(
-            f"{r}/beads",
-            bead.vertices,
-            bead.faces,
-            batched_wxyzs=ident,
-            batched_positions=np.zeros((3, 3)),
-            batched_scales=np.array([1.0, 1.0, 0.0]),
-            batched_colors=bead_colors,
-            batched_opacities=np.array([1.0, 0.5, 1.0]),
-            lod="off",
+        shapes = (("rings", ring, geo.HOOP, 0.45), ("beads", bead, geo.BEAD, 0.5))
+        self.rings, self.beads = (
+            geo.instances(
+                s,
+                f"{r}/{name}",
+                mesh,
+                [colour, geo.GHOST, geo.COMPARE],
+                scales=np.array([1.0, 1.0, 0.0]),
+                opacities=np.array([1.0, ghost_opacity, 1.0]),
+            )
+            for name, mesh, colour, ghost_opacity in shapes
         )
         self.cmp_label = s.add_label(
             f"{r}/compare_label",
