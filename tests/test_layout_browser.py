@@ -3,7 +3,8 @@
 The camera each preset leaves the page with is read back from the browser (viser reports it to
 the server) and the exhibit's box is projected through it onto the page: in its own preset each
 exhibit fills at least 55 % of the height of the part of the page left of the panel (measured in
-the page: the panel's left edge), the first view shows all three there. Presentation mode
+the page: the panel's left edge); the first view shows all three there, staggered down the page so
+that together they span more of its height (45 %) and none is below 26 % of it. Presentation mode
 collapses the panel and draws the key figures at least 28 pixels high (measured on the
 screenshot: the height of the dark ink of each line of the figures' label).
 """
@@ -52,15 +53,18 @@ def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
     app, page = viewer
     free = _panel_left(page)
     position, target, fov = _camera(app, app.camera_preset("All", *PAGE)[1])  # the first view
-    shares = []
+    shares, spans = {}, []
     for key, ex in app.exhibits.items():
         share, x0, x1, y0, y1 = framing.share(*ex.bounds, position, target, *PAGE, fov)
         assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], key
-        shares.append((y0, y1))
-    union = (max(y for _, y in shares) - min(y for y, _ in shares)) / PAGE[1]
-    # three side by side, seen obliquely (the nearest larger) as wide as the free part allows
-    assert union >= 0.35, f"the first view's exhibits span {union:.0%} of the height"
-    print(f"first view: the three exhibits span {union:.0%} of the height")
+        shares[key] = share
+        spans.append((y0, y1))
+    union = (max(y for _, y in spans) - min(y for y, _ in spans)) / PAGE[1]
+    # three round-ish exhibits in a 940 x 800 part of the page cannot each reach 55 %: staggered
+    # in depth, seen from above the front left, they go down the page as well as across it
+    print(f"first view: {', '.join(f'{k} {s:.1%}' for k, s in shares.items())}; union {union:.1%}")
+    assert union >= 0.45, f"the first view's exhibits span {union:.0%} of the height"
+    assert min(shares.values()) >= 0.26, shares
     for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
         page.get_by_role("button", name=view, exact=True).click()
         position, target, fov = _camera(app, app.camera_preset(view, *PAGE)[1])

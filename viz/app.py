@@ -1,7 +1,8 @@
 """The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
 
-Layout: the cyclotron at x = -4.4 m, the spinning disk at the origin, the hoop at x = +4.4 m
-(:data:`SPACING`; +z up).
+Layout (:data:`ORIGINS`, +z up): the spinning disk near the origin, the cyclotron to its left, the
+hoop to its right and nearer the first view's camera: seen from above the front left, the three
+go down the page as well as across it, so together they use its height.
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -30,6 +31,7 @@ The whole app, headless and without its loop thread::
     app.enqueue("hoop", {"op": "set", "method": "rk4"})   # as the GUI does
     app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
+    app.enqueue("app", {"op": "scrub", "value": -10})     # paused, 10 s of the show back
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
     app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
@@ -53,14 +55,17 @@ import numpy as np
 
 from .frames import FrameLog
 from .live_record import add_record_toggle
+from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
 from .scene.fields import NumberField, Typing
 from .scene.panel import Panel, parse_number
 from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-SPACING = 4.4  # m between the exhibits, laid out along x in the order of viz.scene.EXHIBITS
-ORIGINS = {key: (SPACING * (i - 1), 0.0, 0.0) for i, key in enumerate(EXHIBITS)}
+# m: where each exhibit stands, in the order of viz.scene.EXHIBITS, left to right as the first
+# view sees them; staggered in depth so that view (views.OVERVIEW) shows them one below another
+# as well as side by side
+ORIGINS = dict(zip(EXHIBITS, ((-3.95, 1.7, 0.0), (0.0, 1.4, 0.0), (2.4, -3.4, 0.0)), strict=True))
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -124,6 +129,7 @@ class MechvizApp(Views):
         self.common_folder = None
         self.typing = Typing()  # number fields holding typed text not yet read
         self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
+        self.rewind_control = RewindControl(self)  # pause and scrub back (viz.rewind_control)
 
         scene = server.scene
         scene.set_up_direction("+z")
@@ -143,7 +149,7 @@ class MechvizApp(Views):
         self.grid = scene.add_grid(
             "/floor",
             width=20.0,
-            height=8.0,
+            height=16.0,  # 4 m and more in front of the nearest exhibit (the hoop)
             cell_size=0.5,
             section_size=1.0,
             position=(0.0, 0.0, 0.0),
@@ -155,7 +161,9 @@ class MechvizApp(Views):
         history_len = round(CHART_SECONDS * CHART_RATE)
         self.chart_window = CHART_SECONDS
         self.exhibits: dict[str, Exhibit] = {
-            key: cls(server, cfg.get(key), origin=ORIGINS[key], history_len=history_len)
+            key: cls(
+                server, cfg.get(key), origin=ORIGINS[key], history_len=history_len, bounded=True
+            )
             for key, cls in EXHIBITS.items()
         }
         for ex in self.exhibits.values():
@@ -237,8 +245,11 @@ class MechvizApp(Views):
             playing = {"play": True, "pause": False, "toggle": not self.playing}[op]
             if playing != self.playing:
                 self._rtf_window.clear()  # a pause is not a slow-down
+            if playing:
+                self.rewind_control.resume()  # scrubbed back: on from the moment shown
             self.playing = playing
         elif op == "step":
+            self.rewind_control.resume()
             self.playing = False
             self._advance(self.speed * self.frame_dt, measure_all=True)
         elif op == "speed":
@@ -255,6 +266,9 @@ class MechvizApp(Views):
                 ex.reset()
             self.sim_time = 0.0
             self._rtf_window.clear()  # the clock went back: the old samples say nothing now
+            self.rewind_control.forget()
+        elif op == "scrub":
+            self.rewind_control.scrub(cmd.get("value"))
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
         elif op == "chart_window":
@@ -277,8 +291,8 @@ class MechvizApp(Views):
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                "app op must be play, pause, toggle, step, speed, reset, camera, chart_window, "
-                f"present or theme; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, scrub, camera, "
+                f"chart_window, present or theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
@@ -325,7 +339,11 @@ class MechvizApp(Views):
     # ------------------------------------------------------------------ the frame
     def _advance(self, sim_seconds: float, *, measure_all: bool = False) -> None:
         for key, ex in self.exhibits.items():
-            ex.advance(sim_seconds, measure=measure_all or self._measures_now(key))
+            ex.advance(
+                sim_seconds,
+                measure=measure_all or self._measures_now(key),
+                shown=sim_seconds / self.speed,  # seconds of the show, for the Rewind control
+            )
         self.sim_time += sim_seconds
 
     def _measures_now(self, key: str) -> bool:
@@ -424,6 +442,7 @@ class MechvizApp(Views):
             )
             w["speed"], w["speed_track"] = self.speed_field.box, self.speed_field.track
             self.number_fields["speed"] = self.speed_field
+            self.rewind_control.build(gui)
             w["status"] = gui.add_markdown("t = 0 s")
             w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
             w["present"] = gui.add_dropdown(
@@ -522,9 +541,9 @@ class MechvizApp(Views):
                 self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
             self.w["status"].content = (
-                f"**t = {self.sim_time:.2f} s** simulated · real-time factor "
-                f"{'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
-                f"{'playing' if self.playing else 'paused'}  \n"
+                f"**t = {self.sim_time - self.rewind_control.sim_back():.2f} s** simulated · "
+                f"real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
+                f"{'playing' if self.playing else 'paused'}{self.rewind_control.status()}  \n"
                 f"<small>{self._cost_text} (server side)</small>"
             )
         for key, slot in self.EXHIBIT_FRAMES.items():
@@ -532,7 +551,7 @@ class MechvizApp(Views):
                 continue
             ex = self.exhibits[key]
             shown = self._shown.get(key)
-            if not force and shown == (ex.revision, ex.long_history.version):
+            if not force and shown == (ex.revision, ex.chart_version()):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
             if key == self.presenting:
@@ -540,7 +559,7 @@ class MechvizApp(Views):
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or shown is None or shown[1] != ex.long_history.version:
+            if force or shown is None or shown[1] != ex.chart_version():
                 chart = self.w[f"{key}.chart"]
                 data = ex.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
@@ -548,7 +567,7 @@ class MechvizApp(Views):
                     self.panels[key].keep_time_axis(
                         "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._shown[key] = (ex.revision, ex.long_history.version)
+            self._shown[key] = (ex.revision, ex.chart_version())
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -168,6 +168,21 @@ def quat_about_axis(axis, angle: float) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- trail
+def clip_segment(a, b, lo, hi) -> np.ndarray:
+    """The end of the segment from ``a`` (inside the box ``lo``..``hi``) towards ``b``, cut where
+    it leaves the box (``b`` itself if it does not)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    s = 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for k in range(3):
+            if d[k] > 0:
+                s = min(s, (hi[k] - a[k]) / d[k])
+            elif d[k] < 0:
+                s = min(s, (lo[k] - a[k]) / d[k])
+    return a + max(s, 0.0) * d
+
+
 class ChunkedTrail:
     """A polyline trail with a capped length, drawn as frozen chunks plus one open chunk.
 
@@ -177,7 +192,10 @@ class ChunkedTrail:
     and recordings small (a recording stores every message, so rewriting a whole long trail each
     frame would store the trail once per frame). ``push(p)`` appends a point; ``lift()`` makes
     the next point start a new piece (no segment joins them, e.g. when a display coordinate wraps).
-    Call :meth:`draw` once per frame (inside the caller's ``server.atomic()``).
+    Call :meth:`draw` once per frame (inside the caller's ``server.atomic()``). ``box`` (low and
+    high corners, in the trail's coordinates) bounds what is drawn: a point outside it is not
+    drawn and the trail is lifted there, so a run that spirals away (explicit Euler) is seen
+    growing up to its exhibit's edge and never draws across a neighbour.
 
     The open chunk lives in one preallocated ``(chunk, 2, 3)`` float32 buffer: pushing a point
     writes into it and drawing assigns a view of it (viser copies what it is given), so a frame
@@ -194,8 +212,10 @@ class ChunkedTrail:
         chunk: int = 60,
         thickness: float = 2.0,
         visible: bool = True,
+        box=None,
     ) -> None:
         self.scene, self.name = scene, name
+        self.box = box  # (lo, hi): where points are drawn (None: anywhere)
         self.color = np.asarray(color, np.uint8)
         self.cap, self.chunk, self.thickness = int(cap), int(chunk), float(thickness)
         self._frozen: deque = deque()  # (handle, n_segments)
@@ -227,6 +247,11 @@ class ChunkedTrail:
     def push(self, point) -> None:
         p = self._p
         p[:] = point
+        if self.box is not None and not (
+            np.all(p >= self.box[0]) and np.all(p <= self.box[1])  # NaN fails both: not drawn
+        ):
+            self._has_last = False
+            return
         if self._has_last and p.tobytes() != self._last.tobytes():
             if self._n_open == self.chunk:  # full: hand it to draw() and start afresh
                 self._full.append(self._buf.copy())

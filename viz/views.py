@@ -18,7 +18,10 @@ FIGURES_SHARE = 0.38  # of the page's width kept for them, right of the presente
 PANEL_PX = framing.PANEL_PX  # px of the page's right edge the GUI panel covers
 FILL = 0.72  # of the page's height an exhibit's box takes in its own view
 PRESENT_FILL = 0.8  # the same in presentation mode (the panel collapsed)
-OVERVIEW = ((-2.9, -7.9, 5.5), (0.0, 0.0, 1.0))  # the direction the first view looks in
+# the direction the first view looks in: from the front left, 36 degrees above the floor (any
+# steeper and the driven disk's L label passes over its ω label)
+OVERVIEW = ((-2.42, -6.0, 4.7), (0.0, 0.0, 0.0))
+OVERVIEW_FILL = 0.9  # of the page's height the three exhibits' pictures span in the first view
 VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
 
 
@@ -86,12 +89,12 @@ class Views:
         own view frames its box to ``FILL`` of the height, in the middle of the page left of
         the panel; *All* frames the three together (as large as the free width allows); *Top*
         looks straight down on the cyclotron's orbit."""
-        if view == "All":
-            boxes = [ex.bounds for ex in self.exhibits.values()]
-            lo = np.min([b[0] for b in boxes], axis=0)
-            hi = np.max([b[1] for b in boxes], axis=0)
+        if view == "All":  # the three boxes' own corners: their pictures, not a box around all
+            corners = np.concatenate([framing.corners(*ex.bounds) for ex in self.exhibits.values()])
             direction = np.subtract(OVERVIEW[1], OVERVIEW[0])
-            return framing.frame(lo, hi, direction, width, height, fill=FILL, panel_px=panel_px)
+            return framing.frame_points(
+                corners, direction, width, height, fill=OVERVIEW_FILL, panel_px=panel_px
+            )
         if view == "Top":
             lo, hi = self.exhibits[CyclotronExhibit.key].bounds
             return framing.frame(

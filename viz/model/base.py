@@ -38,9 +38,13 @@ from dynamics import params as _v
 
 from .history import History, LongHistory, Motion, Ring  # noqa: F401  (re-exported)
 from .plot import Curve, Samples, Variable, common_variables
+from .rewind import Rewinding
 
 # |E - E0| / |E0| beyond this counts as a blow-up even while the state is still finite.
 DIVERGED = 24.0
+# Beyond this |dE/E0|, a run whose drawing leaves its exhibit (``_outside``) has diverged: it left
+# because the method is wrong, not because of the physics (a kick moves E0 with it).
+ESCAPED = 0.1
 LOG_FLOOR = -17.0  # log10 of an error that is exactly zero
 PAUSED_HINT = "Paused; press Reset (or pick another method or a smaller step)."
 
@@ -115,7 +119,7 @@ class ExhibitConfig:
 
 
 # =========================================================================== the exhibit
-class ExhibitModel:
+class ExhibitModel(Rewinding):
     """Base class: subclasses define ``Config`` (``key`` and ``chart_series`` follow from it),
     ``title``, ``name`` and the hooks
     ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
@@ -224,21 +228,30 @@ class ExhibitModel:
         return sim, cmp_
 
     # ------------------------------------------------------------------ stepping
-    def advance(self, sim_seconds: float, *, measure: bool = True) -> None:
-        """Advance every simulation by ``sim_seconds`` (no-op while paused). ``measure``: also
-        sample the energy and error (a chart point, and the divergence check); the live app
-        measures each exhibit on every third frame, as a sample costs more than the step."""
+    def advance(
+        self, sim_seconds: float, *, measure: bool = True, shown: float | None = None
+    ) -> None:
+        """Advance every simulation by ``sim_seconds`` (no-op while paused; scrubbed back, the
+        run goes on from the moment shown, :mod:`viz.model.rewind`). ``measure``: also sample
+        the energy and error (a chart point, and the divergence check); the live app measures
+        each exhibit on every third frame, as a sample costs more than the step. ``shown``: the
+        seconds of the show this advance stands for (default ``sim_seconds``, as at 1x)."""
+        if self.scrubbed is not None and sim_seconds > 0.0:
+            self.resume_here()
         if self.paused or sim_seconds <= 0.0:
             return
-        self._advance(lambda sim: sim.advance(sim_seconds), measure)
+        shown = sim_seconds if shown is None else shown
+        self._advance(lambda sim: sim.advance(sim_seconds), measure, shown)
 
     def advance_to(self, t: float, *, measure: bool = True) -> None:
         """Advance every simulation to time ``t`` [s] (fixed steps: the last step at or before)."""
+        if self.scrubbed is not None and t > self.t:
+            self.resume_here()
         if self.paused or t <= self.t:
             return
-        self._advance(lambda sim: sim.advance_to(max(t, sim.t)), measure)
+        self._advance(lambda sim: sim.advance_to(max(t, sim.t)), measure, t - self.t)
 
-    def _advance(self, move, measure: bool) -> None:
+    def _advance(self, move, measure: bool, shown: float) -> None:
         self.revision += 1
         steps_before = self.sim.steps
         for sim in self.simulations():
@@ -255,6 +268,7 @@ class ExhibitModel:
                 self._check_divergence()
             self._record()
         self._observe()
+        self._rewind_keep(shown)
 
     def _extra_simulations(self) -> list[dynamics.Simulation]:
         return []
@@ -267,12 +281,20 @@ class ExhibitModel:
             if smp is None:
                 continue
             grown = float(np.max(np.abs(smp.energy_error)))
-            if not math.isfinite(grown) or grown > DIVERGED:
+            where = self._outside(sim) if grown > ESCAPED else None
+            if not math.isfinite(grown) or grown > DIVERGED or where:
                 reason = f"{label}run diverged: the energy changed by a factor {1 + grown:.3g}"
+                if where:
+                    reason = f"{label}run diverged: {where}, its energy changed by a factor {1 + grown:.3g}"
                 self._fail(
                     dynamics.IntegrationError(sim.method.name, sim.step_label(), sim.t, reason)
                 )
                 return
+
+    def _outside(self, sim: dynamics.Simulation) -> str | None:
+        """What of ``sim``'s drawing lies outside the exhibit, in words (``None``: nothing, or
+        a model that draws nothing); a view says."""
+        return None
 
     def _fail(self, error: dynamics.IntegrationError) -> None:
         self.paused = True
@@ -317,8 +339,13 @@ class ExhibitModel:
         with a ``chart_window`` set, at most ``history.maxlen`` points evenly spread over that
         much of the long history."""
         if self.chart_window is None or not len(self.long_history):
-            return self.history.arrays()
-        return self.long_history.window(self.chart_window, self.history.maxlen)
+            data = self.history.arrays()
+        else:
+            data = self.long_history.window(self.chart_window, self.history.maxlen)
+        if self.scrubbed is not None:  # scrubbed back: the charts end at the moment shown
+            keep = data[0] <= self.t + 1e-12
+            data = tuple(a[keep] for a in data)
+        return data
 
     def stability_text(self) -> str:
         """Where the running method's step stops being stable (markdown, for the step control):
@@ -353,6 +380,8 @@ class ExhibitModel:
     def apply(self, command: Mapping[str, Any] | str) -> str:
         """Apply one command; returns a short description. ``ValueError`` leaves all untouched."""
         self.revision += 1
+        if self.scrubbed is not None:  # a change goes on from the moment shown
+            self.resume_here()
         if isinstance(command, str):
             command = {"op": command}
         command = dict(command)
@@ -443,6 +472,7 @@ class ExhibitModel:
         if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
             self.trace = Ring((d + 4,), self.history.maxlen)
         self.trace.clear()
+        self._rewind_start()
 
     # ------------------------------------------------------------------ any variable against any other
     @classmethod

@@ -131,6 +131,12 @@ class CyclotronModel(ExhibitModel):
         self.trace.clear()  # the plot's points before a kick lie in another well
         self._observe()
 
+    def _rewound(self) -> None:
+        # the circle theory predicts from the state shown (a kick after it is undone)
+        p, st = self.params, self.state
+        self.theory_centre = cy.guiding_centre(p, st)
+        self.theory_radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
+
     def _segment_started(self) -> None:
         """Called when the estimators' samples start afresh: a view breaks its trails."""
 

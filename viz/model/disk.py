@@ -131,6 +131,9 @@ class DiskModel(ExhibitModel):
         L = dk.free_angular_momentum_space(moments, st)
         return omega, L, a + rot @ dk.centre_of_mass(p)
 
+    def _rewound(self) -> None:
+        self._pose_cache = None  # the same time may hold another state once gone back
+
     def _observe(self) -> None:
         st = self.state
         self.motion.add(self.t, st[:2] if self.config.mode == "driven" else st[:3])

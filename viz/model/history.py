@@ -42,6 +42,14 @@ class Ring:
         self.count += 1
         self.version += 1
 
+    def drop_newest(self, n: int) -> None:
+        """Forget the newest ``n`` rows (a run taken back to an earlier time)."""
+        n = min(max(0, int(n)), self._n)
+        self._i = (self._i - n) % self.maxlen
+        self._n -= n
+        self.count -= n
+        self.version += 1
+
     def array(self) -> np.ndarray:
         """The rows held, oldest first, as a fresh array."""
         end = self._i + self.maxlen

@@ -57,8 +57,17 @@ class Exhibit(ExhibitModel):
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
 
     def __init__(
-        self, server, config=None, *, origin=(0.0, 0.0, 0.0), history_len: int = 600
+        self,
+        server,
+        config=None,
+        *,
+        origin=(0.0, 0.0, 0.0),
+        history_len: int = 600,
+        bounded: bool = False,
     ) -> None:
+        # beside other exhibits (the live viewer): a runaway is drawn only inside the exhibit's
+        # box, and a run that leaves it diverging is paused; alone (a recording) it is drawn all
+        self.bounded = bounded
         self.server = server
         self.scene = server.scene
         self.origin = np.asarray(origin, dtype=float)

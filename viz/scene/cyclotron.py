@@ -31,8 +31,9 @@ class BeamTrails:
     SEGMENTS = 2400
     EVERY = 4  # frames between samples: 80 samples at 60 fps span 5.3 s, most of a period at 1x
 
-    def __init__(self, scene, name: str, colors: np.ndarray, height: float) -> None:
+    def __init__(self, scene, name: str, colors: np.ndarray, height: float, box=None) -> None:
         n = len(colors)
+        self.box = box  # (lo, hi) where trails are drawn
         self.k = int(max(8, min(80, self.SEGMENTS // n)))
         self.height = height
         self.points = np.full((n, self.k, 3), np.nan)
@@ -53,6 +54,9 @@ class BeamTrails:
             return
         self.points[:, :-1] = self.points[:, 1:]
         self.points[:, -1] = positions
+        if self.box is not None:  # a charge outside the exhibit draws no trail there
+            lo, hi = self.box
+            self.points[:, -1][np.any((positions < lo) | (positions > hi), axis=-1)] = np.nan
         a, b = self.points[:, :-1], self.points[:, 1:]
         # no segment from a point not yet sampled, nor across the height's wrap-around
         cut = np.isnan(a).any(axis=-1) | (np.abs(b[..., 2] - a[..., 2]) > 0.5 * self.height)
@@ -133,11 +137,28 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     def _segment_started(self) -> None:
         self.trail.lift()
         self.compare_trail.lift()
+        # trails are drawn inside the exhibit and the circles its runs are on now (a kick may
+        # send one beyond the exhibit's edge): a spiral growing out of them stops at the edge
+        box = self._trail_box()
+        self.trail.box = self.compare_trail.box = box
+        if getattr(self, "beam_trails", None) is not None:
+            self.beam_trails.box = box
         if getattr(self, "_drawn_circle", None) is not None:  # a kick: keep the old orbit
             x, y, radius, z = self._drawn_circle
             self.ghost_ring.points = geo.circle_segments(radius)
             self.ghost_ring.position = (x, y, z)
             self.ghost_ring.visible = True
+
+    def _rewound(self) -> None:
+        super()._rewound()
+        # gone back in the run: the next points start new pieces (no line back across the
+        # path already drawn); the beam's short trails start afresh
+        self.trail.lift()
+        self.compare_trail.lift()
+        self.trail.box = self.compare_trail.box = box = self._trail_box()
+        if self.beam_trails is not None:
+            self.beam_trails.points[:] = np.nan
+            self.beam_trails.box = box
 
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
@@ -160,7 +181,10 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             positions=self._display(self.beam.state[:, :3]),
         )
         self.beam_trails = BeamTrails(
-            self.scene, f"{self.root}/beam_trails", colors, self.config.height
+            self.scene,
+            f"{self.root}/beam_trails",
+            colors,
+            self.config.height,
         )
 
     # ------------------------------------------------------------------ drawing
@@ -204,6 +228,28 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             shown = self._display(self.beam.state[:, :3])
             self.beam_node.batched_positions = shown
             self.beam_trails.push(shown)
+
+    def _trail_box(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The exhibit's box grown to hold the circle every run (beam members included) is on
+        (``None``: drawn anywhere, the exhibit alone)."""
+        if not self.bounded:
+            return None
+        lo, hi = (np.array(v, float) for v in self._extent())
+        p = self.params
+        for sim in self.simulations():
+            for s in sim.state:
+                c, r = cy.guiding_centre(p, s)[:2], 1.01 * cy.larmor_radius(p, s)
+                lo[:2], hi[:2] = np.minimum(lo[:2], c - r), np.maximum(hi[:2], c + r)
+        return lo.astype(np.float32), hi.astype(np.float32)
+
+    def _outside(self, sim) -> str | None:
+        if not self.bounded:
+            return None
+        lo, hi = self._extent()
+        x, y = sim.state[0, :2]
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            return None
+        return "the charge left the exhibit"
 
     def _extent(self):
         H = self.config.height

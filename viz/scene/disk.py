@@ -139,7 +139,8 @@ class DiskExhibit(DiskModel, Exhibit):
         self.label = s.add_label(
             f"{r}/label",
             "Spinning disk with a bead",
-            position=(0.0, 0.0, 3.0),
+            # above the highest ω's label reaches as the released disk tumbles
+            position=(0.0, 0.0, 3.1),
             anchor="bottom-center",
         )
         # omega, L and, while driven, dL/dt = omega x L drawn at L's tip (the torque the
@@ -313,6 +314,12 @@ class DiskExhibit(DiskModel, Exhibit):
         self.poinsot.start(dk.free_kernel_params(p), p.radius, shown=not driven)
         self.body.position = LIFT  # A stays put while driven
 
+    def _rewound(self) -> None:
+        super()._rewound()
+        # gone back in the run: the next points start new pieces of the Poinsot curves
+        self.poinsot.polhode.lift()
+        self.poinsot.herpolhode.lift()
+
     def body_pose_world(self):
         """``(wxyz, position)`` of the body node relative to the exhibit origin."""
         rot, a = self.pose()
@@ -328,7 +335,13 @@ class DiskExhibit(DiskModel, Exhibit):
         self.body.position = pos
         omega, L, base = self.vectors_space()
         b0 = LIFT + to_world(base)
-        tips = [b0 + to_world(omega) * self.omega_scale, b0 + to_world(L) * self.momentum_scale]
+        # a run whose energy grows (explicit Euler) lengthens them: drawn up to the exhibit's
+        # edge, not across a neighbour
+        tips = [
+            b0 + to_world(v) * s for v, s in ((omega, self.omega_scale), (L, self.momentum_scale))
+        ]
+        if self.bounded:
+            tips = [geo.clip_segment(b0, tip, *self._extent()) for tip in tips]
         pts = self._vector_points
         pts[:, 0] = b0
         pts[0, 1], pts[1, 1] = tips

@@ -41,9 +41,16 @@ def project(points, position, look_at, width: int, height: int, fov: float = FOV
     return out
 
 
-def frame(
-    lo,
-    hi,
+def frame(lo, hi, direction, *args, **kw) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """``(position, look_at)`` of a camera looking along ``direction`` at the box ``lo``..``hi``
+    [m] so that the box's picture is ``fill`` of the page's height (less if it would not fit
+    the free width) and centred in the part of the page left of the panel (the arguments of
+    :func:`frame_points`)."""
+    return frame_points(corners(lo, hi), direction, *args, **kw)
+
+
+def frame_points(
+    pts,
     direction,
     width: int = 1280,
     height: int = 800,
@@ -52,15 +59,13 @@ def frame(
     panel_px: int = PANEL_PX,
     fov: float = FOV,
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """``(position, look_at)`` of a camera looking along ``direction`` at the box ``lo``..``hi``
-    [m] so that the box's picture is ``fill`` of the page's height (less if it would not fit
-    the free width) and centred in the part of the page left of the panel."""
-    pts = corners(lo, hi)
+    """:func:`frame` for any world points (N, 3) [m]: the corners of several boxes are framed
+    by their own picture, not by the larger box that holds them all."""
+    pts = np.asarray(pts, float)
     centre = pts.mean(axis=0)
     f = np.asarray(direction, float) / np.linalg.norm(direction)
     free = max(width - panel_px, 1)
     offset = np.zeros(3)
-    d = float(np.linalg.norm(np.asarray(hi, float) - np.asarray(lo, float))) + 1.0
 
     def view(dist):
         target = centre + offset

@@ -36,7 +36,7 @@ class ConfigurationSpace:
     and (m, -(M + m)) for mode 2 (:func:`dynamics.hoop.normal_modes`). A start on a mode line
     stays on it at small amplitude; at large amplitude the path leaves it."""
 
-    def __init__(self, scene, root: str, centre: np.ndarray, cap: int) -> None:
+    def __init__(self, scene, root: str, centre: np.ndarray, cap: int, bounded: bool) -> None:
         self.scene, self.root, self.centre = scene, root, centre
         half = 0.5 * CONFIG_SIZE
         c = [(-half, 0, -half), (half, 0, -half), (half, 0, half), (-half, 0, half)]
@@ -69,8 +69,11 @@ class ConfigurationSpace:
             scene.add_label(f"{root}/label_mode1", "mode 1", anchor="bottom-left"),
             scene.add_label(f"{root}/label_mode2", "mode 2", anchor="bottom-right"),
         ]
-        self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap)
-        self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap)
+        # the paths are drawn inside the square only: where the angles grow without bound (the
+        # bead going round, or a diverging method) they leave it, not the exhibit
+        box = (centre - (half, 0.0, half), centre + (half, 0.0, half)) if bounded else None
+        self.path = geo.ChunkedTrail(scene, f"{root}/path", geo.BEAD, cap=cap, box=box)
+        self.ghost = geo.ChunkedTrail(scene, f"{root}/ghost_path", geo.GHOST, cap=cap, box=box)
         self.scale = 1.0
 
     def start(self, shapes: np.ndarray, angles0: np.ndarray, ghost: bool) -> None:
@@ -158,7 +161,11 @@ class HoopExhibit(HoopModel, Exhibit):
         self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.config.trail_cap)
         if not hasattr(self, "config_space"):
             self.config_space = ConfigurationSpace(
-                s, f"{r}/configuration_space", CONFIG_CENTRE * (a, 1.0, 1.0), cap=1200
+                s,
+                f"{r}/configuration_space",
+                CONFIG_CENTRE * (a, 1.0, 1.0),
+                cap=1200,
+                bounded=self.bounded,
             )
         self.cmp_trail = geo.ChunkedTrail(
             s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
@@ -177,6 +184,12 @@ class HoopExhibit(HoopModel, Exhibit):
         if cmp_ is not None:
             self.cmp_label.text = f"{c.compare_method} (blue)"
         self.config_space.start(self.shapes, self.sim.state0[0, :2], c.ghost)
+
+    def _rewound(self) -> None:
+        # gone back in the run: the next points start new pieces (no line back across the
+        # path already drawn)
+        for trail in (self.trail, self.cmp_trail, self.config_space.path, self.config_space.ghost):
+            trail.lift()
 
     def _jumped(self) -> None:
         self.config_space.start(self.shapes, self.sim.state0[0, :2], self.config.ghost)
