@@ -10,17 +10,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from viz.app import MechvizApp, warm_up
+from viz.app import MechvizApp
 from viz.scene.hoop import CONFIG_SIZE
 
-
-@pytest.fixture(scope="module", autouse=True)
-def _compiled():
-    warm_up("defaults")
+# every test here starts the viewer's server
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]
 
 
 @pytest.fixture
 def app():
+    """The viewer without its GUI panel (only the scene is looked at here)."""
     a = MechvizApp(port=0, start_loop=False, environment_map=False, gui=False)
     yield a
     a.stop()

@@ -8,22 +8,10 @@ import re
 
 import numpy as np
 import pytest
+from viewer_steps import FRAME
 
-from viz.app import MechvizApp, warm_up
-
-FRAME = 1.0 / 60.0
-
-
-@pytest.fixture(scope="module", autouse=True)
-def _compiled():
-    warm_up("defaults")
-
-
-@pytest.fixture
-def app():
-    a = MechvizApp(port=0, start_loop=False, environment_map=False)
-    yield a
-    a.stop()
+# every test here starts the viewer's server (the app fixture: tests/conftest.py)
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]
 
 
 def enter(app, text) -> None:

@@ -156,7 +156,7 @@ class ExhibitModel(Rewinding):
         self.history = History(self.chart_series, maxlen=history_len)
         self.trace = Ring((1,), history_len)  # sized for the run's state in _reset_common
         self.chart_spacing = 0.0  # simulated seconds between chart points (0: every sample)
-        self.long_history = LongHistory(History, self.chart_series)  # what every window draws on
+        self.long_history = LongHistory(self.chart_series)  # what every window draws on
         self.chart_window: float | None = None  # s shown by chart_data (None: the last points)
         self._chart_t = 0.0  # time of the newest chart point
         self.sim: dynamics.Simulation | None = None
@@ -313,7 +313,7 @@ class ExhibitModel(Rewinding):
         self.revision += 1
 
     def _record(self) -> None:
-        self.long_history.add(self.t, self._chart_values(), force=self.paused)
+        self.long_history.keep(self.t, self._chart_values(), force=self.paused)
         self._record_window()
 
     def _chart_values(self) -> dict[str, float]:

@@ -111,36 +111,34 @@ class Motion:
         return self._t.array(), self._x.array()
 
 
-class LongHistory:
+class LongHistory(History):
     """Chart points ``(t, *series)`` at least ``LONG_SPACING`` apart in simulated time, the
-    last ``LONG_SECONDS`` of them; :meth:`window` picks a chart's points from them."""
+    last ``LONG_SECONDS`` of them (:meth:`keep`); :meth:`window` picks a chart's points from
+    them."""
 
-    def __init__(self, history_cls, names: tuple[str, ...]) -> None:
-        self._points = history_cls(names, maxlen=round(LONG_SECONDS / LONG_SPACING))
+    def __init__(self, names: tuple[str, ...]) -> None:
+        super().__init__(names, maxlen=round(LONG_SECONDS / LONG_SPACING))
         self._t = -math.inf
-
-    def __len__(self) -> int:
-        return len(self._points)
-
-    @property
-    def version(self) -> int:
-        return self._points.version
 
     def clear(self) -> None:
-        self._points.clear()
+        super().clear()
         self._t = -math.inf
 
-    def add(self, t: float, values: dict[str, float], force: bool = False) -> None:
+    def keep(self, t: float, values: dict[str, float], force: bool = False) -> None:
         """Keep the point at ``t`` [s] if ``LONG_SPACING`` has passed since the last (or
         ``force``: paused, the newest state is the one to show)."""
-        if force or t - self._t >= LONG_SPACING or not len(self._points):
-            self._t = t
-            self._points.add(t, **values)
+        if force or t - self._t >= LONG_SPACING or not len(self):
+            self.resume_at(t)
+            self.add(t, **values)
+
+    def resume_at(self, t: float) -> None:
+        """Count the spacing from ``t`` [s] (the newest point kept, or a moment gone back to)."""
+        self._t = t
 
     def window(self, seconds: float, points: int) -> tuple[np.ndarray, ...]:
         """``(t, *series)`` over the last ``seconds``: at most ``points`` of them, evenly
         strided back from the newest (which is always among them)."""
-        arrays = self._points.arrays()
+        arrays = self.arrays()
         t = arrays[0]
         first = int(np.searchsorted(t, t[-1] - seconds))
         stride = max(1, math.ceil((len(t) - first) / points))

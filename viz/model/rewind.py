@@ -152,7 +152,7 @@ class Rewinding:
             rows = ring.array()
             if len(rows):
                 ring.drop_newest(int(np.count_nonzero(rows[:, 0] > t + 1e-12)))
-        self.long_history._t = t
+        self.long_history.resume_at(t)
         self._chart_t = t
         err = self.failure_error
         if err is not None and err.t > t:  # the blow-up lies after the moment gone back to
@@ -165,7 +165,7 @@ class Rewinding:
         the estimators' (:class:`viz.model.history.Motion`)."""
         from .history import Motion
 
-        rings = [self.history._ring, self.long_history._points._ring, self.trace]
+        rings = [self.history._ring, self.long_history._ring, self.trace]
         for value in vars(self).values():
             if isinstance(value, Motion):
                 rings.append(_MotionRing(value))
