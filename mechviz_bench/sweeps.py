@@ -95,9 +95,9 @@ class Settings:
     cap: float = 2.0  # stop a sweep after a single call longer than this [s]
     energy_samples: int = 50
     half_steps: bool = True  # fixed-step sweep in factors sqrt(2) (else 2)
-    # Quarter-decades: the error an adaptive method reaches is not smooth in its tolerance (on
-    # the hoop, DOP853 at 1e-10 misses 1e-9 by 6x and at 1e-11 beats it by 45x), so a coarse
-    # grid charges every method, ours and scipy's alike, for accuracy it was not asked for.
+    # Quarter-decades: the error an adaptive method reaches is not smooth in its tolerance (a
+    # decade tighter can move it by more than a decade), so a coarse grid charges every method,
+    # ours and scipy's alike, for accuracy it was not asked for.
     tolerances: tuple[float, ...] = tuple(10.0 ** (-k / 4) for k in range(12, 61))
     head_to_head_rounds: int = 9
     scipy_methods: tuple[str, ...] = ADAPTIVE_SCIPY

@@ -17,9 +17,9 @@ def _make_fun(sys_id: int, p: np.ndarray, d: int):
     rhs(np.zeros(d), p, np.empty(d))  # compile (or load) before scipy's first call
 
     def fun(t, y):
-        # Call the compiled right-hand side's dispatcher directly: 1.5 us per call here.
-        # Going through a jitted wrapper that takes rhs as an argument makes numba type it on every
-        # call (12.6 us), which would charge scipy ~10x its real RHS cost in the benchmark.
+        # Call the compiled right-hand side's dispatcher directly: a jitted wrapper that takes
+        # rhs as an argument makes numba type it on every call, several times the cost of the
+        # right-hand side itself, which the benchmark would then charge to scipy.
         out = np.empty(d)
         rhs(np.ascontiguousarray(y, dtype=np.float64), p, out)
         return out

@@ -53,11 +53,11 @@ FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
 N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary functions
 # Ensembles of at least PARALLEL_MIN members run their members on numba's threads
-# (:func:`run_taylor_parallel`, bitwise the serial result). On 2 idle cores that was 2x faster
-# from 10 to 10^5 members (``mechviz bench``, "Ensembles"); on cores busy with other jobs a
-# thread that loses its core holds the whole loop up: from 100 members 0.7-1.2x, below that down
-# to 1/15 (threads waiting on each other in calls of a few milliseconds). Hence the threshold of
-# 1000 members (calls of about 0.1 s); ``MECHVIZ_PARALLEL_MIN`` sets it, 0 turns it off.
+# (:func:`run_taylor_parallel`, bitwise the serial result). On idle cores that pays from small
+# ensembles on, but on cores busy with other jobs a thread that loses its core holds the whole
+# loop up, and in short calls the threads wait on each other (``mechviz bench``, "Ensembles",
+# has the figures). Hence a threshold at calls long enough for the waiting not to matter;
+# ``MECHVIZ_PARALLEL_MIN`` sets it, 0 turns it off.
 PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 1000) or 1 << 62
 _THREADS = numba.config.NUMBA_NUM_THREADS
 

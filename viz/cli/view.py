@@ -83,7 +83,7 @@ def _view(args: argparse.Namespace) -> int:
             host=args.host, port=args.port, environment_map=not args.no_env_map, theme=args.theme
         )
         # The other methods compile while the viewer already runs, so a later switch of method
-        # starts at once (measured: 60 fps held while they compile, a few late frames).
+        # starts at once (the frame rate holds while they compile, but for a few late frames).
         background = threading.Thread(
             target=warm_up,
             args=("all",),

@@ -355,7 +355,7 @@ class Panel:
             reset.on_click(lambda _: self.send("reset"))
         self.show_step_controls()
 
-    PLOT_INTERVAL = 0.2  # s between updates of the plot (about 1 ms each; 20-40 ms new axes)
+    PLOT_INTERVAL = 0.2  # s between updates of the plot: drawing new axes costs frames
 
     def plot(self, note: str) -> None:
         """The plot of any variable against any other: two dropdowns naming the quantities as
