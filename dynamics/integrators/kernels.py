@@ -130,11 +130,8 @@ def _report(status, e, k, i):
 
 def _take_step(step, inner, y, p, h, work):
     """One step of ``y``: ``step(y, p, h)``, or ``step(inner, y, p, h, work)`` for a composed
-    step. Compiled, the call is chosen once by the type of ``inner`` (:func:`_take_step_typed`);
-    this body runs only with numba's JIT disabled."""
-    if inner is None:
-        return step(y, p, h)
-    return step(inner, y, p, h, work)
+    step. Only its compiled forms (:func:`_take_step_typed`) are ever called."""
+    raise NotImplementedError
 
 
 @overload(_take_step)
