@@ -469,7 +469,10 @@ class Simulation:
     def _run_fixed_chunk(self, n: int) -> None:
         step, inner = step_functions(self.method, self.system.sys_id)
         before = self.state.copy()
-        nfev = kernels.run_steps(step, inner, self.state, self.p, self.dt, n, self._status)
+        if inner is None:
+            nfev = kernels.run_direct(step, self.state, self.p, self.dt, n, self._status)
+        else:
+            nfev = kernels.run_composed(step, inner, self.state, self.p, self.dt, n, self._status)
         self.nfev += int(nfev)
         code, k = int(self._status[0]), int(self._status[1])
         if code != kernels.OK:

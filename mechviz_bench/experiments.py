@@ -5,7 +5,7 @@
 - :func:`stability_points`: the measured amplification factor per step against ``omega dt``,
   beside the closed forms of :mod:`dynamics.stability`.
 - :func:`per_step_costs`: ns per compiled step of the direct kernels through
-  :func:`dynamics.integrators.kernels.run_steps`, and the same steps written in C
+  :func:`dynamics.integrators.kernels.run_direct`, and the same steps written in C
   (``c_steps.c``, built with gcc ``-O2`` when a compiler is found), measured in the same run.
 """
 
@@ -195,7 +195,7 @@ def _numba_cost(table, sys_id, key, h, n, repeats) -> tuple[float, float]:
     status = np.zeros(3, dtype=np.int64)
     Y = np.atleast_2d(pb.y0).copy()
     t0 = time.perf_counter()
-    kernels.run_steps(step, None, Y.copy(), p, h, 10, status)  # compiles (or loads) the loop
+    kernels.run_direct(step, Y.copy(), p, h, 10, status)  # compiles (or loads) the loop
     compile_s = time.perf_counter() - t0
     ts = []
     gc.disable()
@@ -203,7 +203,7 @@ def _numba_cost(table, sys_id, key, h, n, repeats) -> tuple[float, float]:
         for _ in range(repeats):
             Yc = Y.copy()
             t0 = time.perf_counter()
-            kernels.run_steps(step, None, Yc, p, h, n, status)
+            kernels.run_direct(step, Yc, p, h, n, status)
             ts.append(time.perf_counter() - t0)
     finally:
         gc.enable()
@@ -236,7 +236,7 @@ def _c_costs(n: int, repeats: int) -> dict[str, float] | str:
 
 
 def per_step_costs(quick: bool = False, progress=None) -> dict:
-    """ns per step, numba (through ``run_steps``) and C, measured in the same run."""
+    """ns per step, numba (through ``run_direct``) and C, measured in the same run."""
     repeats = 3 if quick else 7
     scale = 4 if quick else 1
     rows = {}
@@ -257,7 +257,7 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
         "c": "gcc -O2, same arithmetic, state in locals (mechviz_bench/c_steps.c)"
         if isinstance(c, dict)
         else c,
-        "note": "numba steps run through kernels.run_steps on one trajectory (state stored to its "
+        "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "
         "array every step, non-finite check every step); median of repeats.",
     }
 

@@ -335,9 +335,8 @@ METHODS: dict[str, Method] = {
 
 
 def step_functions(method: Method, sys_id: int):
-    """``(step, inner)`` for this method on this system, as :func:`kernels.run_steps` takes
-    them: ``inner`` is ``None`` for a direct step, the right-hand side or base step for a
-    composed one."""
+    """``(step, inner)`` for this method on this system; ``inner`` is ``None`` for a direct step
+    (``kernels.run_direct``) and the right-hand side or base step for a composed one."""
     kind = method.kernel
     if kind == "rk4":
         return _k.RK4[sys_id], None

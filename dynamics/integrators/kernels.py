@@ -9,9 +9,9 @@ Two kinds of step, each with one signature:
   or the system's symmetric second-order step for Yoshida's composition.
 
 Each advances one state ``y`` (d,) by ``h`` in place and returns the number of evaluations
-used, or -1 if an implicit solve failed. :func:`run_steps` advances a batch ``Y`` (N, d),
-ensemble on the leading axis, by ``n_steps`` steps inside compiled code (member outer: see
-:func:`run_steps`). numba specialises it for each step function it
+used, or -1 if an implicit solve failed. :func:`run_direct` and :func:`run_composed` advance a
+batch ``Y`` (N, d), ensemble on the leading axis, by ``n_steps`` steps inside compiled code
+(member outer: see :func:`run_direct`). numba specialises them for each step function they
 receive, so the step is called directly; every extra call layer that passes arrays costs tens
 of ns per step here (reference counting), which is why the direct steps are the physics
 functions themselves.
@@ -27,8 +27,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import types
-from numba.extending import overload
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
@@ -128,27 +126,9 @@ def _report(status, e, k, i):
     report(status, NO_CONVERGENCE if e < 0 else NONFINITE, k, i)
 
 
-def _take_step(step, inner, y, p, h, work):
-    """One step of ``y``: ``step(y, p, h)``, or ``step(inner, y, p, h, work)`` for a composed
-    step. Only its compiled forms (:func:`_take_step_typed`) are ever called."""
-    raise NotImplementedError
-
-
-@overload(_take_step)
-def _take_step_typed(step, inner, y, p, h, work):
-    # Chosen by the type of ``inner`` when the loop is compiled. Left to LLVM to inline (it
-    # does: a direct step costs what it cost called from the loop itself); numba's own IR
-    # inlining (inline="always") made the cheapest steps slower.
-    if isinstance(inner, types.NoneType):
-        return lambda step, inner, y, p, h, work: step(y, p, h)
-    return lambda step, inner, y, p, h, work: step(inner, y, p, h, work)
-
-
 @njit  # takes a compiled function: never disk-cached (see the module docstring)
-def run_steps(step, inner, Y, p, h, n_steps, status):
-    """Advance every row of ``Y`` (N, d) by ``n_steps`` steps of ``h``, in place: direct steps
-    ``step(y, p, h)`` when ``inner`` is ``None``, else steps composed of ``inner``,
-    ``step(inner, y, p, h, work)`` (:func:`_take_step` picks the call when the loop is compiled).
+def run_direct(step, Y, p, h, n_steps, status):
+    """Advance every row of ``Y`` (N, d) by ``n_steps`` direct steps of ``h``, in place.
 
     Returns the total number of evaluations. On failure stops and fills
     ``status = [code, step index, member index]`` with the earliest failure in time (the
@@ -160,6 +140,24 @@ def run_steps(step, inner, Y, p, h, n_steps, status):
     whole cheap step (docs/bench has the figures); the states are bit for bit those of a
     time-outer loop. A member only needs stepping up to the earliest failure found so far.
     """
+    nfev = 0
+    status[0] = OK
+    limit = n_steps
+    for i in range(Y.shape[0]):
+        y = Y[i]
+        for k in range(limit):
+            e = step(y, p, h)
+            if _failed(y, e):
+                _report(status, e, k, i)
+                limit = k
+                break
+            nfev += e
+    return nfev
+
+
+@njit  # takes a compiled function: never disk-cached (see the module docstring)
+def run_composed(step, inner, Y, p, h, n_steps, status):
+    """As :func:`run_direct` for a composed ``step(inner, y, p, h, work)``."""
     work = np.empty((3, Y.shape[1]))
     nfev = 0
     status[0] = OK
@@ -167,7 +165,7 @@ def run_steps(step, inner, Y, p, h, n_steps, status):
     for i in range(Y.shape[0]):
         y = Y[i]
         for k in range(limit):
-            e = _take_step(step, inner, y, p, h, work)
+            e = step(inner, y, p, h, work)
             if _failed(y, e):
                 _report(status, e, k, i)
                 limit = k
