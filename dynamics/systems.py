@@ -79,9 +79,11 @@ class _Adapter:
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
-        if "name" not in cls.__dict__:
+        # a subclass of an adapter keeps what it does not say anew
+        if "name" not in cls.__dict__ and "sys_id" in cls.__dict__:
             cls.name = NAMES[cls.sys_id]
-        cls.Params = type(cls.__dict__["params"])
+        if "params" in cls.__dict__:
+            cls.Params = type(cls.__dict__["params"])
         labels = cls.__dict__.get("state_labels") or {n: n for n in cls.state_names}
         if tuple(labels) != tuple(cls.state_names):
             raise TypeError(f"{cls.__name__}: state_labels must name {cls.state_names} in order")
