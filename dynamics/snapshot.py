@@ -42,10 +42,12 @@ def snapshot(sim: Simulation, out: np.ndarray | None = None) -> np.ndarray:
     """``sim``'s state as a row of :func:`width` floats (written into ``out`` if given)."""
     row = np.full(width(sim), math.nan) if out is None else out
     _write(sim, row)
-    ref = sim._reference
-    if ref is not None and len(row) > _own_width(sim):
+    ref, own = sim._reference, _own_width(sim)
+    if ref is not None and len(row) > own:
         row[_HEAD - 1] = 1.0
-        _write(ref, row[_own_width(sim) :])
+        _write(ref, row[own:])
+    else:
+        row[own:] = math.nan  # room for a reference run it has not (now)
     return row
 
 

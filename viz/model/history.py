@@ -55,6 +55,17 @@ class Ring:
         end = self._i + self.maxlen
         return self._buf[end - self._n : end].copy()
 
+    @property
+    def nbytes(self) -> int:
+        """Memory of the buffer [bytes]."""
+        return self._buf.nbytes
+
+    def forget_after(self, t: float) -> None:
+        """Forget the newest rows whose first entry (a time [s]) is later than ``t``."""
+        end = self._i + self.maxlen
+        first = self._buf[end - self._n : end].reshape(self._n, -1)[:, 0] if self._n else []
+        self.drop_newest(int(np.count_nonzero(np.asarray(first) > t + 1e-12)))
+
 
 class History:
     """Chart points: ``t`` and named series, the last ``maxlen`` of them (:class:`Ring`)."""
@@ -73,6 +84,10 @@ class History:
 
     def clear(self) -> None:
         self._ring.clear()
+
+    def forget_after(self, t: float) -> None:
+        """Forget the points later than ``t`` [s]."""
+        self._ring.forget_after(t)
 
     def add(self, t: float, **values: float) -> None:
         self._ring.add([t, *(values.get(n, math.nan) for n in self.names)])
@@ -109,6 +124,12 @@ class Motion:
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         return self._t.array(), self._x.array()
+
+    def forget_after(self, t: float) -> None:
+        """Forget the samples later than ``t`` [s]."""
+        n = len(self._t)
+        self._t.forget_after(t)
+        self._x.drop_newest(n - len(self._t))
 
 
 class LongHistory(History):

@@ -48,7 +48,7 @@ class Rewind:
     @property
     def nbytes(self) -> int:
         """Memory of the buffer [bytes]."""
-        return self._ring._buf.nbytes
+        return self._ring.nbytes
 
     def add(self, sims, *, force: bool = False) -> None:
         """Keep the runs' state now if ``spacing`` has passed since the last kept (or ``force``)."""
@@ -61,7 +61,6 @@ class Rewind:
         row[0] = self.clock
         k = 1
         for sim, w in zip(sims, self.widths, strict=True):
-            row[k : k + w] = np.nan
             snap.snapshot(sim, row[k : k + w])
             k += w
         self._ring.add(row)
@@ -148,10 +147,8 @@ class Rewinding:
             return
         self.rewind.cut(back)
         t = self.t
-        for ring in self._time_rings():
-            rows = ring.array()
-            if len(rows):
-                ring.drop_newest(int(np.count_nonzero(rows[:, 0] > t + 1e-12)))
+        for samples in self._timed_samples():
+            samples.forget_after(t)
         self.long_history.resume_at(t)
         self._chart_t = t
         err = self.failure_error
@@ -160,16 +157,14 @@ class Rewinding:
         self.revision += 1
         self._rewound()
 
-    def _time_rings(self) -> list[Ring]:
-        """Every buffer of samples whose first column is the time: the charts', the plot's and
-        the estimators' (:class:`viz.model.history.Motion`)."""
+    def _timed_samples(self) -> list:
+        """Everything kept in time order that can forget what came after a moment: the charts'
+        points, the plot's trace and the estimators' samples (:class:`viz.model.history.Motion`)."""
         from .history import Motion
 
-        rings = [self.history._ring, self.long_history._ring, self.trace]
-        for value in vars(self).values():
-            if isinstance(value, Motion):
-                rings.append(_MotionRing(value))
-        return rings
+        kept = [self.history, self.long_history, self.trace]
+        kept += [value for value in vars(self).values() if isinstance(value, Motion)]
+        return kept
 
     def _rewound(self) -> None:
         """Called after the runs were put back (scrubbed, or resumed from there): a model
@@ -178,17 +173,3 @@ class Rewinding:
     def chart_version(self) -> tuple:
         """Changes whenever the charts would show something else."""
         return (self.long_history.version, self.scrubbed, self.t if self.scrubbed else None)
-
-
-class _MotionRing:
-    """A :class:`viz.model.history.Motion` seen as one ring whose first column is the time."""
-
-    def __init__(self, motion) -> None:
-        self.motion = motion
-
-    def array(self) -> np.ndarray:
-        return self.motion._t.array()[:, None]
-
-    def drop_newest(self, n: int) -> None:
-        self.motion._t.drop_newest(n)
-        self.motion._x.drop_newest(n)
