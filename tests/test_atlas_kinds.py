@@ -136,3 +136,24 @@ def test_an_axis_the_map_does_not_have_is_refused_in_one_line(tmp_path, capsys, 
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"mechviz: error: {flag}"), err
     assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.parametrize(
+    ("n", "rows", "workers", "expected"),
+    [
+        (64, 5.4, 2, 4),
+        (64, 40, 2, 32),
+        (32, 0.5, 2, 1),
+        (48, 7, 2, 6),
+        (48, 7, 4, 6),
+        (48, 7, 16, 3),
+    ],
+)
+def test_bench_chunks_are_equal_and_shared_evenly_by_the_workers(n, rows, workers, expected):
+    """The atlas bench's chunks: equal, a whole number per worker, the largest not above the
+    rows asked for (a worker left idle at the end would count as scheduling overhead)."""
+    from dynamics.atlas.bench import balanced_rows
+
+    got = balanced_rows(n, rows, workers)
+    assert got == expected
+    assert n % got == 0 and (n // got) % workers == 0 and (got <= rows or got == 1)

@@ -56,6 +56,15 @@ def _warm(spec: AtlasSpec) -> bool:
     return True
 
 
+def balanced_rows(n: int, rows: float, workers: int) -> int:
+    """Rows per chunk for ``n`` rows: the most that divides ``n`` into equal chunks, a whole
+    number of them per worker, and is at most ``rows`` (about a second of work; at least one
+    row). Unequal chunks, or a count the workers do not share evenly, leave a worker idle at
+    the end while the other finishes: time that would be counted as scheduling overhead."""
+    fits = [d for d in range(1, n + 1) if n % d == 0 and (n // d) % workers == 0 and d <= rows]
+    return max(fits, default=1)
+
+
 def per_cell_cost(n: int, duration: float) -> dict:
     """Seconds per cell: ``n`` cells as one ensemble against the same cells one at a time."""
     spec = _spec(n, duration, (1, n))
@@ -124,10 +133,9 @@ def run_bench(out: Path, *, quick: bool = False, progress: bool = True) -> dict:
     duration = 60.0
     say("cost per cell: one ensemble against one Simulation per cell")
     cost = per_cell_cost(32 if quick else 128, duration)
-    # enough chunks of about a second (a quarter in a quick run) to keep two workers busy
     n = 32 if quick else 64
     target = 0.25 if quick else 1.0
-    rows = max(1, min(n, int(target / (cost["ensemble_s_per_cell"] * n))))
+    rows = balanced_rows(n, target / (cost["ensemble_s_per_cell"] * n), workers=2)
     spec = _spec(n, duration, (rows, n))
     say(
         f"parallel efficiency: {n}x{n} cells in {len(spec.chunks())} chunks of {rows}x{n}, "
