@@ -121,7 +121,7 @@ def verdict_line(result: dict) -> str:
         for r in (row.get("ratios") or {}).values()
     ]
     met = sum(r is None or r >= 1.0 for r in rows)
-    losses = loss_lines(result)
+    losses = result["losses"]
     head = (
         f"- **Peers in their fastest form (seed {result['seed']}, {result['n_random']} random "
         f"cases and the three problems): ours at least as fast in {met} of {len(rows)} "
@@ -129,7 +129,31 @@ def verdict_line(result: dict) -> str:
     )
     if not losses:
         return head + ".**"
-    return head + f", slower in {len(losses)}**: " + "; ".join(losses) + "."
+    # the three problems' losses each with its figure; the random cases' by peer, counted,
+    # with the range of ratios and the worst case (every one is in tables.md)
+    lines = dict(zip(map(id, losses), loss_lines(result), strict=True))
+    fixed = [lines[id(e)] for e in losses if not e["case"].startswith("random-")]
+    by_peer: dict[str, list[dict]] = {}
+    for e in losses:
+        if e["case"].startswith("random-"):
+            by_peer.setdefault(e["peer"], []).append(e)
+    parts = []
+    if fixed:
+        parts.append("on the three problems: " + "; ".join(fixed))
+    for peer, es in by_peer.items():
+        worst = min(es, key=lambda e: e["ratio"])
+        cases = len({e["case"] for e in es})
+        parts.append(
+            f"on random cases, {peer} in {len(es)} comparisons ({cases} cases), "
+            f"{worst['ratio']:.2f}-{max(e['ratio'] for e in es):.2f}, at worst "
+            f"{lines[id(worst)]}"
+        )
+    return (
+        head
+        + f", slower in {len(losses)}**: "
+        + "; ".join(parts)
+        + ". Every one with its figure: `docs/bench/tables.md`."
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
