@@ -35,16 +35,49 @@ class Box:
     x1: float
     y1: float
 
-    def overlaps(self, other: Box) -> bool:
-        return (
-            self.x0 < other.x1 and other.x0 < self.x1 and self.y0 < other.y1 and other.y0 < self.y1
+    # the corners of what the box holds when it is not the whole box (an image seen in
+    # perspective is a convex quadrilateral), in order round it
+    outline: tuple[tuple[float, float], ...] | None = None
+    # distance from the camera [m]: a label's anchor, an image's farthest corner; a label that
+    # is depth-tested is hidden where an image nearer the camera stands in front of it
+    depth: float = 0.0
+    depth_tested: bool = False
+
+    def corners(self) -> np.ndarray:
+        if self.outline is not None:
+            return np.asarray(self.outline, float)
+        return np.array(
+            [(self.x0, self.y0), (self.x1, self.y0), (self.x1, self.y1), (self.x0, self.y1)]
         )
 
+    def hides(self, other: Box) -> bool:
+        return self.outline is not None and other.depth_tested and other.depth > self.depth
 
-def world_point(handles: dict, name: str) -> tuple[np.ndarray, bool]:
-    """World position of node ``name`` and whether it and every ancestor are visible."""
+    def overlaps(self, other: Box) -> bool:
+        if self.hides(other) or other.hides(self):
+            return False
+        if not (
+            self.x0 < other.x1 and other.x0 < self.x1 and self.y0 < other.y1 and other.y0 < self.y1
+        ):
+            return False
+        if self.outline is None and other.outline is None:
+            return True
+        # two convex outlines are apart when some edge's normal separates them
+        a, b = self.corners(), other.corners()
+        for poly in (a, b):
+            edges = np.roll(poly, -1, axis=0) - poly
+            for n in np.stack([-edges[:, 1], edges[:, 0]], axis=1):
+                pa, pb = a @ n, b @ n
+                if pa.max() <= pb.min() or pb.max() <= pa.min():
+                    return False
+        return True
+
+
+def world_point(handles: dict, name: str, local=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, bool]:
+    """World position of the point ``local`` of node ``name`` (in the node's own frame) and
+    whether the node and every ancestor are visible."""
     parts = name.strip("/").split("/")
-    p, visible = np.zeros(3), True
+    p, visible = np.asarray(local, float), True
     chain = ["/" + "/".join(parts[: k + 1]) for k in range(len(parts))]
     # compose from the node up: x_parent = R x_child + t
     for path in reversed(chain):
@@ -94,7 +127,39 @@ def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
         vert, horiz = h.anchor.split("-")
         x0 = {"left": x, "center": x - w / 2, "right": x - w}[horiz]
         y0 = {"top": y, "center": y - hgt / 2, "bottom": y - hgt}[vert]
-        out.append(Box(name, h.text, x0, y0, x0 + w, y0 + hgt))
+        depth = float(np.linalg.norm(p - np.asarray(camera[0], float)))
+        tested = bool(getattr(h, "depth_test", False))
+        out.append(Box(name, h.text, x0, y0, x0 + w, y0 + hgt, None, depth, tested))
+    return out
+
+
+def image_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Box]:
+    """Screen boxes of every visible image in the scene, each with its outline (its four
+    corners projected; an image lies in its node's x-y plane, centred on the node)."""
+    handles = server.scene._handle_from_node_name
+    out = []
+    for name, h in handles.items():
+        if type(h).__name__ != "ImageHandle":
+            continue
+        w, hgt = 0.5 * float(h.render_width), 0.5 * float(h.render_height)
+        # round the image: (-,-), (+,-), (+,+), (-,+)
+        corners = [
+            world_point(handles, name, (sx * w, sy * hgt, 0.0))
+            for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+        ]
+        if not corners[0][1]:
+            continue
+        xy = [project(p, *camera, width, height) for p, _ in corners]
+        if any(c is None for c in xy):
+            continue
+        # seen edge-on (the top view of a standing image) it is a line and hides nothing
+        normal = np.cross(corners[1][0] - corners[0][0], corners[3][0] - corners[0][0])
+        sight = corners[0][0] - np.asarray(camera[0], float)
+        if abs(normal @ sight) < 0.1 * np.linalg.norm(normal) * np.linalg.norm(sight):
+            continue
+        xs, ys = zip(*xy, strict=True)
+        depth = max(float(np.linalg.norm(p - np.asarray(camera[0], float))) for p, _ in corners)
+        out.append(Box(name, f"image {name}", min(xs), min(ys), max(xs), max(ys), tuple(xy), depth))
     return out
 
 

@@ -78,10 +78,12 @@ def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
 
 @pytest.mark.parametrize("mode", ["driven", "released"])
 def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
-    """The labels' boxes on the page, for the camera the browser has at each preset: none
-    overlaps another in the part of the page left of the panel, while the disk turns (driven)
-    or tumbles (released, with the Poinsot picture's names)."""
+    """The labels' boxes and the chaos map's on the page, for the camera the browser has at
+    each preset: none overlaps another in the part of the page left of the panel, while the
+    disk turns (driven) or tumbles (released, with the Poinsot picture's names)."""
     import screen
+
+    from viz.scene import atlas_map
 
     app, page = viewer
     app.enqueue("disk", {"op": "set", "mode": mode})
@@ -93,8 +95,12 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
         position, target, _ = _camera(app, app.camera_preset(view, *PAGE)[1])
         t0 = app.exhibits["disk"].t
         for _ in range(4):  # over a second of the motion: the moving labels move
+            camera = (position, target)
             boxes = [
-                b for b in screen.label_boxes(app.server, (position, target), *PAGE) if b.x0 < free
+                b
+                for b in screen.label_boxes(app.server, camera, *PAGE)
+                + screen.image_boxes(app.server, camera, *PAGE)
+                if b.x0 < free and b.y0 < PAGE[1]
             ]
             assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
             names |= {b.text for b in boxes}
@@ -102,11 +108,16 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
                 lambda t=app.exhibits["disk"].t: app.exhibits["disk"].t > t + 0.3, 15, "time"
             )
         assert app.exhibits["disk"].t > t0
-    expected = {"mode 1", "mode 2", "configuration space:\nθ1 → (across), θ2 ↑ (up)"}
+    expected = {
+        "mode 1",
+        "mode 2",
+        atlas_map.MAP_AND_SQUARE_TITLE,
+        "image /hoop/chaos_map",
+    }
     if mode == "released":
         expected.add("Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode")
     assert expected <= names, expected - names
-    assert any(t.startswith("principal moments") for t in names)
+    assert any("\nprincipal moments about" in t for t in names)
 
 
 def _ink_lines(img: np.ndarray) -> list[int]:

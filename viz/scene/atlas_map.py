@@ -30,7 +30,13 @@ from ..model.atlas_map import (
 )
 
 MAP_SIZE = 1.0  # m, the side of the map in the scene
-MAP_CENTRE = np.array([-2.3, 0.0, 2.1])  # m from the exhibit origin (x times the hoop radius)
+# above the configuration square (the same axes), clear of the mode lines' names at the
+# square's top edge; beside it the hoop's box would grow wider and its view smaller
+MAP_SHIFT = np.array([0.0, 0.0, 1.45])  # m, from the configuration square's centre
+MAP_AND_SQUARE_TITLE = (
+    "configuration space (lower square),\nchaos map (upper; click to start there):\n"
+    "θ1 → (across), θ2 ↑ (up)"
+)
 MARKER_RGB = (230, 30, 30)  # the current start on the chaos maps
 STEP_RGB = (255, 0, 255)  # the current step on the stability map (a colour no map uses)
 REFRESH_FRAMES = 6  # frames between looks at the background work (10 Hz at 60 Hz)
@@ -185,8 +191,7 @@ class HoopMapsView:
     def _build_scene(self) -> None:
         ex = self.exhibit
         s, r = ex.scene, ex.root
-        a = ex.params.radius
-        self.centre_local = MAP_CENTRE * (a, 1.0, 1.0)
+        self.centre_local = ex.config_space.centre + MAP_SHIFT
         # the image's own plane is its x-y with the picture's top along -y; a quarter turn
         # about x stands it in the x-z plane facing -y (the cameras' side), its top down, so
         # the picture is given upside down
@@ -203,6 +208,9 @@ class HoopMapsView:
             receive_shadow=False,
         )
         self.node.on_click(self._clicked)
+        # named with the square below it, whose axes it shares (a title of its own, over or
+        # under it, runs into the disk's or the mode lines' names in the first view)
+        ex.config_space.title.text = MAP_AND_SQUARE_TITLE
         self.marker = geo.lines(
             s, f"{r}/chaos_map_start", np.zeros((2, 2, 3), np.float32), MARKER_RGB, 3.0
         )

@@ -83,6 +83,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             # above the back edge: seen from the top it lies beyond the orbit, not across it
             position=(0.0, 1.7, H + 0.5),
             anchor="bottom-center",
+            # hidden behind what stands in front of it (the hoop's chaos map, seen from the
+            # hoop's view), as the exhibit itself is
+            depth_test=True,
         )
         self.field_arrows = s.add_arrows(
             f"{r}/field",

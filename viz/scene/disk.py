@@ -28,6 +28,7 @@ from .base import Exhibit, against_theory, fmt
 P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
 LIFT = np.array([0.0, 0.0, 0.4])
+TITLE = "Spinning disk with a bead"
 # The disk's opacity: driven, nearly solid; released, the Poinsot ellipsoid at the centre of
 # mass shows through it.
 DISK_OPACITY = {"driven": 0.85, "released": 0.3}
@@ -138,10 +139,13 @@ class DiskExhibit(DiskModel, Exhibit):
         self.poinsot = PoinsotPicture(s, r)
         self.label = s.add_label(
             f"{r}/label",
-            "Spinning disk with a bead",
+            TITLE,
             # above the highest ω's label reaches as the released disk tumbles
             position=(0.0, 0.0, 3.1),
             anchor="bottom-center",
+            # hidden behind what stands in front of it (the hoop's chaos map, seen from the
+            # hoop's view), as the exhibit itself is
+            depth_test=True,
         )
         # omega, L and, while driven, dL/dt = omega x L drawn at L's tip (the torque the
         # bearings must supply; L's tip sweeps the rim of a cone about the axle, drawn too)
@@ -242,18 +246,14 @@ class DiskExhibit(DiskModel, Exhibit):
             head_radius=0.04 * R,
             head_length=0.1 * R,
         )
-        # Named by colour in one label fixed in space, in front of the disk at the floor: text
-        # tied to the turning axes would pile up on screen.
+        # Named by colour under the exhibit's title, in the sky above it: text tied to the
+        # turning axes would pile up on screen, and at the floor in front of the disk the
+        # first view puts the hoop's chaos map over it.
         self.axes_text = ", ".join(
             f"I{k + 1} {name} {moments[k] / mr2:.4g}" for k, name in enumerate(AXIS_NAMES)
         )
         about = "A" if mode == "driven" else "the centre of mass"
-        self.moments_label = self.scene.add_label(
-            f"{self.root}/moments_label",
-            f"principal moments about {about} [MR²]:\n{self.axes_text}",
-            position=(0.0, -1.4 * R, 0.05),
-            anchor="top-center",
-        )
+        self.label.text = f"{TITLE}\nprincipal moments about {about} [MR²]:\n{self.axes_text}"
         self._built_masses = (p.disk_mass, p.bead_mass, R, mode)
 
     def _started(self) -> None:

@@ -19,7 +19,7 @@ from dynamics import hoop as hp
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
-from .atlas_map import add_maps
+from .atlas_map import MAP_SIZE, add_maps
 from .base import Exhibit, against_theory, fmt
 from .panel import number_text
 
@@ -27,6 +27,7 @@ COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
 # Configuration space, drawn as a square standing left of the stand: theta1 across, theta2 up.
 CONFIG_SIZE = 1.0  # m, the square's side
 CONFIG_CENTRE = np.array([-2.3, 0.0, 0.9])  # m from the exhibit origin (times the hoop radius in x)
+CONFIG_TITLE = "configuration space:\nθ1 → (across), θ2 ↑ (up)"
 MODE_COLOURS = ((230, 60, 60), (60, 110, 240))  # mode 1 and mode 2 directions (geo.AXES_RGB)
 
 
@@ -59,9 +60,9 @@ class ConfigurationSpace:
         # its names: the title (naming the axes) under the square, each mode line at its upper
         # end (placed in start(): they depend on the masses), mode 1 right, mode 2 left of it
         c0 = centre.astype(float)
-        scene.add_label(
+        self.title = scene.add_label(
             f"{root}/label_title",
-            "configuration space:\nθ1 → (across), θ2 ↑ (up)",
+            CONFIG_TITLE,
             position=c0 + (-half, 0, -half - 0.03),
             anchor="top-left",
         )
@@ -258,7 +259,10 @@ class HoopExhibit(HoopModel, Exhibit):
         a = self.params.radius
         right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
         left = CONFIG_CENTRE[0] * a - 0.5 * CONFIG_SIZE
-        return (left, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
+        top = self.pivot_local[2] + 0.1
+        if hasattr(self, "maps_view"):  # the chaos map stands above the configuration square
+            top = max(top, self.maps_view.centre_local[2] + 0.5 * MAP_SIZE)
+        return (left, -0.3, 0.0), (1.1 * a + right, 0.3, top)
 
     @property
     def camera(self):
