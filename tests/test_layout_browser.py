@@ -27,18 +27,30 @@ def viewer():
         yield app, page
 
 
-def _camera(app, target):
-    """The browser's camera once its look-at point is ``target``: (position, look_at, fov)."""
+def _camera(app, view):
+    """The browser's camera once it looks where preset ``view`` puts it (a look-at point: the
+    one it has now), for the page size the client reports now, which the app framed it for
+    (the browser draws a loaded page smaller): (position, look_at, fov)."""
+    from viz.views import page_size
+
     client = next(iter(app.server.get_clients().values()))
+
+    def target():
+        if not isinstance(view, str):
+            return np.asarray(view, float)
+        return app.camera_preset(view, *page_size(client))[1]
 
     def arrived():
         cam = client.camera
-        return np.allclose(cam.look_at, target, atol=1e-3) and cam
+        return np.allclose(cam.look_at, target(), atol=1e-3) and cam
 
     try:
-        cam = wait_until(arrived, 20, f"the camera to look at {target}")
+        cam = wait_until(arrived, 20, f"the camera to look where {view!r} puts it")
     except TimeoutError as exc:
-        raise TimeoutError(f"{exc}; it looks at {client.camera.look_at}") from None
+        raise TimeoutError(
+            f"{exc}: {target()} for a page of {page_size(client)}; it looks at "
+            f"{client.camera.look_at}"
+        ) from None
     assert cam.image_width * PAGE[1] == cam.image_height * PAGE[0]  # drawn at some scale of it
     return np.array(cam.position), np.array(cam.look_at), float(cam.fov)
 
@@ -52,7 +64,7 @@ def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
 
     app, page = viewer
     free = _panel_left(page)
-    position, target, fov = _camera(app, app.camera_preset("All", *PAGE)[1])  # the first view
+    position, target, fov = _camera(app, "All")  # the first view
     shares, spans = {}, []
     for key, ex in app.exhibits.items():
         share, x0, x1, y0, y1 = framing.share(*ex.bounds, position, target, *PAGE, fov)
@@ -67,7 +79,7 @@ def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
     assert min(shares.values()) >= 0.26, shares
     for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
         page.get_by_role("button", name=view, exact=True).click()
-        position, target, fov = _camera(app, app.camera_preset(view, *PAGE)[1])
+        position, target, fov = _camera(app, view)
         share, x0, x1, y0, y1 = framing.share(
             *app.exhibits[key].bounds, position, target, *PAGE, fov
         )
@@ -92,7 +104,7 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
     names = set()
     for view in ("All", "Cyclotron", "Disk", "Hoop", "Top"):
         page.get_by_role("button", name=view, exact=True).click()
-        position, target, _ = _camera(app, app.camera_preset(view, *PAGE)[1])
+        position, target, _ = _camera(app, view)
         t0 = app.exhibits["disk"].t
         for _ in range(4):  # over a second of the motion: the moving labels move
             camera = (position, target)

@@ -298,6 +298,14 @@ def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app)
     assert math.hypot(*(st[:2] - expected_centre[:2])) == pytest.approx(expected_radius, rel=1e-9)
 
 
+def test_the_first_view_a_page_gets_is_the_all_preset_with_everything_in_it(app):
+    """The camera a page starts with is the *All* preset of the finished scene (the hoop's chaos
+    map, built with the GUI, included): a page the app is slow to reframe shows it as is."""
+    position, look_at = app.camera_preset("All")
+    np.testing.assert_allclose(app.server.initial_camera.position, position, atol=1e-9)
+    np.testing.assert_allclose(app.server.initial_camera.look_at, look_at, atol=1e-9)
+
+
 def test_camera_presets_frame_each_exhibit_large_left_of_the_panel(app):
     from viz.scene import framing
 

@@ -169,7 +169,6 @@ class MechvizApp(Views):
         for ex in self.exhibits.values():
             ex.chart_window = self.chart_window  # the charts draw on the long history
         self.panels: dict[str, Panel] = {}
-        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
         with server.atomic():
             self._draw()
         server.on_client_connect(self._frame_new_client)
@@ -180,6 +179,8 @@ class MechvizApp(Views):
             self._build_figures()
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
+        # after the GUI: the hoop's chaos map (built with its tab) is part of the first view
+        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
         if start_loop:
             self.start()
 
