@@ -278,7 +278,7 @@ class Simulation:
     def restart(self, state: np.ndarray | None = None) -> None:
         """Go back to ``t = 0`` with the same system, method and settings, from the initial state
         or from ``state`` (same shape): counters, kept steps and the reference start afresh.
-        Costs about a microsecond, where building a new Simulation costs ten (the system's
+        Costs a few microseconds, where building a new Simulation costs tens (the system's
         parameters and energy are worked out again)."""
         if state is not None:
             s0 = np.asarray(state, dtype=np.float64).reshape(self.state0.shape)
@@ -290,9 +290,8 @@ class Simulation:
         self.state = self.state0.copy()
         self.t = self.clock = self.t0 = 0.0
         self.steps = self.nfev = self.rejected = 0
-        # fill(), not [:] = : a third of the cost of a restart went to slice assignment
-        self._H.fill(0.0)
-        self._stats.fill(0)
+        self._H[:] = 0.0
+        self._stats[:] = 0
         if self._carry is not None:
             self._carry.forget()
         if self._reference is not None:
