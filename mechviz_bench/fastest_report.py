@@ -113,7 +113,9 @@ def markdown(result: dict) -> str:
 
 
 def verdict_line(result: dict) -> str:
-    """The peers' target in one line: cases met, every loss with its figure."""
+    """The peers' target in one line: comparisons met; each loss on the three problems with its
+    figure, the random cases' losses by peer (how many, their range, the worst with its figure);
+    every one is listed by :func:`loss_lines` (``tables.md``)."""
     rows = [
         r
         for case in result["cases"].values()
@@ -121,7 +123,7 @@ def verdict_line(result: dict) -> str:
         for r in (row.get("ratios") or {}).values()
     ]
     met = sum(r is None or r >= 1.0 for r in rows)
-    losses = result["losses"]
+    losses = list(zip(result["losses"], loss_lines(result), strict=True))
     head = (
         f"- **Peers in their fastest form (seed {result['seed']}, {result['n_random']} random "
         f"cases and the three problems): ours at least as fast in {met} of {len(rows)} "
@@ -129,24 +131,21 @@ def verdict_line(result: dict) -> str:
     )
     if not losses:
         return head + ".**"
-    # the three problems' losses each with its figure; the random cases' by peer, counted,
-    # with the range of ratios and the worst case (every one is in tables.md)
-    lines = dict(zip(map(id, losses), loss_lines(result), strict=True))
-    fixed = [lines[id(e)] for e in losses if not e["case"].startswith("random-")]
-    by_peer: dict[str, list[dict]] = {}
-    for e in losses:
+    fixed = [line for e, line in losses if not e["case"].startswith("random-")]
+    by_peer: dict[str, list[tuple[dict, str]]] = {}
+    for e, line in losses:
         if e["case"].startswith("random-"):
-            by_peer.setdefault(e["peer"], []).append(e)
+            by_peer.setdefault(e["peer"], []).append((e, line))
     parts = []
     if fixed:
         parts.append("on the three problems: " + "; ".join(fixed))
-    for peer, es in by_peer.items():
-        worst = min(es, key=lambda e: e["ratio"])
-        cases = len({e["case"] for e in es})
+    for peer, pairs in by_peer.items():
+        ratios = [e["ratio"] for e, _ in pairs]
+        worst = min(pairs, key=lambda pair: pair[0]["ratio"])[1]
+        cases = len({e["case"] for e, _ in pairs})
         parts.append(
-            f"on random cases, {peer} in {len(es)} comparisons ({cases} cases), "
-            f"{worst['ratio']:.2f}-{max(e['ratio'] for e in es):.2f}, at worst "
-            f"{lines[id(worst)]}"
+            f"on random cases, {peer} in {len(pairs)} comparisons ({cases} cases), "
+            f"{min(ratios):.2f}-{max(ratios):.2f}, at worst {worst}"
         )
     return (
         head

@@ -63,8 +63,9 @@ class Ring:
     def forget_after(self, t: float) -> None:
         """Forget the newest rows whose first entry (a time [s]) is later than ``t``."""
         end = self._i + self.maxlen
-        first = self._buf[end - self._n : end].reshape(self._n, -1)[:, 0] if self._n else []
-        self.drop_newest(int(np.count_nonzero(np.asarray(first) > t + 1e-12)))
+        rows = self._buf[end - self._n : end]
+        times = rows if rows.ndim == 1 else rows[:, 0]
+        self.drop_newest(int(np.count_nonzero(times > t + 1e-12)))
 
 
 class History:
