@@ -110,7 +110,8 @@ def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
     (several lines of text: as wide as the longest, one line height each)."""
     handles = server.scene._handle_from_node_name
     out = []
-    for name, h in handles.items():
+    # a snapshot: the app's loop adds nodes (trail pieces) while this reads
+    for name, h in list(handles.items()):
         if type(h).__name__ != "LabelHandle" or not h.text:
             continue
         p, visible = world_point(handles, name)
@@ -138,7 +139,8 @@ def image_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
     corners projected; an image lies in its node's x-y plane, centred on the node)."""
     handles = server.scene._handle_from_node_name
     out = []
-    for name, h in handles.items():
+    # a snapshot: the app's loop adds nodes (trail pieces) while this reads
+    for name, h in list(handles.items()):
         if type(h).__name__ != "ImageHandle":
             continue
         w, hgt = 0.5 * float(h.render_width), 0.5 * float(h.render_height)
