@@ -257,12 +257,14 @@ PATHS: dict[str, dict[str, Any]] = {
     "two_pages": {"pages": 2},
     "one_page": {"pages": 1},
     "one_page_shadows": {"pages": 1, "shadows": True},
+    "one_page_environment": {"pages": 1, "environment": True},
 }
 LABELS = {
-    "today": "today's path (as mechviz video: pages by length, no shadow maps)",
-    "two_pages": "two pages, no shadow maps",
-    "one_page": "one page, no shadow maps",
-    "one_page_shadows": "one page, with the shadow maps",
+    "today": "today's path (as mechviz video: pages by length, no shadow maps, sky light)",
+    "two_pages": "two pages, no shadow maps, sky light",
+    "one_page": "one page, no shadow maps, sky light",
+    "one_page_shadows": "one page, with the shadow maps, sky light",
+    "one_page_environment": "one page, no shadow maps, environment map",
     "replaced": "the replaced path (faked clock, PNG)",
 }
 

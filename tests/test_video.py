@@ -91,6 +91,28 @@ def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_a
         recording_edit.page_without_shadows(b"<html></html>")
 
 
+def test_a_video_draws_the_recording_with_a_sky_light_for_the_viewers_environment(tmp_path):
+    from viz import recording_edit as edit
+
+    res = rec.record(rec.load_demo("helix").with_overrides(duration=0.5, fps=10), tmp_path)
+    page = res.paths[".html"].read_bytes()
+    head, _ = edit.read(video.recording_of_page(page))
+    t0 = head["messages"][0][0]
+
+    def messages(p: bytes) -> list:
+        return edit.read(video.recording_of_page(p))[0]["messages"]
+
+    drawn = messages(edit.page_for_video(page))
+    first = [edit.NO_SHADOWS, edit.NO_ENVIRONMENT, edit.SKY_LIGHT]
+    assert drawn == [[t0, m] for m in first] + head["messages"]
+    assert edit.page_for_video(page, shadows=True, environment=True) == page
+    # a recording that chose its environment itself (here: none) keeps it, and gets no light
+    own = edit.page_with_messages_first(page, [edit.NO_ENVIRONMENT])
+    assert edit.sets_environment(own) and not edit.sets_environment(page)
+    assert messages(edit.page_for_video(own))[0] == [t0, edit.NO_SHADOWS]
+    assert messages(edit.page_for_video(own))[1:] == messages(own)
+
+
 # --------------------------------------------------------------------------- browser
 def _mp4_frames(path) -> tuple[dict, list[np.ndarray]]:
     import imageio_ffmpeg
@@ -360,3 +382,27 @@ def test_still_writes_a_3840x2160_png_with_the_exhibit_in_it(capsys, tmp_path):
     assert _exhibit_rows(frame, 300, 300) >= 0.5
     assert len(np.unique(frame[::8, ::8].reshape(-1, 3), axis=0)) > 100  # drawn, not blank
     assert sorted(p.name for p in tmp_path.iterdir()) == ["helix.png"]
+
+
+@pytest.mark.browser
+def test_the_sky_light_looks_like_the_viewers_environment_map(recording):
+    """Videos swap the viewer's environment map for a hemisphere light (cheaper in software
+    WebGL): the exhibit's colours stay close to the environment-lit picture, and the light is
+    what keeps them close (without it the lit parts go dark)."""
+    from viz import recording_edit as edit
+    from viz.player import Player, decode
+
+    page = video.clip_from_file(recording / "helix.viser").page
+    lit = edit.page_with_messages_first(page, [edit.NO_SHADOWS])
+    unlit = edit.page_with_messages_first(page, [edit.NO_SHADOWS, edit.NO_ENVIRONMENT])
+    pictures = []
+    for p in (lit, edit.page_for_video(page), unlit):
+        with Player(p, (640, 360), antialias=False) as player:
+            pictures.append(decode(player.png(0.5)).astype(int))
+    env, sky, dark = pictures
+    exhibit = env.min(axis=2) < 235
+    assert exhibit.sum() > 500
+    sky_off = np.abs(sky - env)[exhibit].mean()
+    dark_off = np.abs(dark - env)[exhibit].mean()
+    assert sky_off < 12, sky_off
+    assert dark_off > 2 * sky_off, (sky_off, dark_off)

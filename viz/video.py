@@ -38,7 +38,7 @@ from .chromium import find_chromium
 from .encoders import GifWriter, Mp4Writer, gif_delays_ms
 from .overlay import Overlay
 from .player import Player, PlayerError, decode
-from .recording_edit import page_without_shadows
+from .recording_edit import page_for_video
 
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
@@ -376,12 +376,14 @@ def write_video(
     antialias: bool = ANTIALIAS,
     pages: int | None = None,
     shadows: bool = False,
+    environment: bool = False,
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
 
     ``antialias``, ``pages`` (:class:`viz.player.Player`; default :func:`pages_for` the video's
-    frames) and ``shadows`` (the default lights' shadow maps, :mod:`viz.recording_edit`) say how
-    the frames are drawn; the defaults are the fastest way that gives the same picture.
+    frames), ``shadows`` (the default lights' shadow maps) and ``environment`` (the viewer's default
+    environment map, otherwise a hemisphere light; :mod:`viz.recording_edit`) say how the frames
+    are drawn; the defaults are the fastest way that gives nearly the same picture.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`, the camera),
     :class:`NoChromium` without a browser, :class:`VideoError` if drawing or encoding fails;
@@ -392,7 +394,7 @@ def write_video(
     times = clip.playback_times()
     overlay = _overlay(clip, look, size, [clip.simulated(t) for t in times])
     camera = camera_for(clip, look, size, overlay)
-    page = clip.page if shadows else page_without_shadows(clip.page)
+    page = page_for_video(clip.page, shadows=shadows, environment=environment)
     require_chromium()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.partial"
