@@ -170,7 +170,10 @@ def test_interrupted_run_resumes_to_the_same_map_computing_no_chunk_twice(client
 
 
 def test_worker_killed_mid_run_leaves_a_complete_and_correct_map(client, tmp_path):
-    spec = chaos_spec(n=16, chunk=(1, 16), duration=15.0)
+    # chunks of about 0.2 s: when the first one has been written, most are still to run (with
+    # 15 s spans a chunk took 10 ms, and on a loaded machine the whole map could be done before
+    # the first chunk's write returned, leaving no worker busy to kill)
+    spec = chaos_spec(n=16, chunk=(1, 16), duration=300.0)
     killed = []
 
     def kill_a_busy_worker(_chunk, _report):
