@@ -15,8 +15,9 @@ MAX_ORDER = 40
 
 # Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, per system: the step size and loop
 # (c0), Horner's evaluation and the linear recurrences (c1), the Cauchy products (c2). Measured
-# with the compiled pieces on a 2-core x86-64 VM; only their ratios matter.
-STEP_COST = {CYCLOTRON: (60.0, 1.0, 0.0), HOOP: (50.0, 17.3, 0.67), FREE_BODY: (55.0, 5.8, 1.0)}
+# with the compiled pieces on a 2-core x86-64 VM; only their ratios matter. The hoop's: a
+# least-squares fit of whole steps (180-1391 ns) at orders 6-32 on the benchmark hoop.
+STEP_COST = {CYCLOTRON: (60.0, 1.0, 0.0), HOOP: (72.0, 11.8, 0.92), FREE_BODY: (55.0, 5.8, 1.0)}
 
 
 # Systems whose solutions are entire functions with coefficients falling as 1/k! (the charge's

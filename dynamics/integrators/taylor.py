@@ -7,7 +7,7 @@ component are generated from ``y^[0] = y(t)`` by the recurrences of automatic di
 ``(uv)^[k] = sum_j u^[j] v^[k-j]``, quotients and the coupled sine/cosine recurrence
 ``S^[k] = (1/k) sum_j j u^[j] C^[k-j]``, ``C^[k] = -(1/k) sum_j j u^[j] S^[k-j]``. Each system
 has its own expansion (``*_expand``), written for its right-hand side: the charge's is linear,
-the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solve.
+the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solve per order.
 
 Step size as Jorba and Zou's (and heyoka's): ``h = rho e^-a exp(-0.7 / (p - 1))`` with ``rho``
 the smaller of ``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and
@@ -51,7 +51,7 @@ from .taylor_linear import charge_eval, charge_steps, two_sum
 # fast-math licence: inf and nan still propagate, so a blow-up is still reported.
 FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
-N_ROWS = 18  # series per member: the state and the hoop's 14 auxiliary functions
+N_ROWS = 14  # series per member: the state and the hoop's 10 auxiliary functions
 # Ensembles of at least PARALLEL_MIN members run their members on numba's threads
 # (:func:`run_taylor_parallel`, bitwise the serial result). On idle cores that pays from small
 # ensembles on, but on cores busy with other jobs a thread that loses its core holds the whole
@@ -120,28 +120,40 @@ def free_body_expand(A, p, order):
 @njit(cache=True, fastmath=SUMS)
 def hoop_expand(A, p, order):
     """The hoop and bead (:func:`dynamics.hoop.acceleration`): with ``u = th1 - th2``,
-    ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``, ``r2 = sin(u) w1^2 - (g/a) sin th2``,
-    ``det = 2M + m - m cos(u)^2``, ``w1' = (r1 - m cos(u) r2) / det``,
-    ``w2' = ((2M + m) r2 - cos(u) r1) / det``.
+    ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``, ``r2 = sin(u) w1^2 - (g/a) sin th2``, the
+    accelerations solve the mass-matrix system ``(2M + m) w1' + m cos(u) w2' = r1``,
+    ``cos(u) w1' + w2' = r2``.
+
+    The series are taken of that system rather than of its solved form (the quotients by
+    ``det = 2M + m - m cos(u)^2``): order ``k`` of each line is the order-``k`` accelerations
+    times the matrix at the step's start, plus the products of the higher orders of ``cos u``
+    with the lower orders of the accelerations, so order ``k`` is one 2x2 solve with the matrix
+    inverted once per step. That takes two Cauchy products per order (``cos(u) w2'``,
+    ``cos(u) w1'``) where the quotients took four and the square ``cos(u)^2``: a fifth fewer
+    multiply-adds a step.
 
     Per order three loops, each accumulating several independent sums (the sums are chains of
-    dependent additions; interleaving six of them keeps the floating-point units busy): the three
-    sine/cosine pairs; the squares ``w2^2``, ``w1^2``, ``cos(u)^2`` (over half the terms, by
-    symmetry); the products with ``sin u`` and ``cos u`` together with the quotient's sums.
+    dependent additions; interleaving them keeps the floating-point units busy): the three
+    sine/cosine pairs; the squares ``w2^2``, ``w1^2`` (over half the terms, by symmetry); the
+    products with ``sin u`` and ``cos u``.
     """
     M, m, ga = p[0], p[1], p[3] / p[2]
     m11 = 2.0 * M + m
     mg = (M + m) * ga
     # rows 0-3: th1, th2, w1, w2
-    SU, CU, S1, C1, S2, C2, Q1, Q2, R1, R2, DET, A1, A2 = range(4, 17)
-    inv_det = 0.0
+    SU, CU, S1, C1, S2, C2, Q1, Q2, A1, A2 = range(4, 14)
+    i11 = i12 = i21 = i22 = 0.0  # the inverse of the matrix at the step's start
     for k in range(order):
         if k == 0:
             s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
             s2, c2 = math.sin(A[1, 0]), math.cos(A[1, 0])
             A[S1, 0], A[C1, 0], A[S2, 0], A[C2, 0] = s1, c1, s2, c2
-            A[SU, 0] = s1 * c2 - c1 * s2  # sin(th1 - th2): two library calls fewer per step
-            A[CU, 0] = c1 * c2 + s1 * s2
+            su = s1 * c2 - c1 * s2  # sin(th1 - th2): two library calls fewer per step
+            cu = c1 * c2 + s1 * s2
+            A[SU, 0] = su
+            A[CU, 0] = cu
+            inv_det = 1.0 / (m11 - m * cu * cu)
+            i11, i12, i21, i22 = inv_det, -m * cu * inv_det, -cu * inv_det, m11 * inv_det
         else:
             su = cu = s1 = c1 = s2 = c2 = 0.0
             for j in range(1, k + 1):
@@ -163,49 +175,35 @@ def hoop_expand(A, p, order):
             A[S2, k] = s2 * inv
             A[C2, k] = -c2 * inv
         # squares: (uu)^[k] = 2 sum_{j < k/2} u_j u_(k-j) (+ u_(k/2)^2 for even k)
-        q1 = q2 = cc = 0.0
+        q1 = q2 = 0.0
         for j in range((k + 1) // 2):
             i = k - j
             q1 += A[3, j] * A[3, i]
             q2 += A[2, j] * A[2, i]
-            cc += A[CU, j] * A[CU, i]
         q1 *= 2.0
         q2 *= 2.0
-        cc *= 2.0
         if k % 2 == 0:
             h = k // 2
             q1 += A[3, h] * A[3, h]
             q2 += A[2, h] * A[2, h]
-            cc += A[CU, h] * A[CU, h]
         A[Q1, k] = q1
         A[Q2, k] = q2
-        A[DET, k] = (m11 if k == 0 else 0.0) - m * cc
-        # the terms j = 1 ... k that use only lower orders of Q, R and the quotients
-        s1 = s2 = n1 = n2 = d1 = d2 = 0.0
+        # the terms j = 1 ... k, which use only lower orders of the squares and accelerations
+        s1 = s2 = n1 = n2 = 0.0
         for j in range(1, k + 1):
             i = k - j
             su = A[SU, j]
             cu = A[CU, j]
-            det = A[DET, j]
             s1 += su * A[Q1, i]
             s2 += su * A[Q2, i]
-            n1 += cu * A[R2, i]
-            n2 += cu * A[R1, i]
-            d1 += det * A[A1, i]
-            d2 += det * A[A2, i]
+            n1 += cu * A[A2, i]
+            n2 += cu * A[A1, i]
         s1 += A[SU, 0] * q1
         s2 += A[SU, 0] * q2
-        r1 = -m * s1 - mg * A[S1, k]
-        r2 = s2 - ga * A[S2, k]
-        A[R1, k] = r1
-        A[R2, k] = r2
-        n1 += A[CU, 0] * r2
-        n2 += A[CU, 0] * r1
-        if k == 0:
-            # one division per step: the two quotients' sums are on the chain from order to order
-            inv_det = 1.0 / A[DET, 0]
-        a1 = (r1 - m * n1 - d1) * inv_det
-        a2 = (m11 * r2 - n2 - d2) * inv_det
+        b1 = -m * s1 - mg * A[S1, k] - m * n1
+        b2 = s2 - ga * A[S2, k] - n2
+        a1 = i11 * b1 + i12 * b2
+        a2 = i21 * b1 + i22 * b2
         A[A1, k] = a1
         A[A2, k] = a2
         inv = 1.0 / (k + 1)
