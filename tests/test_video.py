@@ -80,7 +80,7 @@ def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_a
 
     res = rec.record(rec.load_demo("helix").with_overrides(duration=0.5, fps=10), tmp_path)
     page = res.paths[".html"].read_bytes()
-    edited = recording_edit.page_without_shadows(page)
+    edited = recording_edit.page_for_video(page, environment=True)
     head, buffers = recording_edit.read(video.recording_of_page(page))
     head2, buffers2 = recording_edit.read(video.recording_of_page(edited))
     assert head2["messages"][0] == [head["messages"][0][0], recording_edit.NO_SHADOWS]
@@ -88,7 +88,7 @@ def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_a
     assert buffers2 == buffers and len(buffers) > 5
     assert head2["durationSeconds"] == head["durationSeconds"]
     with pytest.raises(ValueError, match="not a viser recording"):
-        recording_edit.page_without_shadows(b"<html></html>")
+        recording_edit.page_for_video(b"<html></html>")
 
 
 def test_a_video_draws_the_recording_with_a_sky_light_for_the_viewers_environment(tmp_path):
