@@ -4,7 +4,7 @@ Adaptive, explicit, of any order. At each step the coefficients ``y^[k] = y^(k)(
 component are generated from ``y^[0] = y(t)`` by the recurrences of automatic differentiation
 (Moore; Jorba & Zou, *Exp. Math.* 14 (2005) 99-117): with ``y' = f(y)``,
 ``y^[k+1] = f(y)^[k] / (k + 1)``, and ``f(y)^[k]`` is built from sums, Cauchy products
-``(uv)^[k] = sum_j u^[j] v^[k-j]``, quotients and the coupled sine/cosine recurrence
+``(uv)^[k] = sum_j u^[j] v^[k-j]``, linear solves and the coupled sine/cosine recurrence
 ``S^[k] = (1/k) sum_j j u^[j] C^[k-j]``, ``C^[k] = -(1/k) sum_j j u^[j] S^[k-j]``. Each system
 has its own expansion (``*_expand``), written for its right-hand side: the charge's is linear,
 the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solve per order.
