@@ -10,8 +10,6 @@ Skipped with the reason when no Chromium is found (a failure under MECHVIZ_REQUI
 
 from __future__ import annotations
 
-import time
-
 import browser
 import numpy as np
 import pytest
@@ -156,26 +154,34 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
 
 
 def _chart_lines(page) -> tuple[int, int]:
-    """Red and blue pixels (the energy-error and error lines) in the visible tab's chart. The
-    chart is drawn anew when its time axis moves on (every quarter window): a locator that
-    went stale meanwhile is looked up again."""
+    """Red and blue pixels (the energy-error and error lines) in the visible tab's chart; (0, 0)
+    while no chart is laid out on the page. The chart is found, scrolled into view and measured
+    in one call to the page: it is drawn anew when its time axis moves on (every quarter
+    window), and a locator taken before that could point at a chart that is gone."""
     import io
 
     from PIL import Image
 
-    for _attempt in range(5):
-        try:
-            chart = next(u for u in page.locator(".uplot").all() if u.is_visible())
-            # the readouts above it change height as they refresh, so playwright never sees the
-            # chart "stable": scroll it into view from the page instead
-            chart.evaluate(  # two animation frames: the scroll is painted
-                "e => new Promise(done => { e.scrollIntoView({block: 'center'}); "
-                "requestAnimationFrame(() => requestAnimationFrame(done)); })"
-            )
-            png = page.screenshot(clip=chart.bounding_box())
-            break
-        except (PlaywrightError, StopIteration, TypeError):
-            time.sleep(0.3)
+    box = page.evaluate(
+        """() => new Promise(done => {
+            const chart = [...document.querySelectorAll('.uplot')].find(
+                e => e.getClientRects().length && e.getBoundingClientRect().width > 0);
+            if (!chart) return done(null);
+            // the readouts above it change height as they refresh, so playwright never sees
+            // the chart "stable": scroll it into view from the page, then let it be painted
+            chart.scrollIntoView({block: 'center'});
+            requestAnimationFrame(() => requestAnimationFrame(() => {
+                const r = chart.getBoundingClientRect();
+                done({x: r.x, y: r.y, width: r.width, height: r.height});
+            }));
+        })"""
+    )
+    if not box or box["width"] < 20 or box["height"] < 20:
+        return 0, 0
+    try:
+        png = page.screenshot(clip=box)
+    except PlaywrightError:  # the page moved on while it was taken: count nothing this time
+        return 0, 0
     img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     red = (img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 110)
     blue = (img[..., 2] > 150) & (img[..., 0] < 120) & (img[..., 1] < 160)
