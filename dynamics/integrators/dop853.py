@@ -380,7 +380,7 @@ class Dop853Carry:
 
     def forget(self) -> None:
         """Keep no step: the next call starts afresh from the state it is given."""
-        self.span[:] = 0.0
+        self.span.fill(0.0)
 
 
 def run_dop853(

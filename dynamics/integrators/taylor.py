@@ -422,7 +422,7 @@ class TaylorCarry:
 
     def forget(self) -> None:
         """Keep no step: the next call starts a fresh one."""
-        self.span[:] = 0.0
+        self.span.fill(0.0)
 
 
 def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
