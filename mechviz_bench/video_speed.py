@@ -1,7 +1,7 @@
 """``mechviz bench --video``: how fast videos are made, as a ratio to real time, with today's
-path (:mod:`viz.player`: two copies of the page drawing the frames in turn, each frame a seek,
-one render without the default lights' shadow maps and a JPEG copied from the canvas; the words
-and the encoder on a worker thread) beside the same with one page, and with one page and the
+path (:mod:`viz.player`: two copies of the page drawing the frames side by side, each frame a
+seek, one render without the default lights' shadow maps and a JPEG copied from the canvas; the
+words and the encoder on a worker thread) beside the same with one page, and with one page and the
 shadow maps; on request also an older path (the player playing on a faked clock at 0.5x, four
 animation frames and a PNG screenshot per frame, kept here only to be measured).
 

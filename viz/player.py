@@ -12,10 +12,10 @@ frame, where the updates that go through React reach the picture one frame after
 so that frame would mix two moments). One call to the page per frame takes the picture and
 makes the next seek.
 
-A video's frames can be drawn by several copies of the page in turn, each in a browser of its
-own (:meth:`Player.jpegs`): software WebGL draws a frame on every core, but a page's own work
-(its scripts, copying the canvas, encoding the JPEG) runs on one, and meanwhile another page's
-frame can be drawn.
+A video's frames can be drawn by several copies of the page, each in a browser of its own,
+working side by side (:meth:`Player.jpegs`): software WebGL draws a frame on every core, but a
+page's own work (its scripts, copying the canvas, encoding the JPEG) runs on one, and meanwhile
+another page's frame can be drawn.
 
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
@@ -105,6 +105,19 @@ _INIT = """
     return picture;
   };
   window.__mechvizTick = (tickMs) => globalThis.__pwClock.controller.runFor(tickMs);
+  // the same call started in the page's next task, so that the caller can go on to another
+  // page while this one works; its result is collected by awaiting window.__mechvizJob. (A
+  // message channel, because the fake clock runs no timer unless stepped.)
+  window.__mechvizStart = (type, quality, width, height, t, tickMs) => {
+    const channel = new MessageChannel();
+    window.__mechvizJob = new Promise((resolve, reject) => {
+      channel.port1.onmessage = () => {
+        window.__mechvizPictureThenSeek(type, quality, width, height, t, tickMs)
+          .then(resolve, reject);
+      };
+    });
+    channel.port2.postMessage(null);
+  };
 })();
 """
 
@@ -278,30 +291,44 @@ class Player:
         """JPEG pictures of the recording at each playback time in ``times`` (ascending), one
         WebGL render each (see the module docstring), in the order of ``times``.
 
-        With ``n`` pages, page ``i`` draws frames ``i, i + n, i + 2n, ...``, and the pages are
-        called in turn: page ``p`` is asked for its picture of frame ``k`` (and seeks to frame
-        ``k + n``) only after the other pages were each given a frame to draw, so its frame
-        was drawn meanwhile; then an animation frame starts the drawing of frame ``k + n``."""
+        With ``n`` pages, page ``i`` draws frames ``i, i + n, i + 2n, ...``. Each page is given
+        a job (the picture of its frame, then the seek to its next frame and the animation
+        frame that draws it) that it starts on its own and that is collected later, so the
+        pages work side by side while Python collects, decodes and encodes: the picture of
+        frame ``k`` is collected from page ``k % n``, which is then given its next job. Without
+        the page's own clock (each step through playwright's), the pages are called in turn."""
         from playwright.sync_api import Error as PlaywrightError
 
         W, H = self.size
         count = len(times)
         n = min(len(self._all), count)
         pages = self._all[:n]
+        tick = TICK_MS if self._own_clock else 0
+
+        def job(k: int) -> str:
+            """The page's call that takes the picture of frame ``k`` and draws frame ``k + n``."""
+            t = repr(float(times[k + n])) if k + n < count else "null"
+            return f"('image/jpeg', {JPEG_QUALITY}, {W}, {H}, {t}, {tick})"
+
         try:
             for i, page in enumerate(pages):
                 self._seek(times[i], page)
                 self._tick(page)  # draws frame i
-            tick = TICK_MS if self._own_clock else 0
+            side_by_side = n > 1 and self._own_clock
+            if side_by_side:
+                for i, page in enumerate(pages):
+                    page.evaluate(f"window.__mechvizStart{job(i)}")
             for k in range(count):
                 page = pages[k % n]
-                t = repr(float(times[k + n])) if k + n < count else "null"
-                url = page.evaluate(
-                    f"window.__mechvizPictureThenSeek('image/jpeg', {JPEG_QUALITY}, {W}, {H}, "
-                    f"{t}, {tick})"
-                )  # with the page's own clock, its animation frame drew frame k + n too
-                if k + n < count and not tick:
-                    self._tick(page)  # draws frame k + n
+                if side_by_side:
+                    url = page.evaluate("window.__mechvizJob")
+                    if k + n < count:
+                        page.evaluate(f"window.__mechvizStart{job(k + n)}")
+                else:
+                    # with the page's own clock, its animation frame drew frame k + n too
+                    url = page.evaluate(f"window.__mechvizPictureThenSeek{job(k)}")
+                    if k + n < count and not tick:
+                        self._tick(page)  # draws frame k + n
                 yield base64.b64decode(url.split(",", 1)[1])
         except PlaywrightError as exc:
             raise PlayerError(f"Chromium failed while drawing the frames: {exc}") from None

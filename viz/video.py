@@ -48,12 +48,13 @@ MAX_FPS = 60
 # Multisampling doubles the cost of a frame in software WebGL: videos go without it (at 960x540
 # and above the lines stay clean enough), stills have it.
 ANTIALIAS = False
-# Copies of the page drawing a video's frames in turn: while one encodes its picture, the other's
-# frame is drawn (software WebGL spreads one frame over the cores, but not the page's own work).
-# The second page's browser takes seconds to start, which its quicker frames repay only over a
-# long video: two pages from TWO_PAGES_FRAMES frames on (30 s at 30 fps), and never on one core,
-# where there is nothing to overlap.
-TWO_PAGES_FRAMES = 900
+# Copies of the page drawing a video's frames side by side: while one copies and encodes its
+# picture, the other's frame is drawn (software WebGL spreads one frame over the cores, but not
+# the page's own work). Measured on two idle cores at 960x540: two pages make a frame in 30-31
+# ms against 36 ms, but their second browser adds about 1.5 s to the page load, which the
+# quicker frames repay from about 260 frames on. Hence two pages from TWO_PAGES_FRAMES frames (9
+# s at 30 fps) on, and never on one core, where there is nothing to overlap.
+TWO_PAGES_FRAMES = 270
 
 
 def pages_for(frames: int) -> int:
