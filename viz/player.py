@@ -145,7 +145,7 @@ class Player:
 
     ``antialias``: the WebGL canvas's multisampling (smoother lines; in software WebGL it costs
     about as much as the rest of a frame). ``pages``: copies of the page that draw a video's
-    frames in turn (see :meth:`jpegs`)."""
+    frames side by side (see :meth:`jpegs`)."""
 
     def __init__(
         self,
