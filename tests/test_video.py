@@ -251,8 +251,8 @@ def _changed(a: np.ndarray, b: np.ndarray) -> int:
 
 
 @pytest.mark.browser
-def test_frames_drawn_in_turn_by_two_pages_are_the_recording_at_their_times(recording):
-    """A video's frames are drawn by two copies of the page in turn, each picture taken one
+def test_frames_drawn_side_by_side_by_two_pages_are_the_recording_at_their_times(recording):
+    """A video's frames are drawn by two copies of the page side by side, each picture taken one
     animation frame after its seek; each must be the picture of that moment drawn on its own
     (after several animation frames), and not of the moment before or after it."""
     from viz.player import Player, decode
