@@ -10,7 +10,8 @@ only thing that crosses to Python. The page is told it is hidden: viser then app
 messages at once, as the seek is made (a visible page applies them inside the next animation
 frame, where the updates that go through React reach the picture one frame after the poses,
 so that frame would mix two moments). One call to the page per frame takes the picture and
-makes the next seek.
+makes the next seek (started by one call and collected by another when pages work side by
+side).
 
 A video's frames can be drawn by several copies of the page, each in a browser of its own,
 working side by side (:meth:`Player.jpegs`): software WebGL draws a frame on every core, but a
