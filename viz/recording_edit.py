@@ -84,15 +84,11 @@ def read(viser_bytes: bytes) -> tuple[dict[str, Any], list[bytes]]:
     return head, buffers
 
 
-def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
-    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
-    at the same time. ``ValueError`` if it is not a recording."""
+def _pack(head: dict[str, Any], buffers: list[bytes]) -> bytes:
+    """A ``.viser`` recording from its header and binary buffers (the inverse of :func:`read`)."""
     import msgspec
     import zstandard
 
-    head, buffers = read(viser_bytes)
-    first = head["messages"][0][0] if head["messages"] else 0.0
-    head["messages"] = [[first, dict(m)] for m in messages] + head["messages"]
     header = msgspec.msgpack.encode(head)
     parts = [len(header).to_bytes(8, "little"), header]
     offset = 8 + len(header)
@@ -104,31 +100,58 @@ def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> b
     return len(data).to_bytes(8, "little") + zstandard.ZstdCompressor(level=3).compress(data)
 
 
-def page_with_messages_first(page: bytes, messages: list[dict[str, Any]]) -> bytes:
-    """A viser player page whose embedded recording plays ``messages`` first
-    (:func:`with_messages_first`). ``ValueError`` if the page embeds no recording."""
+def _put_first(head: dict[str, Any], messages: list[dict[str, Any]]) -> dict[str, Any]:
+    """``head`` with ``messages`` played before its first message, at the same time."""
+    first = head["messages"][0][0] if head["messages"] else 0.0
+    return {**head, "messages": [[first, dict(m)] for m in messages] + head["messages"]}
+
+
+def _embedded(page: bytes) -> tuple[re.Match, dict[str, Any], list[bytes]]:
+    """Where a player page embeds its recording, and the recording's header and buffers."""
     m = _EMBED.search(page)
     if m is None:
         raise ValueError("not a viser recording page (no embedded scene data)")
-    edited = with_messages_first(base64.b64decode(m.group(1)), messages)
-    return page[: m.start(1)] + base64.b64encode(edited) + page[m.end(1) :]
+    return (m, *read(base64.b64decode(m.group(1))))
+
+
+def _sets_environment(head: dict[str, Any]) -> bool:
+    return any(msg.get("type") == NO_ENVIRONMENT["type"] for _, msg in head["messages"])
+
+
+def _with_recording(page: bytes, m: re.Match, viser_bytes: bytes) -> bytes:
+    return page[: m.start(1)] + base64.b64encode(viser_bytes) + page[m.end(1) :]
+
+
+def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
+    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
+    at the same time. ``ValueError`` if it is not a recording."""
+    head, buffers = read(viser_bytes)
+    return _pack(_put_first(head, messages), buffers)
+
+
+def page_with_messages_first(page: bytes, messages: list[dict[str, Any]]) -> bytes:
+    """A viser player page whose embedded recording plays ``messages`` first
+    (:func:`with_messages_first`). ``ValueError`` if the page embeds no recording."""
+    m, head, buffers = _embedded(page)
+    return _with_recording(page, m, _pack(_put_first(head, messages), buffers))
 
 
 def sets_environment(page: bytes) -> bool:
     """Whether the page's recording sets an environment map (or switches it off) itself."""
-    m = _EMBED.search(page)
-    if m is None:
-        raise ValueError("not a viser recording page (no embedded scene data)")
-    head, _ = read(base64.b64decode(m.group(1)))
-    return any(msg.get("type") == NO_ENVIRONMENT["type"] for _, msg in head["messages"])
+    return _sets_environment(_embedded(page)[1])
 
 
 def page_for_video(page: bytes, *, shadows: bool = False, environment: bool = False) -> bytes:
     """The player page as videos draw it (see the module docstring): without the shadow maps
     unless ``shadows``, and, unless ``environment``, with the viewer's default environment map
     replaced by :data:`SKY_LIGHT` when the recording leaves the environment to the viewer.
-    ``ValueError`` if the page embeds no recording."""
+    The recording is read once. ``ValueError`` if the page embeds no recording."""
+    if shadows and environment:
+        return page
+    m, head, buffers = _embedded(page)
     first = [] if shadows else [NO_SHADOWS]
-    if not environment and not sets_environment(page):
+    if not environment and not _sets_environment(head):
         first += [NO_ENVIRONMENT, SKY_LIGHT]
-    return page_with_messages_first(page, first) if first else page
+    if not first:
+        return page
+    return _with_recording(page, m, _pack(_put_first(head, first), buffers))
