@@ -106,11 +106,22 @@ def _put_first(head: dict[str, Any], messages: list[dict[str, Any]]) -> dict[str
     return {**head, "messages": [[first, dict(m)] for m in messages] + head["messages"]}
 
 
-def _embedded(page: bytes) -> tuple[re.Match, dict[str, Any], list[bytes]]:
-    """Where a player page embeds its recording, and the recording's header and buffers."""
+def _locate(page: bytes) -> re.Match:
+    """Where a player page embeds its recording (its base64 is group 1)."""
     m = _EMBED.search(page)
     if m is None:
         raise ValueError("not a viser recording page (no embedded scene data)")
+    return m
+
+
+def recording_of_page(page: bytes) -> bytes:
+    """The ``.viser`` bytes embedded in a player page (``ValueError`` if there are none)."""
+    return base64.b64decode(_locate(page).group(1))
+
+
+def _embedded(page: bytes) -> tuple[re.Match, dict[str, Any], list[bytes]]:
+    """Where a player page embeds its recording, and the recording's header and buffers."""
+    m = _locate(page)
     return (m, *read(base64.b64decode(m.group(1))))
 
 
@@ -122,16 +133,9 @@ def _with_recording(page: bytes, m: re.Match, viser_bytes: bytes) -> bytes:
     return page[: m.start(1)] + base64.b64encode(viser_bytes) + page[m.end(1) :]
 
 
-def with_messages_first(viser_bytes: bytes, messages: list[dict[str, Any]]) -> bytes:
-    """``viser_bytes`` (a ``.viser`` recording) with ``messages`` played before its first one,
-    at the same time. ``ValueError`` if it is not a recording."""
-    head, buffers = read(viser_bytes)
-    return _pack(_put_first(head, messages), buffers)
-
-
 def page_with_messages_first(page: bytes, messages: list[dict[str, Any]]) -> bytes:
-    """A viser player page whose embedded recording plays ``messages`` first
-    (:func:`with_messages_first`). ``ValueError`` if the page embeds no recording."""
+    """A viser player page whose embedded recording plays ``messages`` before its first
+    message, at the same time. ``ValueError`` if the page embeds no recording."""
     m, head, buffers = _embedded(page)
     return _with_recording(page, m, _pack(_put_first(head, messages), buffers))
 

@@ -38,7 +38,7 @@ from .chromium import find_chromium
 from .encoders import GifWriter, Mp4Writer, gif_delays_ms
 from .overlay import Overlay
 from .player import Player, PlayerError, decode
-from .recording_edit import page_for_video
+from .recording_edit import page_for_video, recording_of_page
 
 FORMATS = ("mp4", "gif")
 DEFAULT_SIZE = (960, 540)
@@ -120,7 +120,6 @@ class Look:
 
 
 # =========================================================================== sources
-_EMBED = re.compile(rb'window\.__VISER_EMBED_DATA__="([A-Za-z0-9+/=]*)"')
 _SESSION = re.compile(
     rb'<script type="application/json" id="mechviz-recording">(.*?)</script>', re.DOTALL
 )
@@ -139,14 +138,6 @@ def page_for_recording(viser_bytes: bytes) -> bytes:
     )
     head_end = client.index("</head>")
     return (client[:head_end] + script + client[head_end:]).encode("utf-8")
-
-
-def recording_of_page(page: bytes) -> bytes:
-    """The ``.viser`` bytes embedded in a player page (``ValueError`` if there are none)."""
-    m = _EMBED.search(page)
-    if m is None:
-        raise ValueError("not a viser recording page (no embedded scene data)")
-    return base64.b64decode(m.group(1))
 
 
 def with_session_info(page: bytes, info: dict[str, Any]) -> bytes:
