@@ -99,8 +99,19 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
     try:
         yield client
     finally:
+        # The cluster is ours to shut down: a worker whose heartbeat meets the scheduler already
+        # closed logs that as an error with a traceback, on the user's terminal after a Ctrl-C
+        # or a finished run. The workers' logs are quietened first (a worker already gone is
+        # no matter); errors of the run itself reached the client before this.
+        with contextlib.suppress(Exception):
+            client.run(_quiet_logs)
         client.close()
         cluster.close()
+
+
+def _quiet_logs() -> None:
+    """In a worker process: only critical messages from Dask from now on."""
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
 @contextlib.contextmanager
