@@ -46,12 +46,12 @@ bench: $(VENV)/.installed-test
 # The bench exits with status 1 when it misses a target and writes its figures all the same;
 # what counts is that it wrote a new results.json.
 bench-docs: $(VENV)/.installed-test
-	$(BIN)/python -m mechviz_bench.docs --check README.md
+	$(BIN)/python -m mechviz.bench.docs --check README.md
 	$(BIN)/python -m pip install -q -e '.[peers]'
 	stamp=$$(mktemp) && trap 'rm -f "$$stamp"' EXIT && \
 	{ $(BIN)/mechviz bench --peers --out docs/bench; \
 	  [ docs/bench/results.json -nt "$$stamp" ] || { echo "bench-docs: the run wrote no results"; exit 1; }; }
-	$(BIN)/python -m mechviz_bench.docs docs/bench README.md
+	$(BIN)/python -m mechviz.bench.docs docs/bench README.md
 
 screenshots: $(VENV)/.installed-test
 	MECHVIZ_WRITE_DOCS=1 MECHVIZ_ALL_DEMOS=1 $(BIN)/python -m pytest -q \
@@ -81,7 +81,7 @@ atlas-docs: $(VENV)/.installed-test
 	done && \
 	cp "$$tmp/chaos-hoop/chaos.png" $(ATLAS_IMG)/chaos-hoop.png.partial && \
 	mv $(ATLAS_IMG)/chaos-hoop.png.partial $(ATLAS_IMG)/chaos-hoop.png
-	$(BIN)/python -m viz.model.atlas_map
+	$(BIN)/python -m mechviz.viz.model.atlas_map
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

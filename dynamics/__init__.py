@@ -12,7 +12,7 @@ This package never imports viser.
 
 import importlib
 
-# Loaded when first used (PEP 562), so that ``import dynamics.aot`` and ``dynamics.ids`` cost no
+# Loaded when first used (PEP 562), so that ``import mechviz.dynamics.aot`` and ``.ids`` cost no
 # numba: every compiled module imports :mod:`._jit` (numba's cache set-up) itself.
 _WHERE = {
     **dict.fromkeys(
@@ -33,7 +33,7 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(_WHERE[name], __name__), name)
         globals()[name] = value
         return value
-    try:  # a module of the package (dynamics.hoop, dynamics.measure, ...)
+    try:  # a module of the package (mechviz.dynamics.hoop, mechviz.dynamics.measure, ...)
         return importlib.import_module(f".{name}", __name__)
     except ModuleNotFoundError as exc:
         if exc.name != f"{__name__}.{name}":  # the module exists; something it imports does not

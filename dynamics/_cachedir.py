@@ -1,5 +1,5 @@
 """Where compiled code is cached: a folder per version of the package's sources (no numba here,
-so that code loading a module compiled ahead of time, :mod:`dynamics.aot`, finds it without
+so that code loading a module compiled ahead of time, :mod:`mechviz.dynamics.aot`, finds it without
 importing numba)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 
 # Left out of the hash: the atlas defines no cached function and nothing compiled imports it, so
 # an edit there must not throw away (and make the next run recompile) every cached kernel. A
-# cached function added there would have to come back in. (The benchmark, mechviz_bench, lives
+# cached function added there would have to come back in. (The benchmark, mechviz.bench, lives
 # outside this package and is not hashed either.)
 UNCACHED = ("atlas",)
 

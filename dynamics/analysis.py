@@ -1,14 +1,14 @@
 """The seed's analytic results for each system, as a JSON-ready dict, with every derived number
 checked to be representable.
 
-:func:`analyze` is what ``mechviz analyze`` prints and what :func:`dynamics.api.analyze` returns:
+:func:`analyze` is what ``mechviz analyze`` prints and what :func:`mechviz.dynamics.api.analyze` returns:
 cyclotron gyrofrequency, period, radius for a transverse ``speed``, canonical momentum and the
 effective potential's minimum; disk inertia tensors, principal moments and axes, bearing forces;
 hoop normal-mode frequencies, periods and shapes.
 
 A value that is valid on its own can still have consequences a double cannot hold (a
 gyrofrequency that overflows, a kinetic energy that underflows to 0). :func:`analyze` refuses
-those with a :class:`dynamics.params.SettingError` whose ``fields`` are the settings to blame:
+those with a :class:`mechviz.dynamics.params.SettingError` whose ``fields`` are the settings to blame:
 those given whose default alone makes every result representable (else every setting given).
 """
 
@@ -92,9 +92,9 @@ def check_representable(
 
 
 def analyze(system: str, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """The analytic results of ``system`` (a name in :data:`dynamics.systems.SPECS`) for
+    """The analytic results of ``system`` (a name in :data:`mechviz.dynamics.systems.SPECS`) for
     ``values``: its parameters by name, and the start settings its analysis takes
-    (:attr:`dynamics.spec.SystemSpec.analysis_start`; the cyclotron's ``speed`` [m/s]); the rest
+    (:attr:`mechviz.dynamics.spec.SystemSpec.analysis_start`; the cyclotron's ``speed`` [m/s]); the rest
     default. :class:`SettingError` names a bad or unknown setting, or those whose consequences
     are not representable."""
     spec = SPECS[system]

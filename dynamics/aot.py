@@ -2,15 +2,15 @@
 
 numba compiles on first use, or loads its on-disk cache; either way a fresh process pays for
 importing numba and starting its compiler before the first kernel runs, several tenths of a
-second, more than the whole solve. :func:`build` compiles :func:`dynamics.solver.solve_taylor`
+second, more than the whole solve. :func:`build` compiles :func:`mechviz.dynamics.solver.solve_taylor`
 once into an extension module (numba's ``pycc``) kept beside numba's cache, in the folder of
 this version of the sources (:mod:`._cachedir`); :func:`solve` loads it with nothing but numpy,
-and falls back to the just-in-time :func:`~dynamics.solver.solve_taylor` while it is not built.
-``python -m dynamics.aot`` builds it (tens of seconds); ``mechviz bench`` builds it before it
+and falls back to the just-in-time :func:`~mechviz.dynamics.solver.solve_taylor` while it is not built.
+``python -m mechviz.dynamics.aot`` builds it (tens of seconds); ``mechviz bench`` builds it before it
 times the first answer.
 
 ``solve("hoop", state, t_end, params=[M, m, a, g], rtol=1e-9)`` returns the state at ``t_end``
-from ``state`` at 0: the steps of :class:`dynamics.solver.Solver` at that tolerance. The
+from ``state`` at 0: the steps of :class:`mechviz.dynamics.solver.Solver` at that tolerance. The
 parameters are the system's kernel parameters (``System.kernel_params()``: charge ``[Omega]``,
 hoop ``[M, m, a, g]``, free body ``[I1, I2, I3]``).
 """

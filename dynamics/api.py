@@ -2,12 +2,12 @@
 arrays or a pandas DataFrame, the seed's analytic results as a dict, and the estimators that
 measure a figure from samples, as the viewer and the recordings do.
 
-This is the stable surface over :class:`dynamics.Simulation`, :data:`dynamics.SYSTEMS`, the
-system modules' analytic functions, :mod:`dynamics.measure` and :mod:`dynamics.stability`; it
+This is the stable surface over :class:`mechviz.dynamics.Simulation`, :data:`mechviz.dynamics.SYSTEMS`, the
+system modules' analytic functions, :mod:`mechviz.dynamics.measure` and :mod:`mechviz.dynamics.stability`; it
 adds no physics of its own. Units are SI and the conventions are those of each system's module
-(:mod:`dynamics.cyclotron`, :mod:`dynamics.disk`, :mod:`dynamics.hoop`).
+(:mod:`mechviz.dynamics.cyclotron`, :mod:`mechviz.dynamics.disk`, :mod:`mechviz.dynamics.hoop`).
 
->>> from dynamics import api
+>>> from mechviz.dynamics import api
 >>> run = api.simulate("hoop", method="rk4", dt=0.01, t_end=10.0, modes=(0.1, 0.0))
 >>> run.states.shape                    # (samples, state dimension)
 (501, 4)
@@ -27,9 +27,9 @@ about the axle, or ``"released"``, the free body after the axle is removed). Eve
 use. Methods: :func:`methods` (``mechviz simulate --list-methods``); the largest stable step of
 one: :func:`stability_limit`. Estimators (each returns an :class:`Estimate`, a value or the
 reason there is none): :func:`gyrofrequency`, :func:`fit_circle`, :func:`crossing_frequency`,
-:func:`wobble_growth_rate`. Bad input raises :class:`dynamics.params.SettingError` (a
+:func:`wobble_growth_rate`. Bad input raises :class:`mechviz.dynamics.params.SettingError` (a
 ``ValueError``) whose ``field`` names the argument; a run that blows up raises
-:class:`dynamics.IntegrationError`.
+:class:`mechviz.dynamics.IntegrationError`.
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ class Run:
 
     ``states`` is ``(K, d)`` for one initial state and ``(K, N, d)`` for an ensemble of ``N``;
     ``energy`` [J], ``energy_error`` (signed, relative to the energy that moves,
-    ``(E - E0) / (E0 - E_floor)``, as in :class:`dynamics.Simulation`), ``error`` (relative,
+    ``(E - E0) / (E0 - E_floor)``, as in :class:`mechviz.dynamics.Simulation`), ``error`` (relative,
     against what ``error_vs`` names: ``"exact"``, the exact solution, or ``"reference"``, a
     DOP853 run at ``rtol = 3e-15``, ``atol = 1e-17`` where there is none; ``None`` if not
     measured) and each of ``quantities`` (the system's own quantities beyond the state, as the
@@ -121,7 +121,7 @@ class Run:
             import pandas as pd
         except ImportError:
             raise ImportError(
-                "to_dataframe needs pandas: pip install pandas (or pip install 'mechviz[notebook]')"
+                "to_dataframe needs pandas: pip install pandas (or pip install 'mechviz-lab[notebook]')"
             ) from None
         S = self.states if self.states.ndim == 3 else self.states[:, None, :]
         K, N, _ = S.shape
@@ -234,7 +234,7 @@ def simulate(
     step for fixed-step methods; ``rtol`` (default 1e-9) and ``atol`` (default ``rtol``, in the
     state's units: a motion much smaller than 1 is then held to ``atol``, not to ``rtol`` of
     itself) are for adaptive ones.
-    ``reference`` as in :class:`dynamics.Simulation` (``None`` skips the error measurement, which
+    ``reference`` as in :class:`mechviz.dynamics.Simulation` (``None`` skips the error measurement, which
     for systems without an exact solution runs a tight DOP853 beside the method)."""
     spec = _spec(system)
     start_names = {s.name for s in spec.start}
@@ -308,7 +308,7 @@ def stability_limit(system: str, method: str, **settings: Any) -> float | None:
     """The largest stable fixed step [s] of ``method`` on ``system`` for ``settings`` (its
     parameters and start, as :func:`simulate` takes them; the disk's methods other than
     ``exact`` need ``motion="released"``), from the method's stability region and the motion's
-    fastest frequency (:mod:`dynamics.stability`). ``None``: stable at any step (or adaptive,
+    fastest frequency (:mod:`mechviz.dynamics.stability`). ``None``: stable at any step (or adaptive,
     or exact); ``0.0``: stable at none (explicit Euler on an oscillation)."""
     spec = _spec(system)
     start_names = {s.name for s in spec.start}

@@ -1,16 +1,20 @@
-"""Where the project's data files are: ``assets/`` beside the source in a checkout (and an
-editable install), ``share/mechviz`` in the installed prefix otherwise (a wheel carries them
-there: ``pip install .``, ``pipx install``)."""
+"""Where the project's data files are: the package ``mechviz.assets`` (the folder ``assets/`` of a
+checkout), found with :mod:`importlib.resources`, so that every kind of install (a venv, pipx,
+``pip install --user``, ``pip install --target``, editable) reads the same files."""
 
 from __future__ import annotations
 
-import sys
+from importlib import resources
 from pathlib import Path
-
-_CHECKOUT = Path(__file__).resolve().parents[1] / "assets"
 
 
 def asset(*parts: str) -> Path:
-    """The path of a data file or folder, e.g. ``asset("demos")``."""
-    base = _CHECKOUT if _CHECKOUT.is_dir() else Path(sys.prefix) / "share" / "mechviz"
-    return base.joinpath(*parts)
+    """The path of a data file or folder, e.g. ``asset("demos")``.
+
+    The package is always installed as plain files (a wheel unpacked by pip), so the traversable
+    ``importlib.resources`` gives is a real folder; a zipped install is refused here rather than
+    read half."""
+    root = resources.files("mechviz.assets")
+    if not isinstance(root, Path):
+        raise RuntimeError(f"mechviz's data must be installed as files, not inside {root!s}")
+    return root.joinpath(*parts)

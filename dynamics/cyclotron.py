@@ -280,7 +280,7 @@ def analysis(p: CyclotronParams, speed: float = 1.0) -> dict:
     """The seed's results for a charge of transverse ``speed`` [m/s], JSON-ready: gyrofrequency
     (and its sign), period, kinetic energy, radius, canonical angular momentum, the effective
     potential's minimum and the radial oscillation frequency about it. A result a double cannot
-    hold is NaN (:func:`dynamics.params.guarded`)."""
+    hold is NaN (:func:`mechviz.dynamics.params.guarded`)."""
     g = _v.guarded
     ke = g(lambda: 0.5 * p.mass * speed**2)
     state = g(lambda: circular_orbit_state(p, speed), np.full(6, math.nan))

@@ -527,7 +527,7 @@ def analysis(p: DiskParams) -> dict:
     """The seed's results, JSON-ready: inertia tensors about A (disk, bead, both), principal
     moments and axes about A and about the centre of mass, the angular momentum and torque of the
     uniform rotation, and the bearing forces' amplitudes. A result a double cannot hold is NaN
-    (:func:`dynamics.params.guarded`)."""
+    (:func:`mechviz.dynamics.params.guarded`)."""
     g = _v.guarded
     nan3 = (np.full(3, np.nan), np.full((3, 3), np.nan))
     moments, axes = g(lambda: principal_axes(p), nan3)

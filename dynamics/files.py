@@ -3,7 +3,7 @@ and JSON that is valid whatever numbers it carries.
 
 Used by the benchmark's results and charts and the viewer's endurance results. The switch
 renames each file in turn and rolls back on failure, which a process killed with SIGKILL cannot
-do; the recorder's demo files use :mod:`dynamics.fileset` instead, switched by a single rename.
+do; the recorder's demo files use :mod:`mechviz.dynamics.fileset` instead, switched by a single rename.
 
 :func:`write_files_atomically` writes every file to a temporary name in the target folder and
 fsyncs it, then switches the set in one step: each old file is kept under a hard link, the new
@@ -44,7 +44,7 @@ class _Outcome:
         always the case unless putting the old files back failed too.
     new_files : names now holding the new content (empty when ``unchanged``).
     committed : True when every new file is in place (the write was switched whole before the
-        signal or error came, as :func:`dynamics.fileset.write_set` does).
+        signal or error came, as :func:`mechviz.dynamics.fileset.write_set` does).
     signum : the signal that ended the write, or None.
     on_disk : one sentence stating the above, also the end of the exception's message.
     """

@@ -20,7 +20,7 @@ first copied into a set of their own and made current, then each is replaced by 
 
 Signals (SIGINT, SIGTERM, SIGHUP) and I/O errors before the commit undo the write (the folder is
 as it was); a signal that arrives later is held until the commit and the clean-up are over, then
-handled: SIGINT raises :class:`~dynamics.files.WriteInterrupted` saying the new set is complete,
+handled: SIGINT raises :class:`~mechviz.dynamics.files.WriteInterrupted` saying the new set is complete,
 SIGTERM and SIGHUP end the process as their default does.
 """
 
@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import fcntl
 import os
 import secrets
 import shutil
@@ -103,6 +102,8 @@ class _Lock:
         self.fd: int | None = None
 
     def __enter__(self) -> _Lock:
+        import fcntl  # POSIX only: imported where a set is written, so reading works anywhere
+
         told = False
         while True:
             self.created += _make_dirs(self.home)
@@ -262,12 +263,12 @@ def write_set(
 
     ``on_wait(message)`` is called once if another process is writing to ``out_dir`` (this call
     then waits for it). Returns None when the new set is in place and nothing else is left.
-    Raises :class:`~dynamics.files.WriteFailed` (an ``OSError``) on an I/O error and
-    :class:`~dynamics.files.WriteInterrupted` (a ``KeyboardInterrupt``) on SIGINT; their
+    Raises :class:`~mechviz.dynamics.files.WriteFailed` (an ``OSError``) on an I/O error and
+    :class:`~mechviz.dynamics.files.WriteInterrupted` (a ``KeyboardInterrupt``) on SIGINT; their
     ``unchanged`` says whether the folder shows the old set (True) or the complete new one
     (a signal that came after the commit). SIGTERM and SIGHUP end the process after the
     clean-up, as their default does. Signals are caught only in the main thread and only while
-    their handler is the default one, as :func:`dynamics.files.write_files_atomically` does.
+    their handler is the default one, as :func:`mechviz.dynamics.files.write_files_atomically` does.
     """
     out_dir = Path(out_dir)
     if not name or name in (".", "..") or os.sep in name or "\0" in name:

@@ -320,7 +320,7 @@ def verlet_step(y, p, h):
 
 def analysis(p: HoopParams) -> dict:
     """The seed's results, JSON-ready: the normal-mode frequencies [rad/s], periods [s] and
-    shapes (rows). A result a double cannot hold is NaN (:func:`dynamics.params.guarded`)."""
+    shapes (rows). A result a double cannot hold is NaN (:func:`mechviz.dynamics.params.guarded`)."""
     g = _v.guarded
     freqs, shapes = g(lambda: normal_modes(p), (np.full(2, np.nan), np.full((2, 2), np.nan)))
     return {

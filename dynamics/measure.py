@@ -15,7 +15,8 @@ those frame rates, exact and with 0.1 % noise, is measured in ``tests/test_measu
 in the README.
 
 Conventions: angles in radians, frequencies in rad/s, SI units otherwise; states in the layout of
-their system module (:mod:`dynamics.cyclotron`, :mod:`dynamics.disk`, :mod:`dynamics.hoop`).
+their system module
+(:mod:`mechviz.dynamics.cyclotron`, :mod:`mechviz.dynamics.disk`, :mod:`mechviz.dynamics.hoop`).
 """
 
 from __future__ import annotations
@@ -304,7 +305,7 @@ def mode_frequencies(
 ) -> list[Estimate]:
     """Frequencies [rad/s] of the hoop's two normal modes measured from the angles (K, 2).
 
-    The angles are projected on the mode ``shapes`` (rows, :func:`dynamics.hoop.normal_modes`),
+    The angles are projected on the mode ``shapes`` (rows, :func:`mechviz.dynamics.hoop.normal_modes`),
     giving the modal coordinates, and each is timed by :func:`crossing_frequency`. A mode whose
     coordinate stays below ``min_share`` of the larger one is not excited: not resolved."""
     q = modal_coordinates(angles, shapes)
@@ -329,7 +330,7 @@ def bearing_force(p: disk.DiskParams, t: np.ndarray, angle: np.ndarray, omega) -
 
     ``L(t) = R(angle) I_A omega y`` about A, the torque ``N = dL/dt`` from differences over the
     samples, and ``F_B = -(y x N) / 2R`` (the bearings are 2R apart on the axle ``y``,
-    :mod:`dynamics.disk`). The difference of a vector turning by ``2 theta`` between two samples
+    :mod:`mechviz.dynamics.disk`). The difference of a vector turning by ``2 theta`` between two samples
     is its derivative times ``sin(theta) / theta``; that known factor is divided out, with
     ``theta`` half the sampled turn, so a uniform rotation gives its torque exactly at any frame
     rate below the aliasing limit. Central differences inside, one-sided at the two ends (there
@@ -439,6 +440,6 @@ def wobble_growth_rate(
 
 def wobble_growth_rate_theory(moments: np.ndarray, w0: np.ndarray) -> float:
     """Linear growth rate [1/s] of a wobble about the intermediate axis
-    (:func:`dynamics.disk.wobble_growth_rate`), the figure :func:`wobble_growth_rate` is
+    (:func:`mechviz.dynamics.disk.wobble_growth_rate`), the figure :func:`wobble_growth_rate` is
     compared with."""
     return disk.wobble_growth_rate(moments, w0)

@@ -66,7 +66,7 @@ def parse_number(field: str, text: Any) -> float:
 def guarded(fn: Callable[[], Any], fallback: Any = math.nan) -> Any:
     """``fn()``, or ``fallback`` (NaN) if its arithmetic overflows, divides by zero or leaves its
     domain: a derived result that cannot be represented then shows as NaN, which
-    :func:`dynamics.analysis.unrepresentable` reports, instead of a traceback."""
+    :func:`mechviz.dynamics.analysis.unrepresentable` reports, instead of a traceback."""
     try:
         with np.errstate(all="ignore"):
             return fn()

@@ -126,14 +126,14 @@ class Simulation:
 
     Parameters
     ----------
-    system : a :mod:`dynamics.systems` adapter.
-    method : a name from :data:`dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
+    system : a :mod:`mechviz.dynamics.systems` adapter.
+    method : a name from :data:`mechviz.dynamics.integrators.METHODS` (``mechviz simulate --list-methods``).
     dt : step size [s] for fixed-step methods (must be > 0 and finite).
     rtol, atol : tolerances for adaptive methods (default ``1e-9`` and ``rtol``). ``atol`` is in
         the state's units: where a component is much smaller than 1 (a swing of 0.01 rad) it
         is held to ``atol``, not to ``rtol`` of itself, so its relative error exceeds ``rtol``
         by about the ratio of the two; give a smaller ``atol`` for such motions.
-    step : the step control as one value (:mod:`dynamics.steps`), instead of dt/rtol/atol.
+    step : the step control as one value (:mod:`mechviz.dynamics.steps`), instead of dt/rtol/atol.
     state : initial state(s); default the system's ``default_state()``.
     reference : measure the error against the exact solution, or a tight DOP853 run when there
         is none (``"auto"``; not for an adaptive run tighter than :data:`MIN_COMPARED_TOL`, see
@@ -168,7 +168,7 @@ class Simulation:
             )
         if step is None:
             step = step_control(self.method, dt, rtol, atol)
-        #: The step control in force (:mod:`dynamics.steps`).
+        #: The step control in force (:mod:`mechviz.dynamics.steps`).
         self.step = step
         self.dt: float | None = step.dt if isinstance(step, Fixed) else None
         self.rtol = step.rtol if isinstance(step, Tolerance) else None

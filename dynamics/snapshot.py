@@ -1,6 +1,6 @@
 """A run's whole state in one flat row of floats, and back: what going back in a run needs.
 
-:func:`snapshot` writes what :class:`dynamics.simulation.Simulation` carries from one call to the
+:func:`snapshot` writes what :class:`mechviz.dynamics.simulation.Simulation` carries from one call to the
 next (time and the clock asked for, the state and the start it is measured from, the counters,
 the step the adaptive methods go on with, and the tight reference run's own row); :func:`restore`
 puts a run back where a row says it was, so it goes on from there as it went on then: a fixed-step

@@ -1,6 +1,6 @@
 """A compiled problem solved many times: Taylor's method from a start to a time, nothing else.
 
-:class:`~dynamics.simulation.Simulation` is a run: it keeps time, counters, energy and the
+:class:`~mechviz.dynamics.simulation.Simulation` is a run: it keeps time, counters, energy and the
 error against a reference, and builds all of that for each start. A user who solves the same
 system from many starts or with many parameter sets (a parameter scan, a shooting method, a
 benchmark) needs none of it: :class:`Solver` is built once for a system kind and a tolerance,
@@ -9,7 +9,7 @@ parameters as arrays, so changing them costs nothing but passing them. The same 
 function, :func:`solve_taylor`, can be called from a numba ``njit`` function (no Python between
 solves at all).
 
-The steps are :mod:`dynamics.integrators.taylor`'s, from ``t = 0`` to ``t_end`` (the last step
+The steps are :mod:`mechviz.dynamics.integrators.taylor`'s, from ``t = 0`` to ``t_end`` (the last step
 evaluated at ``t_end`` by its series): the same final state as a ``Simulation`` advanced to
 ``t_end`` in one call.
 """

@@ -9,7 +9,7 @@ are generated from it, so one default and one range hold everywhere.
 
 :meth:`SystemSpec.setup` turns settings (any subset; the rest default) into a :class:`Setup`: the
 system, its initial state, the method and its step control, all checked, or a
-:class:`dynamics.params.SettingError` naming the setting (a parameter's name, ``initial.<name>``
+:class:`mechviz.dynamics.params.SettingError` naming the setting (a parameter's name, ``initial.<name>``
 for a start setting, ``method``, ``dt``, ``rtol``, ``atol``).
 """
 
@@ -31,7 +31,7 @@ class Setting:
     """One setting a person can give: ``name`` (a Python identifier: the API's keyword, the demo
     key, the flag ``--name-with-dashes``), ``label`` and ``unit`` (what a panel shows),
     ``default``, and ``rule(name, value)`` that returns the checked value or raises
-    :class:`dynamics.params.SettingError` naming ``name``."""
+    :class:`mechviz.dynamics.params.SettingError` naming ``name``."""
 
     name: str
     label: str
@@ -94,7 +94,7 @@ class Setup:
     spec: SystemSpec
     params: Any  # the system's parameter dataclass
     start: dict[str, Any]  # the checked start settings, defaults filled in
-    system: Any  # a dynamics.systems adapter
+    system: Any  # a mechviz.dynamics.systems adapter
     state: np.ndarray
     method: Method
     step: Step

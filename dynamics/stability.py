@@ -121,7 +121,7 @@ REASONS = {
 def limit_omega_dt(method: str, system=None) -> float | None:
     """Largest stable ``omega h`` for ``method`` (``None``: no limit; ``0``: none stable).
 
-    ``yoshida4`` composes ``system``'s own symmetric step (a :mod:`dynamics.systems` adapter or
+    ``yoshida4`` composes ``system``'s own symmetric step (a :mod:`mechviz.dynamics.systems` adapter or
     its class): where that step keeps the norm at any step (Boris on the charge, the rotation
     splitting on the free body) so does the composition; only over Verlet (the hoop) is there a
     limit.
@@ -140,7 +140,7 @@ def fastest_frequency(system, state: np.ndarray | None = None) -> float:
 
 
 def stability_limit(method_name: str, system, state: np.ndarray | None = None) -> float | None:
-    """Largest stable ``dt`` [s] for ``method_name`` on ``system`` (a :mod:`dynamics.systems`
+    """Largest stable ``dt`` [s] for ``method_name`` on ``system`` (a :mod:`mechviz.dynamics.systems`
     adapter, or its name for the default parameters).
 
     ``None`` when the method is stable at any step (or adaptive, or exact); ``0.0`` when it is
@@ -162,7 +162,7 @@ def stability_limit(method_name: str, system, state: np.ndarray | None = None) -
 
 
 def _default_system(name: str):
-    """The adapter called ``name`` in :data:`dynamics.systems.SYSTEMS`, default parameters."""
+    """The adapter called ``name`` in :data:`mechviz.dynamics.systems.SYSTEMS`, default parameters."""
     from .systems import SYSTEMS
 
     try:

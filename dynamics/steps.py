@@ -11,7 +11,7 @@ A run is integrated with one of
 - :class:`Exact`: the closed form, evaluated at the times asked for.
 
 :func:`step_control` validates the settings once, for every front end, and raises a
-:class:`dynamics.params.SettingError` naming the field (``dt``, ``rtol``, ``atol``).
+:class:`mechviz.dynamics.params.SettingError` naming the field (``dt``, ``rtol``, ``atol``).
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def step_control(
     method (``rtol`` default :data:`DEFAULT_RTOL`), a fixed step for a fixed-step method (``dt``
     required), and for the exact flow a fixed step if ``dt`` is given, else :class:`Exact`.
     Settings the method does not take are ignored: callers that hold both a step and a tolerance
-    (the viewer, a demo) let the method choose. :class:`dynamics.params.SettingError` names the
+    (the viewer, a demo) let the method choose. :class:`mechviz.dynamics.params.SettingError` names the
     field that is missing or out of range."""
     if method.adaptive:
         return Tolerance(DEFAULT_RTOL if rtol is None else rtol, atol)

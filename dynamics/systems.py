@@ -1,7 +1,7 @@
 """The three systems as the driver sees them: state layout, compiled id, invariants, exact flow.
 
 Each adapter wraps a parameter dataclass from its physics module and adds nothing physical of its
-own; it only tells :class:`dynamics.simulation.Simulation` how to treat the system.
+own; it only tells :class:`mechviz.dynamics.simulation.Simulation` how to treat the system.
 
 Besides the state layout, energy, invariants and exact flow, each adapter gives the driver two
 scales: ``energy_floor()``, the lowest energy the system can have (at rest in its stable
@@ -55,7 +55,7 @@ class _Adapter:
     general methods.
     """
 
-    #: The system's name (from its compiled id, :data:`dynamics.ids.NAMES`, unless it says one)
+    #: The system's name (from its compiled id, :data:`mechviz.dynamics.ids.NAMES`, unless it says one)
     #: and its parameter dataclass (the type of its default ``params``): both derived when the
     #: adapter is defined.
     name: ClassVar[str]
@@ -105,7 +105,7 @@ def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Cyclotron(_Adapter):
-    """Charge in a uniform field along +z (:mod:`dynamics.cyclotron`): state ``(x, y, z, vx, vy,
+    """Charge in a uniform field along +z (:mod:`mechviz.dynamics.cyclotron`): state ``(x, y, z, vx, vy,
     vz)`` [m, m/s]; its exact flow is a helix, known from every state (the ``exact`` method)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
@@ -182,7 +182,7 @@ class Cyclotron(_Adapter):
 
 @dataclass(frozen=True)
 class Hoop(_Adapter):
-    """Bead on a hanging hoop (:mod:`dynamics.hoop`)."""
+    """Bead on a hanging hoop (:mod:`mechviz.dynamics.hoop`)."""
 
     params: hoop.HoopParams = hoop.HoopParams()
     sys_id = kernels.HOOP
@@ -235,7 +235,7 @@ class Hoop(_Adapter):
     }
 
     def quantities(self, states: np.ndarray) -> dict[str, np.ndarray]:
-        """The angles on the two normal-mode shapes (:func:`dynamics.measure.modal_coordinates`)."""
+        """The angles on the two normal-mode shapes (:func:`mechviz.dynamics.measure.modal_coordinates`)."""
         angles = np.asarray(states, dtype=float)[..., :2]
         shapes = hoop.normal_modes(self.params)[1]
         q = measure.modal_coordinates(angles.reshape(-1, 2), shapes).reshape(angles.shape)
@@ -262,7 +262,7 @@ class Hoop(_Adapter):
 
 @dataclass(frozen=True)
 class ReleasedDisk(_Adapter):
-    """The disk with its bead after the axle is removed: a free rigid body (:mod:`dynamics.disk`)."""
+    """The disk with its bead after the axle is removed: a free rigid body (:mod:`mechviz.dynamics.disk`)."""
 
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release

@@ -1,7 +1,7 @@
 """Taylor's method's order and step rule (:func:`order_for`), without the compiled code.
 
-Kept apart from :mod:`dynamics.integrators.taylor` so that code loading the method compiled ahead
-of time (:mod:`dynamics.aot`) can choose the order without importing numba.
+Kept apart from :mod:`mechviz.dynamics.integrators.taylor` so that code loading the method compiled ahead
+of time (:mod:`mechviz.dynamics.aot`) can choose the order without importing numba.
 """
 
 from __future__ import annotations

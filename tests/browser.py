@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from waiting import scaled
 
-from viz.chromium import CHROMIUM_ARGS, find_chromium, first_page, launch  # noqa: F401  (API above)
+from mechviz.viz.chromium import CHROMIUM_ARGS, find_chromium, first_page, launch  # noqa: F401  (API above)
 
 REQUIRE_ENV = "MECHVIZ_REQUIRE_BROWSER"
 
@@ -119,7 +119,7 @@ def open_viewer(width: int = 1280, height: int = 800):
     on exit. No environment map: these are geometry checks, and SwiftShader draws lit meshes
     slowly with it."""
     require_browser()
-    from viz.app import MechvizApp, warm_up
+    from mechviz.viz.app import MechvizApp, warm_up
 
     warm_up("defaults")
     app = MechvizApp(port=0, environment_map=False)

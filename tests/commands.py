@@ -17,8 +17,8 @@ class Ran(NamedTuple):
 
 
 def mechviz(*args: str) -> Ran:
-    """Run ``mechviz ARGS`` through ``viz.cli.main`` (argparse's refusals included)."""
-    from viz.cli import main
+    """Run ``mechviz ARGS`` through ``mechviz.viz.cli.main`` (argparse's refusals included)."""
+    from mechviz.viz.cli import main
 
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):

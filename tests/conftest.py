@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="session")
 def warm_viewer():
     """The viewer's compiled kernels loaded (or compiled) once for the session."""
-    from viz.app import warm_up
+    from mechviz.viz.app import warm_up
 
     warm_up("defaults")
 
@@ -31,7 +31,7 @@ def warm_viewer():
 def app(warm_viewer):
     """The live viewer on a free port without its loop thread (environment map off), driven
     frame by frame with ``app.step_frame()``; stopped after the test."""
-    from viz.app import MechvizApp
+    from mechviz.viz.app import MechvizApp
 
     a = MechvizApp(port=0, start_loop=False, environment_map=False)
     yield a

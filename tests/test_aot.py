@@ -10,13 +10,13 @@ import sys
 import numpy as np
 import pytest
 
-from dynamics import Hoop
-from dynamics.solver import Solver
+from mechviz.dynamics import Hoop
+from mechviz.dynamics.solver import Solver
 
 HOOP = {"state": [0.5, -0.3, 0.0, 0.0], "params": [1.0, 0.5, 1.0, 9.81]}
 SCRIPT = """
 import json, sys
-from dynamics.aot import load, solve
+from mechviz.dynamics.aot import load, solve
 y = solve("hoop", {state}, 5.0, params={params}, rtol=1e-10)
 print(json.dumps({{"y": list(y), "numba": "numba" in sys.modules, "aot": load() is not None}}))
 """
@@ -48,7 +48,7 @@ def test_unbuilt_it_falls_back_to_the_compiled_solver(tmp_path):
 
 
 def test_a_bad_system_or_state_is_refused():
-    from dynamics import aot
+    from mechviz.dynamics import aot
 
     with pytest.raises(ValueError, match="system"):
         aot.solve("pendulum", [0.0], 1.0, [1.0])
@@ -60,7 +60,9 @@ def test_a_bad_system_or_state_is_refused():
 def test_built_it_answers_in_a_process_that_never_imports_numba(tmp_path):
     env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}
     env.pop("NUMBA_CACHE_DIR", None)
-    subprocess.run([sys.executable, "-m", "dynamics.aot"], env=env, check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, "-m", "mechviz.dynamics.aot"], env=env, check=True, capture_output=True
+    )
     out = _fresh(tmp_path)
     assert out["aot"] is True and out["numba"] is False
     # the same steps compiled for a generic CPU: equal to round-off

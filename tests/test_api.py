@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-import dynamics
-from dynamics import api
+from mechviz import dynamics
+from mechviz.dynamics import api
 
 
 def test_cyclotron_run_goes_round_at_the_gyrofrequency_of_the_analysis():

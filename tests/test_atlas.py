@@ -27,12 +27,12 @@ pytest.importorskip("zarr")
 
 from waiting import scaled, wait_until
 
-from dynamics import hoop
-from dynamics.atlas import store
-from dynamics.atlas.driver import compute_serial, run_atlas
-from dynamics.atlas.grid import AtlasSpec, Axis
-from dynamics.atlas.kernels import VARIABLES
-from viz.cli import main
+from mechviz.dynamics import hoop
+from mechviz.dynamics.atlas import store
+from mechviz.dynamics.atlas.driver import compute_serial, run_atlas
+from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
+from mechviz.dynamics.atlas.kernels import VARIABLES
+from mechviz.viz.cli import main
 
 # every test here starts a Dask cluster or an interpreter, or runs the maps for seconds
 pytestmark = pytest.mark.slow
@@ -135,7 +135,7 @@ def test_interrupted_run_resumes_to_the_same_map_computing_no_chunk_twice(client
     spec = chaos_spec(n=24, chunk=(1, 24), duration=300.0)
     out = tmp_path / "atlas"
     path = out / "atlas.zarr"
-    cmd = [sys.executable, "-m", "viz.cli", *_cli_args(spec, out), "--workers", "1"]
+    cmd = [sys.executable, "-m", "mechviz.viz.cli", *_cli_args(spec, out), "--workers", "1"]
     proc = subprocess.Popen(
         cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
     )
@@ -237,7 +237,7 @@ def test_chaos_map_is_near_zero_near_rest_and_positive_for_large_swings(client, 
 
 
 def test_maps_have_labelled_axes_and_colour_bars(tmp_path):
-    from dynamics.atlas.maps import save_maps
+    from mechviz.dynamics.atlas.maps import save_maps
 
     spec = chaos_spec(n=6, chunk=(6, 6), duration=4.0)
     png, svg = save_maps(compute_serial(spec), tmp_path, "chaos")

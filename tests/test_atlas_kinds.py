@@ -11,10 +11,10 @@ import pytest
 pytest.importorskip("distributed")
 pytest.importorskip("xarray")
 
-from dynamics import get_method, hoop
-from dynamics.atlas.driver import compute_serial
-from dynamics.atlas.grid import AtlasSpec, Axis
-from viz.cli import main
+from mechviz.dynamics import get_method, hoop
+from mechviz.dynamics.atlas.driver import compute_serial
+from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
+from mechviz.viz.cli import main
 
 OMEGA1, OMEGA2 = (float(w) for w in hoop.normal_modes(hoop.HoopParams())[0])
 
@@ -152,7 +152,7 @@ def test_an_axis_the_map_does_not_have_is_refused_in_one_line(tmp_path, capsys, 
 def test_bench_chunks_are_equal_and_shared_evenly_by_the_workers(n, rows, workers, expected):
     """The atlas bench's chunks: equal, a whole number per worker, the largest not above the
     rows asked for (a worker left idle at the end would count as scheduling overhead)."""
-    from dynamics.atlas.bench import balanced_rows
+    from mechviz.dynamics.atlas.bench import balanced_rows
 
     got = balanced_rows(n, rows, workers)
     assert got == expected

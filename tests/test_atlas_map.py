@@ -1,4 +1,4 @@
-"""The viewer's atlas maps, headless (:mod:`viz.model.atlas_map`): the shipped chaos map is the
+"""The viewer's atlas maps, headless (:mod:`mechviz.viz.model.atlas_map`): the shipped chaos map is the
 default hoop's, a map computed in the background process is the one computed here, and a place
 on a map and the start it means go both ways.
 """
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from waiting import wait_until
 
-from dynamics import hoop
-from dynamics.atlas.grid import AtlasSpec, Axis
-from dynamics.atlas.kernels import compute_chunk
-from viz.model.atlas_map import (
+from mechviz.dynamics import hoop
+from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
+from mechviz.dynamics.atlas.kernels import compute_chunk
+from mechviz.viz.model.atlas_map import (
     MapWorker,
     chaos_spec,
     compute,
@@ -29,7 +29,9 @@ def test_shipped_chaos_map_is_the_default_hoops_map():
     give the shipped exponents (stored as float32)."""
     p = hoop.HoopParams()
     shipped = load_shipped(p)
-    assert shipped is not None, "assets/atlas/hoop-maps.npz: run python -m viz.model.atlas_map"
+    assert shipped is not None, (
+        "assets/atlas/hoop-maps.npz: run python -m mechviz.viz.model.atlas_map"
+    )
     spec = chaos_spec(p)
     one = AtlasSpec(**{**spec.__dict__, "chunk": (1, 1)})
     for i, j in ((32, 32), (5, 60), (50, 10)):

@@ -11,9 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dynamics.simulation import Simulation
-from mechviz_bench.problems import PROBLEMS, load_references, reference_state
-from mechviz_bench.sweeps import (
+from mechviz.bench.problems import PROBLEMS, load_references, reference_state
+from mechviz.bench.sweeps import (
     TARGETS,
     Point,
     Settings,
@@ -21,6 +20,7 @@ from mechviz_bench.sweeps import (
     retime_ratios,
     time_to_reach,
 )
+from mechviz.dynamics.simulation import Simulation
 
 
 @pytest.mark.parametrize("key", ["hoop", "disk"])
@@ -122,7 +122,7 @@ def test_head_to_head_retiming_runs_the_chosen_points_and_keeps_the_sweep_figure
 
 
 def test_bench_command_is_registered_with_its_flags():
-    from viz.cli import build_parser
+    from mechviz.viz.cli import build_parser
 
     args = build_parser().parse_args(["bench", "--quick", "--json", "--peers", "--out", "x"])
     assert args.quick and args.json and args.peers and args.out == "x"
@@ -132,7 +132,7 @@ def test_bench_command_is_registered_with_its_flags():
 
 
 def test_targets_name_each_miss_with_its_figure():
-    from mechviz_bench.run import _targets
+    from mechviz.bench.run import _targets
 
     ratios = {"hoop": {"1e-09": {"ratio": 80.0}, "1e-12": {"ratio": 30.0}}}
     peers = {"heyoka": {"hoop": {"1e-09": {"ratio": 1.4}, "1e-12": {"ratio": 0.8}}}}
@@ -168,7 +168,7 @@ def _committed_result() -> dict:
 def test_the_readme_and_tables_quote_the_committed_run():
     """Every figure of a run in the README and docs/bench/tables.md is rendered from
     docs/bench/results.json (`make bench-docs`): hand edits or a stale render fail here."""
-    from mechviz_bench import docs, report
+    from mechviz.bench import docs, report
 
     result = _committed_result()
     readme = (ROOT / "README.md").read_text()
@@ -179,7 +179,7 @@ def test_the_readme_and_tables_quote_the_committed_run():
 
 
 def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
-    from mechviz_bench import docs
+    from mechviz.bench import docs
 
     result = _committed_result()
     blocks = "".join(
@@ -206,7 +206,7 @@ def test_rendering_fills_only_the_blocks_and_twice_changes_nothing():
 def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, capsys, damage):
     import shutil
 
-    from mechviz_bench import docs
+    from mechviz.bench import docs
 
     text = "".join(f"<!-- bench:{n} -->\n<!-- /bench:{n} -->\n" for n in docs.BLOCKS)
     readme = tmp_path / "README.md"
@@ -225,7 +225,7 @@ def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, cap
 def test_a_peer_that_cannot_be_imported_is_skipped_with_the_reason(monkeypatch):
     import builtins
 
-    from mechviz_bench import peers
+    from mechviz.bench import peers
 
     real = builtins.__import__
 
@@ -244,7 +244,7 @@ def test_a_peer_that_cannot_be_imported_is_skipped_with_the_reason(monkeypatch):
 def test_each_peer_solves_the_same_problem(peer, key):
     """A peer integrates the same equations from the same state: at 1e-10 it lands near the
     reference (skipped when the peer is not installed)."""
-    from mechviz_bench import peers
+    from mechviz.bench import peers
 
     why = peers.available()[peers.package_of(peer)]
     if why is not None:
@@ -256,7 +256,7 @@ def test_each_peer_solves_the_same_problem(peer, key):
 
 
 def test_an_adaptive_sweep_stops_where_the_error_stops_falling():
-    from mechviz_bench.sweeps import _stalled
+    from mechviz.bench.sweeps import _stalled
 
     def pt(tol, err):
         return Point("hoop", "odeint", True, None, tol, 10, 40, err, 0.0, 1.0, 1.0, 0.0, 5, 1, "ok")
@@ -272,7 +272,7 @@ def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
 
     from scipy.integrate import ODEintWarning, solve_ivp
 
-    from mechviz_bench.run import _quiet_scipy
+    from mechviz.bench.run import _quiet_scipy
 
     def sweep_point():
         solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], rtol=1e-16, atol=1e-16)
@@ -291,13 +291,13 @@ def test_the_bench_silences_only_scipys_warnings_about_swept_tolerances():
 
 def test_no_cached_kernel_lives_in_the_atlas_and_only_its_edits_keep_the_cache(tmp_path):
     """The compiled-code cache is keyed on every dynamics source but the atlas's
-    (``dynamics._jit.UNCACHED``): that holds only while no cached function is defined there. The
-    benchmark lives outside the package (``mechviz_bench``) and defines none either."""
+    (``mechviz.dynamics._jit.UNCACHED``): that holds only while no cached function is defined there. The
+    benchmark lives outside the package (``mechviz.bench``) and defines none either."""
     import shutil
 
-    from dynamics import _jit
+    from mechviz.dynamics import _jit
 
-    for folder in (ROOT / "dynamics" / "atlas", ROOT / "mechviz_bench"):
+    for folder in (ROOT / "dynamics" / "atlas", ROOT / "mechviz.bench"):
         for path in folder.rglob("*.py"):
             assert "cache=True" not in path.read_text(), path
     tree = tmp_path / "dynamics"
@@ -313,8 +313,8 @@ def test_no_cached_kernel_lives_in_the_atlas_and_only_its_edits_keep_the_cache(t
 
 
 def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_repeated():
-    from mechviz_bench.sweeps import Settings
-    from mechviz_bench.timing import time_calls
+    from mechviz.bench.sweeps import Settings
+    from mechviz.bench.timing import time_calls
 
     quick = Settings.for_mode(True)
     calls = []
@@ -354,7 +354,7 @@ def test_a_quick_runs_long_call_is_its_own_single_sample_and_short_calls_are_rep
 def test_the_compile_cache_is_filled_by_worker_processes_once_per_checkout(tmp_path, monkeypatch):
     import numba
 
-    from viz import warm
+    from mechviz.viz import warm
 
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))  # where the stamp goes
     monkeypatch.setattr(
@@ -373,8 +373,8 @@ def test_a_miss_with_no_scipy_answer_is_summarised_and_the_tables_are_made():
     is below the target the run counts a miss, and the summary says so instead of failing."""
     import copy
 
-    from mechviz_bench import report
-    from mechviz_bench.report import SCIPY_FACTOR
+    from mechviz.bench import report
+    from mechviz.bench.report import SCIPY_FACTOR
 
     result = copy.deepcopy(_committed_result())
     key = next(iter(result["ratios"]))

@@ -12,11 +12,11 @@ import math
 import numpy as np
 import pytest
 
-from dynamics.simulation import Simulation
-from mechviz_bench import fast_peers as fp
-from mechviz_bench import fastest, fastest_report, untuned
-from mechviz_bench.peer_equations import heyoka_pars
-from mechviz_bench.problems import PROBLEMS, Problem, reference_state
+from mechviz.bench import fast_peers as fp
+from mechviz.bench import fastest, fastest_report, untuned
+from mechviz.bench.peer_equations import heyoka_pars
+from mechviz.bench.problems import PROBLEMS, Problem, reference_state
+from mechviz.dynamics.simulation import Simulation
 
 HAVE = fp.available()
 
@@ -162,7 +162,7 @@ def test_the_report_lists_every_losing_case_with_its_figure():
 
 
 def test_a_loss_fails_the_bench_and_is_named_in_its_misses():
-    from mechviz_bench.run import _targets
+    from mechviz.bench.run import _targets
 
     result = _fake({"disk": {"1e-03": {"heyoka/kept": 0.5, "heyoka/fresh": 1.5}}})
     t = _targets({}, None, {}, None, result)

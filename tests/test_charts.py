@@ -10,10 +10,10 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from viz import record as rec
-from viz.record import charts
-from viz.record.outputs import chart_figure
-from viz.record.run import trace_demo
+from mechviz.viz import record as rec
+from mechviz.viz.record import charts
+from mechviz.viz.record.outputs import chart_figure
+from mechviz.viz.record.run import trace_demo
 
 
 def _chart(name: str, **overrides):

@@ -160,7 +160,7 @@ def test_a_long_run_shows_progress_on_a_terminal_and_ctrl_c_ends_it_within_a_sec
     main, child = pty.openpty()  # stderr on a terminal: the progress line is shown
     run = "simulate hoop --theta1 0.3 --t-end 1e6 --dt 0.01 --method midpoint --max-steps 1e9"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", *run.split()],
+        [sys.executable, "-m", "mechviz.viz.cli", *run.split()],
         stdout=subprocess.PIPE,
         stderr=child,
         text=True,
@@ -226,7 +226,7 @@ def test_the_hoop_energy_error_is_relative_to_the_energy_that_moves():
 
 _SWALLOWING_CALLBACK = """
 import ctypes, ctypes.util, sys, time
-from viz.interrupts import ctrl_c_within_a_second
+from mechviz.viz.interrupts import ctrl_c_within_a_second
 
 libc = ctypes.CDLL(ctypes.util.find_library("c"))
 CMP = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)
@@ -268,7 +268,7 @@ def test_ctrl_c_ends_a_bench_run_while_it_compiles_on_every_core_and_writes_noth
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     out = tmp_path / "out"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "bench", "--quick", "--out", str(out)],
+        [sys.executable, "-m", "mechviz.viz.cli", "bench", "--quick", "--out", str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

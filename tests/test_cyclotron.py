@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from dynamics import Cyclotron, Simulation, cyclotron
-from dynamics.cyclotron import CyclotronParams
+from mechviz.dynamics import Cyclotron, Simulation, cyclotron
+from mechviz.dynamics.cyclotron import CyclotronParams
 
 PARAMS = [
     CyclotronParams(),

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from dynamics import ReleasedDisk, Simulation, disk
-from dynamics.disk import DiskParams
+from mechviz.dynamics import ReleasedDisk, Simulation, disk
+from mechviz.dynamics.disk import DiskParams
 
 SEED = DiskParams()
 OTHERS = [DiskParams(2.0, 0.5, 0.3, 3.0), DiskParams(1.0, 1.5, 4.0, -2.0)]

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.integrate import DOP853, solve_ivp
 
-from dynamics import Cyclotron, Hoop, Simulation, hoop
-from dynamics.integrators import dop853, kernels
-from dynamics.simulation import REFERENCE_ACCURACY, reference_run
+from mechviz.dynamics import Cyclotron, Hoop, Simulation, hoop
+from mechviz.dynamics.integrators import dop853, kernels
+from mechviz.dynamics.simulation import REFERENCE_ACCURACY, reference_run
 
 HOOP_STATE = hoop.mode_state(Hoop().params, (0.5, 0.2))  # both modes: no exact solution
 CHARGE_STATE = np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1])
@@ -241,7 +241,7 @@ def test_a_final_time_is_the_end_point_of_a_step_cut_there(tol):
     solve_ivp cuts it: the same steps and the same end state to round-off, and at least as
     accurate against the exact helix as the interpolant of an uncut step (measured: 5.4e-9
     against 6.4e-9 at 1e-9; 5.50e-12 against 5.50e-12 at 1e-12)."""
-    from dynamics.cyclotron import CyclotronParams
+    from mechviz.dynamics.cyclotron import CyclotronParams
 
     system = Cyclotron(CyclotronParams(charge=-2.0, mass=1.5, field=0.7))
     T = 30.0

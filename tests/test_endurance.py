@@ -13,8 +13,8 @@ import browser
 import numpy as np
 import pytest
 
-from mechviz_bench.endurance import frame_windows, rss_trend
-from viz.frames import FrameLog
+from mechviz.bench.endurance import frame_windows, rss_trend
+from mechviz.viz.frames import FrameLog
 
 
 def test_frame_log_returns_every_frame_once_and_skips_what_was_overwritten():
@@ -55,7 +55,7 @@ def test_rss_trend_is_the_slope_over_the_second_half_in_mb_per_minute():
 @pytest.mark.browser
 def test_short_endurance_run_reports_windows_memory_and_a_connected_client(tmp_path):
     browser.require_browser()
-    from mechviz_bench.endurance import format_summary, run_endurance
+    from mechviz.bench.endurance import format_summary, run_endurance
 
     out = tmp_path / "endurance.json"
     r = run_endurance(

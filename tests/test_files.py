@@ -1,4 +1,4 @@
-"""Atomic writing (:mod:`dynamics.files`): what the benchmark, the endurance run and the recorder
+"""Atomic writing (:mod:`mechviz.dynamics.files`): what the benchmark, the endurance run and the recorder
 write is either the old file or the whole new one, never half of it."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from faults import disk_full_at_nth_fsync
 
-from dynamics import files
+from mechviz.dynamics import files
 
 
 def test_json_is_written_whole_and_replaces_the_old_file(tmp_path):
@@ -104,7 +104,7 @@ def test_a_new_set_replaces_the_old_one_whole_and_leaves_nothing_else(tmp_path):
 _CHILD = """
 import os, sys, time
 from pathlib import Path
-from dynamics import files
+from mechviz.dynamics import files
 out = Path(sys.argv[1])
 real_fsync = os.fsync
 def slow_fsync(fd):

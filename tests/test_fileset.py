@@ -1,4 +1,4 @@
-"""A set of files switched by one rename (:mod:`dynamics.fileset`): a writer killed with SIGKILL
+"""A set of files switched by one rename (:mod:`mechviz.dynamics.fileset`): a writer killed with SIGKILL
 after any of its file-system steps leaves the whole old set or the whole new one, every file
 matching the manifest; the next writer leaves nothing else; a second writer waits for the first."""
 
@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 from faults import disk_full_at_nth_fsync, killed_after_nth_call
 
-from dynamics import fileset
-from dynamics.files import WriteInterrupted
+from mechviz.dynamics import fileset
+from mechviz.dynamics.files import WriteInterrupted
 
 NAMES = ("a.viser", "a.csv", "a.json")
 
@@ -80,7 +80,7 @@ _CHILD = killed_after_nth_call(
     ("rename", "replace", "symlink", "unlink", "rmdir", "mkdir"),
     """
 from pathlib import Path
-from dynamics import fileset
+from mechviz.dynamics import fileset
 import json
 files = {k: v.encode("latin-1") for k, v in json.loads(sys.stdin.read()).items()}
 fileset.write_set(Path(sys.argv[2]), "a", files)
@@ -177,7 +177,7 @@ def test_ctrl_c_after_the_switch_keeps_the_new_set_and_says_so(tmp_path, monkeyp
 _HOLDER = """
 import sys
 from pathlib import Path
-from dynamics import fileset
+from mechviz.dynamics import fileset
 home = Path(sys.argv[1]) / fileset.HOME
 home.mkdir(parents=True, exist_ok=True)
 with fileset._Lock(home, [], None):

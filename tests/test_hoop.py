@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from dynamics import Hoop, Simulation, hoop
-from dynamics.hoop import HoopParams
+from mechviz.dynamics import Hoop, Simulation, hoop
+from mechviz.dynamics.hoop import HoopParams
 
 PARAMS = [HoopParams(), HoopParams(1.0, 1.0, 1.0, 9.81), HoopParams(3.0, 0.2, 0.5, 1.62)]
 

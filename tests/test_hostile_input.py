@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from viz.cli import build_parser, main
+from mechviz.viz.cli import build_parser, main
 
 # every test here runs the command line or records over hundreds of hostile inputs
 pytestmark = pytest.mark.slow
@@ -173,7 +173,7 @@ def test_a_command_line_that_is_not_a_demo_or_a_path_is_refused_with_status_2(tm
 
 # --------------------------------------------------------------------------- demo files
 def _demo_dir() -> Path:
-    from viz.record.demo import DEMO_DIR
+    from mechviz.viz.record.demo import DEMO_DIR
 
     return DEMO_DIR
 
@@ -211,7 +211,7 @@ def _dump(raw: dict) -> str:
 def _numeric_keys(raw: dict) -> list[tuple]:
     """Every numeric key path of ``raw`` (elements of arrays included), and the exhibit's
     parameters and step settings even where the file leaves them out."""
-    from viz.scene import EXHIBITS
+    from mechviz.viz.scene import EXHIBITS
 
     out: list[tuple] = []
     for k, v in raw.items():
@@ -260,7 +260,7 @@ def _mutations():
 
 
 def test_every_mutated_demo_is_refused_naming_its_key_or_loads(tmp_path):
-    from viz.record import load_demo
+    from mechviz.viz.record import load_demo
 
     accepted = 0
     for name, keys, value, raw in _mutations():
@@ -303,7 +303,7 @@ def test_the_demo_cases_the_first_round_found_are_refused_by_key(tmp_path):
 @pytest.mark.slow
 def test_every_accepted_extreme_demo_records_or_is_refused_by_key(tmp_path):
     """The mutated demos that load, at the extreme values, recorded for real (5 fps)."""
-    from viz.record import load_demo
+    from mechviz.viz.record import load_demo
 
     checked = 0
     for name, keys, value, raw in _mutations():
@@ -319,7 +319,7 @@ def test_every_accepted_extreme_demo_records_or_is_refused_by_key(tmp_path):
             [
                 sys.executable,
                 "-m",
-                "viz.cli",
+                "mechviz.viz.cli",
                 "record",
                 str(f),
                 "--out",
@@ -344,7 +344,7 @@ def test_every_accepted_extreme_demo_records_or_is_refused_by_key(tmp_path):
 @pytest.mark.parametrize("host", ["999.999.999.999", "example.invalid", "a" * 300])
 def test_view_answers_a_bad_host_at_once_as_a_process(host):
     out = subprocess.run(
-        [sys.executable, "-m", "viz.cli", "view", "--host", host, "--port", "0"],
+        [sys.executable, "-m", "mechviz.viz.cli", "view", "--host", host, "--port", "0"],
         capture_output=True,
         text=True,
         timeout=TIMEOUT,

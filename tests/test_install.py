@@ -85,7 +85,7 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(installed, tm
         [
             str(installed / "python"),
             "-c",
-            "import viz, dynamics.assets as a; print(viz.__file__, a.asset('demos'))",
+            "import mechviz.viz, mechviz.dynamics.assets as a; print(mechviz.viz.__file__, a.asset('demos'))",
         ],
         capture_output=True,
         text=True,
@@ -93,7 +93,143 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(installed, tm
         env=_env(),
         cwd=tmp_path,
     )
-    assert str(ROOT) not in where.stdout and "share/mechviz/demos" in where.stdout, where.stdout
+    assert str(ROOT) not in where.stdout, where.stdout
+    assert "site-packages/mechviz/assets/demos" in where.stdout, where.stdout
+
+
+def test_the_installed_command_says_its_version_and_lists_the_demos(installed, tmp_path):
+    _command_works(installed / "mechviz", tmp_path, _env())
+
+
+def _command_works(mechviz: Path, cwd: Path, env: dict[str, str]) -> None:
+    """``mechviz --version``, ``mechviz record --list`` and ``mechviz record helix`` as a new user
+    runs them after installing."""
+    version = subprocess.run(
+        [str(mechviz), "--version"], capture_output=True, text=True, timeout=300, env=env, cwd=cwd
+    )
+    assert version.returncode == 0 and re.fullmatch(r"mechviz \d+\.\d+\.\d+\n", version.stdout), (
+        version.stdout + version.stderr
+    )
+    listing = subprocess.run(
+        [str(mechviz), "record", "--list"],
+        capture_output=True,
+        text=True,
+        timeout=scaled(600),
+        env=env,
+        cwd=cwd,
+    )
+    assert listing.returncode == 0, listing.stderr
+    shipped = {p.stem for p in (ROOT / "assets" / "demos").glob("*.toml")}
+    listed = {line.split()[0] for line in listing.stdout.splitlines() if line.strip()}
+    assert shipped and shipped <= listed, listing.stdout
+    out = cwd / "rec"
+    out.mkdir(exist_ok=True)
+    run = subprocess.run(
+        [str(mechviz), "record", "helix", "--out", str(out), "--duration", "1", "--fps", "5"],
+        capture_output=True,
+        text=True,
+        timeout=scaled(900),
+        env=env,
+        cwd=cwd,
+    )
+    assert run.returncode == 0, run.stderr
+    assert json.loads((out / "helix.json").read_text())["demo"] == "helix"
+
+
+def test_a_students_dynamics_py_and_viz_py_change_nothing(installed, tmp_path):
+    """Homework files called dynamics.py and viz.py in the working folder (first on sys.path for
+    ``python -c`` and ``python -m``) are not the package's modules."""
+    for name in ("dynamics", "viz", "bench"):
+        (tmp_path / f"{name}.py").write_text(f"raise ImportError('the student\\'s {name}.py')\n")
+    code = (
+        "from mechviz.dynamics import api\n"
+        "from mechviz.viz import notebook\n"
+        "run = api.simulate('hoop', duration=0.5)\n"
+        "print('ok', run.t[-1])\n"
+    )
+    for argv in (["-c", code], ["-m", "mechviz.viz.cli", "--version"]):
+        got = subprocess.run(
+            [str(installed / "python"), *argv],
+            capture_output=True,
+            text=True,
+            timeout=scaled(600),
+            env=_env(),
+            cwd=tmp_path,
+        )
+        assert got.returncode == 0 and "student" not in got.stderr, got.stderr[-2000:]
+        assert got.stdout.startswith(("ok 0.5", "mechviz ")), got.stdout
+
+
+@pytest.fixture(scope="module")
+def dependencies(source, tmp_path_factory) -> Path:
+    """The site-packages folder of a fresh venv holding every dependency and not the project (the
+    wheel installed, then uninstalled): the libraries for the ``--user`` and ``--target`` installs
+    below, which put only the project where those options say."""
+    venv = tmp_path_factory.mktemp("deps") / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    for args in (["install", "-q", str(source)], ["uninstall", "-q", "-y", "mechviz-lab"]):
+        pip = subprocess.run(
+            [str(venv / "bin" / "python"), "-m", "pip", *args],
+            capture_output=True,
+            text=True,
+            timeout=scaled(1800),
+            env=_env(),
+        )
+        assert pip.returncode == 0, pip.stderr[-2000:]
+    (site,) = (venv / "lib").glob("python3*/site-packages")
+    return site
+
+
+def _base_python() -> str:
+    """The interpreter outside any venv (``--user`` installs are refused inside one)."""
+    return getattr(sys, "_base_executable", None) or shutil.which("python3")
+
+
+def test_pip_install_user_finds_its_demos(source, dependencies, tmp_path):
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {
+        **_env(),
+        "HOME": str(home),
+        "PYTHONUSERBASE": str(home / ".local"),
+        "PYTHONPATH": str(dependencies),
+    }
+    env.pop("PYTHONNOUSERSITE", None)
+    pip = subprocess.run(
+        [_base_python(), "-m", "pip", "install", "-q", "--user", "--no-deps", str(source)],
+        capture_output=True,
+        text=True,
+        timeout=scaled(1800),
+        env=env,
+        cwd=tmp_path,
+    )
+    assert pip.returncode == 0, pip.stderr[-2000:]
+    _command_works(home / ".local" / "bin" / "mechviz", tmp_path, env)
+
+
+def test_pip_install_target_finds_its_demos(source, dependencies, tmp_path):
+    target = tmp_path / "target"
+    pip = subprocess.run(
+        [
+            _base_python(),
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--target",
+            str(target),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=scaled(1800),
+        env={**_env(), "PYTHONPATH": str(dependencies)},
+        cwd=tmp_path,
+    )
+    assert pip.returncode == 0, pip.stderr[-2000:]
+    env = {**_env(), "PYTHONPATH": f"{target}{os.pathsep}{dependencies}"}
+    _command_works(target / "bin" / "mechviz", tmp_path, env)
 
 
 def test_the_installed_viewer_serves_until_ctrl_c(installed, tmp_path):
@@ -170,3 +306,4 @@ def test_pipx_installs_the_command_that_records_a_built_in_demo(installed, sourc
     )
     assert pipx.returncode == 0, pipx.stderr[-2000:]
     _record_helix(tmp_path / "bin" / "mechviz", tmp_path / "out")
+    _command_works(tmp_path / "bin" / "mechviz", tmp_path, env)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from dynamics import (
+from mechviz.dynamics import (
     METHODS,
     Cyclotron,
     DrivenDisk,
@@ -21,9 +21,9 @@ from dynamics import (
     disk,
     methods_for,
 )
-from dynamics.disk import DiskParams
-from dynamics.hoop import HoopParams
-from dynamics.integrators import kernels
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.hoop import HoopParams
+from mechviz.dynamics.integrators import kernels
 
 # name -> (system, initial state, duration T, step sizes). The step sizes keep every method in
 # its asymptotic regime and above the round-off floor: a slope fitted where round-off dominates,
@@ -265,7 +265,7 @@ def test_reference_solution_agrees_with_scipy_radau():
     f = lambda t, y: (lambda out: (sysm_rhs(y, out), out)[1])(np.empty(4))  # noqa: E731
 
     def sysm_rhs(y, out):
-        from dynamics.hoop import rhs
+        from mechviz.dynamics.hoop import rhs
 
         rhs(np.ascontiguousarray(y), sysm.kernel_params(), out)
 
@@ -301,15 +301,19 @@ def test_uncompiled_source_gives_bit_identical_results():
 
 
 _EVERY_METHOD = """
-import dynamics
-from dynamics.disk import DiskParams
-systems = [dynamics.Cyclotron(), dynamics.Hoop(), dynamics.ReleasedDisk(DiskParams(omega=1.0))]
+import mechviz.dynamics
+from mechviz.dynamics.disk import DiskParams
+systems = [
+    mechviz.dynamics.Cyclotron(),
+    mechviz.dynamics.Hoop(),
+    mechviz.dynamics.ReleasedDisk(DiskParams(omega=1.0)),
+]
 for system in systems:
-    for m in dynamics.methods_for(system):
+    for m in mechviz.dynamics.methods_for(system):
         if m.backend == "scipy":
             continue
         kw = {"rtol": 1e-6} if m.adaptive else ({} if m.backend == "exact" else {"dt": 1e-3})
-        dynamics.Simulation(system, m.name, reference=None, **kw).advance(2e-3)
+        mechviz.dynamics.Simulation(system, m.name, reference=None, **kw).advance(2e-3)
 print("ok")
 """
 

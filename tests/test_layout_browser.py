@@ -31,7 +31,7 @@ def _camera(app, view):
     """The browser's camera once it looks where preset ``view`` puts it (a look-at point: the
     one it has now), for the page size the client reports now, which the app framed it for
     (the browser draws a loaded page smaller): (position, look_at, fov)."""
-    from viz.views import page_size
+    from mechviz.viz.views import page_size
 
     client = next(iter(app.server.get_clients().values()))
 
@@ -60,7 +60,7 @@ def _panel_left(page) -> float:
 
 
 def test_each_preset_fills_more_than_half_the_height_left_of_the_panel(viewer):
-    from viz.scene import framing
+    from mechviz.viz.scene import framing
 
     app, page = viewer
     free = _panel_left(page)
@@ -95,7 +95,7 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
     disk turns (driven) or tumbles (released, with the Poinsot picture's names)."""
     import screen
 
-    from viz.scene import atlas_map
+    from mechviz.viz.scene import atlas_map
 
     app, page = viewer
     app.enqueue("disk", {"op": "set", "mode": mode})
@@ -146,7 +146,7 @@ def _ink_lines(img: np.ndarray) -> list[int]:
 
 
 def test_presentation_mode_collapses_the_panel_and_draws_the_key_figures_large(viewer):
-    from viz.scene import framing
+    from mechviz.viz.scene import framing
 
     app, page = viewer
     page.get_by_role("combobox", name="Present").click()

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-import dynamics
-from dynamics import cyclotron as cy
-from dynamics import disk as dk
-from dynamics import hoop as hp
-from dynamics import measure
+from mechviz import dynamics
+from mechviz.dynamics import cyclotron as cy
+from mechviz.dynamics import disk as dk
+from mechviz.dynamics import hoop as hp
+from mechviz.dynamics import measure
 
 
 # --------------------------------------------------------------------------- estimators

@@ -1,5 +1,5 @@
 """The exhibits' models run headless: a demo's samples, CSV and measured figures come out of
-:mod:`viz.model` with viser unimportable, and match what the drawn exhibit records.
+:mod:`mechviz.viz.model` with viser unimportable, and match what the drawn exhibit records.
 
 Also the shape of the code the model split promises: no import cycle (imports inside functions
 counted), no module over 600 lines, each system named (as a string) outside its own modules in
@@ -18,16 +18,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mechviz import dynamics
+
 ROOT = Path(__file__).resolve().parents[1]
 
 _HEADLESS = textwrap.dedent(
     """
     import json, sys
     sys.modules["viser"] = None  # importing viser now raises ImportError
-    from viz.record.demo import load_demo
-    from viz.record.figures import figures
-    from viz.record.outputs import traces_csv
-    from viz.record.run import trace_demo
+    from mechviz.viz.record.demo import load_demo
+    from mechviz.viz.record.figures import figures
+    from mechviz.viz.record.outputs import traces_csv
+    from mechviz.viz.record.run import trace_demo
 
     demo = load_demo("radial-kick").with_overrides(duration=8.0, fps=20)
     tr = trace_demo(demo)
@@ -64,8 +66,8 @@ def test_a_demo_runs_headless_without_viser_and_its_figures_are_the_physics():
 
 @pytest.mark.slow
 def test_the_headless_model_records_what_the_drawn_exhibit_records():
-    from viz.record.demo import load_demo
-    from viz.record.run import run_demo, trace_demo
+    from mechviz.viz.record.demo import load_demo
+    from mechviz.viz.record.run import run_demo, trace_demo
 
     demo = load_demo("hoop-mode1").with_overrides(duration=1.0, fps=15)
     alone = trace_demo(demo)
@@ -78,7 +80,7 @@ def test_the_headless_model_records_what_the_drawn_exhibit_records():
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for pkg in ("dynamics", "viz", "mechviz_bench"):
+    for pkg in ("dynamics", "viz", "mechviz.bench"):
         for path in (ROOT / pkg).rglob("*.py"):
             parts = path.relative_to(ROOT).with_suffix("").parts
             name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
@@ -173,7 +175,6 @@ def _string_constants(tree: ast.AST) -> set[str]:
 
 
 def test_each_system_is_named_in_its_own_modules_and_at_most_two_other_files():
-    import dynamics
 
     own = {"dynamics", "viz/model", "viz/scene"}
     by_system: dict[str, set[str]] = {}

@@ -1,4 +1,4 @@
-"""Going back in a run (:mod:`viz.model.rewind`): a paused exhibit scrubbed back shows the state
+"""Going back in a run (:mod:`mechviz.viz.model.rewind`): a paused exhibit scrubbed back shows the state
 its run had at that time, the run goes on from there as it went on then, and only the last
 minute of the show is kept, in bounded memory."""
 
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from dynamics import cyclotron as cy
-from viz.model import CyclotronConfig, CyclotronModel, DiskConfig, DiskModel, HoopModel
-from viz.model.rewind import BUDGET, SECONDS
+from mechviz.dynamics import cyclotron as cy
+from mechviz.viz.model import CyclotronConfig, CyclotronModel, DiskConfig, DiskModel, HoopModel
+from mechviz.viz.model.rewind import BUDGET, SECONDS
 
 FRAME = 1 / 60
 

@@ -44,7 +44,7 @@ def test_committed_notebook_has_no_outputs(path):
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
 def test_an_example_uses_only_the_documented_api(path):
-    """mechviz reached only through dynamics.api and viz.notebook (the surface the README
+    """mechviz reached only through mechviz.dynamics.api and mechviz.viz.notebook (the surface the README
     documents), never a module behind them."""
     import ast
 
@@ -57,8 +57,8 @@ def test_an_example_uses_only_the_documented_api(path):
                     used |= {f"{node.module}.{a.name}" for a in node.names}
                 elif isinstance(node, ast.Import):
                     used |= {a.name for a in node.names}
-    ours = {u for u in used if u.split(".")[0] in ("dynamics", "viz", "mechviz_bench")}
-    assert ours <= {"dynamics.api", "viz.notebook"}, ours
+    ours = {u for u in used if u.split(".")[0] in ("dynamics", "viz", "mechviz.bench")}
+    assert ours <= {"mechviz.dynamics.api", "mechviz.viz.notebook"}, ours
 
 
 _executed: dict[Path, Path] = {}
@@ -158,7 +158,7 @@ def test_an_executed_example_opened_untrusted_in_jupyterlab_shows_its_scene(
     pytest.importorskip("jupyterlab")
     from playwright.sync_api import sync_playwright
 
-    from viz.chromium import find_chromium, first_page, launch
+    from mechviz.viz.chromium import find_chromium, first_page, launch
 
     nb_path = executed(EXAMPLES / "01-cyclotron.ipynb", tmp_path_factory)
     with _jupyterlab(nb_path.parent, tmp_path) as (url, token, env):
@@ -264,7 +264,7 @@ def _jupyterlab(root: Path, tmp: Path):
 
 @pytest.mark.slow
 def test_an_embed_is_stored_once_and_a_saved_one_links_to_its_files(tmp_path, capfd, monkeypatch):
-    from viz import notebook
+    from mechviz.viz import notebook
 
     monkeypatch.chdir(tmp_path)  # a notebook's folder: the page is saved beside it
 
@@ -284,7 +284,7 @@ def test_an_embed_is_stored_once_and_a_saved_one_links_to_its_files(tmp_path, ca
 @pytest.mark.browser
 def test_a_saved_embed_writes_its_still_beside_the_page(tmp_path, monkeypatch):
     require_browser()
-    from viz import notebook
+    from mechviz.viz import notebook
 
     monkeypatch.chdir(tmp_path)
     saved = notebook.show("helix", duration=1.0, fps=5, save="demos/helix.html")
@@ -296,7 +296,7 @@ def test_a_saved_embed_writes_its_still_beside_the_page(tmp_path, monkeypatch):
 
 
 def test_show_refuses_a_change_the_demo_cannot_take(tmp_path):
-    from viz import notebook
+    from mechviz.viz import notebook
 
     with pytest.raises(ValueError, match="dv"):
         notebook.show("helix", dv=0.5)
@@ -309,7 +309,7 @@ def test_show_refuses_a_change_the_demo_cannot_take(tmp_path):
 def test_live_embeds_the_running_viewer_and_stops_it(capfd):
     import re
 
-    from viz import notebook
+    from mechviz.viz import notebook
 
     view = notebook.live(port=0)
     try:

@@ -19,8 +19,8 @@ pytestmark = pytest.mark.browser
 @pytest.fixture(scope="module")
 def viewer():
     browser.require_browser()
-    from viz.app import MechvizApp, warm_up
-    from viz.model import CyclotronConfig, DiskConfig, HoopConfig
+    from mechviz.viz.app import MechvizApp, warm_up
+    from mechviz.viz.model import CyclotronConfig, DiskConfig, HoopConfig
 
     configs = {
         # off the axis and kicked: r swings in its well
@@ -102,7 +102,7 @@ MODE_1 = {"op": "set", "mode": "mode 1", "amplitude": 1.5}
 def test_the_plot_shows_the_motion_and_its_exact_curve(
     viewer, tmp_path, tab, key, pair, name, start
 ):
-    from viz.model.plot import CURVE_COLOURS, PATH_COLOUR
+    from mechviz.viz.model.plot import CURVE_COLOURS, PATH_COLOUR
 
     app, page = viewer
     for command in start:
@@ -132,7 +132,7 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
         img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
         # the README's still: the disk's box as the browser's camera sees it (the body, its
         # construction and the construction's names under it), not the floor
-        from viz.scene import framing
+        from mechviz.viz.scene import framing
 
         client = next(iter(app.server.get_clients().values()))
         cam = client.camera

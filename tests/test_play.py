@@ -1,4 +1,4 @@
-"""``mechviz play`` (:mod:`viz.play`): serves the recordings in a folder, and nothing else."""
+"""``mechviz play`` (:mod:`mechviz.viz.play`): serves the recordings in a folder, and nothing else."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ import urllib.request
 import pytest
 from waiting import scaled
 
-from viz import play
+from mechviz.viz import play
 
 RECORDING = b"\x10\x00\x00\x00\x00\x00\x00\x00not really zstd"
 
@@ -90,7 +90,7 @@ def test_the_root_url_redirects_to_the_list_or_the_only_recording(served, tmp_pa
 def start_play(folder, **popen) -> subprocess.Popen:
     """``mechviz play FOLDER --port 0`` in a child process, its output as text."""
     return subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "play", str(folder), "--port", "0"],
+        [sys.executable, "-m", "mechviz.viz.cli", "play", str(folder), "--port", "0"],
         stdout=subprocess.PIPE,
         text=True,
         **({"stderr": subprocess.PIPE} | popen),
@@ -123,7 +123,7 @@ def test_a_client_that_goes_away_is_not_an_error(tmp_path):
 def test_a_port_out_of_range_is_refused_with_status_2(tmp_path):
     (tmp_path / "a.viser").write_bytes(RECORDING)
     out = subprocess.run(
-        [sys.executable, "-m", "viz.cli", "play", str(tmp_path), "--port", "70000"],
+        [sys.executable, "-m", "mechviz.viz.cli", "play", str(tmp_path), "--port", "70000"],
         capture_output=True,
         text=True,
         timeout=60,
@@ -156,7 +156,7 @@ def test_a_hard_link_to_a_file_outside_the_folder_is_not_served(served):
 
 
 def test_a_recording_made_by_record_is_served_through_its_links(tmp_path):
-    from dynamics import fileset
+    from mechviz.dynamics import fileset
 
     fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})
     server, base = _serve(tmp_path)
@@ -246,7 +246,7 @@ def test_file_names_with_terminal_escapes_are_printed_escaped(tmp_path, capsys):
 
 
 def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
-    from viz.cli import main
+    from mechviz.viz.cli import main
 
     assert main(["play", str(tmp_path / ("p" * 5000))]) == 2
     err = capsys.readouterr().err.strip()
@@ -254,7 +254,7 @@ def test_a_path_too_long_is_one_line_with_status_2(tmp_path, capsys):
 
 
 def test_one_recording_made_by_record_is_served_anew_after_it_is_recorded_again(tmp_path):
-    from dynamics import fileset
+    from mechviz.dynamics import fileset
 
     fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})
     server, _ = play.make_play_server(tmp_path / "demo.viser", "127.0.0.1", 0)
@@ -272,7 +272,7 @@ def test_one_recording_made_by_record_is_served_anew_after_it_is_recorded_again(
 
 @pytest.mark.slow
 def test_play_serves_the_client_and_the_recording_then_stops_on_ctrl_c(tmp_path):
-    from viz import record as rec
+    from mechviz.viz import record as rec
 
     res = rec.record(rec.load_demo("helix").with_overrides(duration=1.0, fps=10), tmp_path)
     proc = start_play(tmp_path)

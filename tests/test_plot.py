@@ -1,4 +1,4 @@
-"""Any variable against any other (viz.model.plot): the quantities each exhibit plots, the exact
+"""Any variable against any other (mechviz.viz.model.plot): the quantities each exhibit plots, the exact
 curves drawn with them, and the panel that picks the pair. Each curve is checked against the
 physics it draws: the motion lies on it, or on the side of it theory says."""
 
@@ -9,11 +9,11 @@ import math
 import numpy as np
 import pytest
 
-import dynamics
-from dynamics import hoop as hp
-from viz.model import CyclotronConfig, DiskConfig, HoopConfig
-from viz.model.plot import PlotImage, Samples
-from viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit
+from mechviz import dynamics
+from mechviz.dynamics import hoop as hp
+from mechviz.viz.model import CyclotronConfig, DiskConfig, HoopConfig
+from mechviz.viz.model.plot import PlotImage, Samples
+from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit
 
 CASES = [
     (CyclotronExhibit, CyclotronConfig(centre=(0.6, 0.0), vz=0.1)),
@@ -86,10 +86,10 @@ def test_the_well_is_drawn_whole_on_the_default_orbit_where_r_never_moves(where)
     """The default start circles the axis: r is constant, the path one point, the charge at the
     bottom of its well. The axes still show the well from near r = 0 to beyond the turning
     point, over at least half of E_perp, with the walls rising through the level: the live
-    panel's image and a recording's picture (both through viz.model.plot.draw_xy)."""
+    panel's image and a recording's picture (both through mechviz.viz.model.plot.draw_xy)."""
     from matplotlib.figure import Figure
 
-    from viz.model.plot import draw_xy
+    from mechviz.viz.model.plot import draw_xy
 
     cfg = CyclotronConfig()
     p = cfg.physics()
@@ -187,7 +187,7 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
 
 @pytest.mark.slow
 def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_other_motion(server):
-    from viz.app import MechvizApp
+    from mechviz.viz.app import MechvizApp
 
     app = MechvizApp(port=0, start_loop=False, environment_map=False)
     try:

@@ -1,4 +1,4 @@
-"""Recording demo sessions (viz.record), headless: every built-in demo records, its manifest
+"""Recording demo sessions (mechviz.viz.record), headless: every built-in demo records, its manifest
 agrees with theory, the .viser decodes frame by frame, failures leave no partial files."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import pytest
 from faults import disk_full_at_nth_fsync
 from recordings import decode_recording, frame_times
 
-import dynamics
-from viz import record as rec
-from viz.cli import main
-from viz.scene import EXHIBITS, CyclotronExhibit
+from mechviz import dynamics
+from mechviz.viz import record as rec
+from mechviz.viz.cli import main
+from mechviz.viz.scene import EXHIBITS, CyclotronExhibit
 
 # Short runs that still hold enough motion to measure each demo's figures.
 SHORT = {
@@ -404,7 +404,7 @@ def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatc
     import base64
     import re
 
-    from viz.app import MechvizApp
+    from mechviz.viz.app import MechvizApp
 
     app = MechvizApp(port=0, start_loop=False, environment_map=False)
     sent = []

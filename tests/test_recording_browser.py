@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from waiting import scaled, wait_until
 
-from viz import record as rec
+from mechviz.viz import record as rec
 
 pytestmark = pytest.mark.browser
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 from faults import killed_after_nth_call
 
-from dynamics import fileset
-from viz import record as rec
+from mechviz.dynamics import fileset
+from mechviz.viz import record as rec
 
 SUFFIXES = rec.SUFFIXES
 
@@ -69,12 +69,22 @@ def earlier_layout(out: Path) -> dict[str, bytes]:
     return files
 
 
-_RECORD = [sys.executable, "-m", "viz.cli", "record", "helix", "--duration", "0.6", "--fps", "5"]
+_RECORD = [
+    sys.executable,
+    "-m",
+    "mechviz.viz.cli",
+    "record",
+    "helix",
+    "--duration",
+    "0.6",
+    "--fps",
+    "5",
+]
 
 _KILL_AFTER_RENAME = killed_after_nth_call(
     ("rename", "replace"),
     """
-from viz.cli import main
+from mechviz.viz.cli import main
 sys.exit(main(sys.argv[2:]))
 """,
 )
@@ -157,7 +167,7 @@ class Stop:
             sys.stdin.readline()
         return None
 sys.meta_path.insert(0, Stop())
-from viz.cli import main
+from mechviz.viz.cli import main
 sys.exit(main(sys.argv[1:]))
 """
 

@@ -14,10 +14,10 @@ import msgspec
 import pytest
 import zstandard
 
-from viz import record as rec
-from viz.cli import main
-from viz.record import demo as demo_module
-from viz.record import outputs
+from mechviz.viz import record as rec
+from mechviz.viz.cli import main
+from mechviz.viz.record import demo as demo_module
+from mechviz.viz.record import outputs
 
 HEAD = 'title = "t"\ndescription = "d"\nexhibit = "cyclotron"\n'
 
@@ -142,7 +142,7 @@ def test_a_crafted_recording_given_to_video_is_one_line(tmp_path, capsys, head, 
 _HUP_AFTER_SWITCH = """
 import os, signal, sys
 from pathlib import Path
-from dynamics import files, fileset
+from mechviz.dynamics import files, fileset
 real_replace, real_sync = os.replace, files._fsync_dir
 def replace(src, dst):
     real_replace(src, dst)

@@ -3,7 +3,7 @@ every system from the same default, and refuse the same bad value naming the sam
 
 Each front end names a setting in its own words (a flag ``--bead-mass``, an argument
 ``bead_mass``, a panel label "Bead mass m [kg]", a demo key ``parameters.bead_mass``); all of
-them come from the one :class:`dynamics.Setting` of :data:`dynamics.SPECS`.
+them come from the one :class:`mechviz.dynamics.Setting` of :data:`mechviz.dynamics.SPECS`.
 """
 
 from __future__ import annotations
@@ -17,21 +17,24 @@ import sys
 import numpy as np
 import pytest
 
-import dynamics
-from dynamics import api
+from mechviz import dynamics
+from mechviz.dynamics import api
 
 T_END = 0.25
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "viz.cli", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "mechviz.viz.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 
 @pytest.fixture(scope="module")
 def app():
-    viz_app = pytest.importorskip("viz.app")
+    viz_app = pytest.importorskip("mechviz.viz.app")
     a = viz_app.MechvizApp(port=0, start_loop=False, environment_map=False)
     yield a
     with contextlib.redirect_stdout(io.StringIO()):
@@ -56,8 +59,8 @@ def _start(ex) -> tuple[np.ndarray, dict, str]:
 @pytest.mark.parametrize("system", list(dynamics.SPECS))
 @pytest.mark.slow
 def test_every_front_end_starts_a_system_from_the_same_default(system, app, server):
-    from viz.record.demo import parse_demo
-    from viz.scene import EXHIBITS
+    from mechviz.viz.record.demo import parse_demo
+    from mechviz.viz.scene import EXHIBITS
 
     spec = dynamics.SPECS[system]
     want = spec.setup()
@@ -110,7 +113,7 @@ def _named(spec, field: str) -> dict[str, str]:
 @pytest.mark.parametrize(("field", "method", "typed"), BAD)
 @pytest.mark.slow
 def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, method, typed, app):
-    from viz.record.demo import parse_demo
+    from mechviz.viz.record.demo import parse_demo
 
     system = "hoop"
     spec = dynamics.SPECS[system]
@@ -158,7 +161,7 @@ def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, meth
 def test_a_typed_number_is_read_by_one_rule_everywhere():
     """The command line, the panel and the demo's parameters accept what Python reads as a float
     and refuse the rest with the field named; a subnormal has lost its digits and is refused."""
-    from viz.scene.panel import parse_number as panel_number
+    from mechviz.viz.scene.panel import parse_number as panel_number
 
     for text, value in [("2.5e-2", 0.025), ("1E-2", 0.01), ("\u22121", -1.0), (" 3 ", 3.0)]:
         assert dynamics.parse_number("x", text) == value

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from waiting import alive, descendants, scaled, wait_until
 
-from viz.chromium import find_chromium
+from mechviz.viz.chromium import find_chromium
 
 pytestmark = pytest.mark.slow
 needs_chromium = pytest.mark.skipif(
@@ -33,7 +33,7 @@ def cpu_seconds(pid: int) -> float:
 def start(args: list[str], tmp: Path, **env) -> subprocess.Popen:
     tmp.mkdir(exist_ok=True)
     return subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", *args],
+        [sys.executable, "-m", "mechviz.viz.cli", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -95,7 +95,7 @@ def test_sigterm_ends_video_while_chromium_draws(tmp_path):
     rec = tmp_path / "rec"
     record = ["record", "helix", "--out", str(rec), "--duration", "10", "--fps", "10"]
     subprocess.run(
-        [sys.executable, "-m", "viz.cli", *record],
+        [sys.executable, "-m", "mechviz.viz.cli", *record],
         check=True,
         capture_output=True,
         timeout=scaled(300),

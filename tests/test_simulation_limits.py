@@ -1,4 +1,4 @@
-"""The driver's limits (:class:`dynamics.Simulation`): work estimated before a run, compiled work
+"""The driver's limits (:class:`mechviz.dynamics.Simulation`): work estimated before a run, compiled work
 in short chunks so that Ctrl-C is seen, an energy error relative to the energy that moves, and a
 reference clearly tighter than the run it judges."""
 
@@ -12,8 +12,8 @@ import threading
 import numpy as np
 import pytest
 
-from dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation, hoop
-from dynamics.simulation import MIN_COMPARED_TOL, REFERENCE_ACCURACY, REFERENCE_TOL
+from mechviz.dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation, hoop
+from mechviz.dynamics.simulation import MIN_COMPARED_TOL, REFERENCE_ACCURACY, REFERENCE_TOL
 
 
 def test_estimated_steps_of_a_fixed_step_run_are_exact_and_count_the_ensemble():

@@ -9,12 +9,12 @@ import numba
 import numpy as np
 import pytest
 
-from dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
-from dynamics.cyclotron import CyclotronParams
-from dynamics.disk import DiskParams
-from dynamics.hoop import HoopParams
-from dynamics.integrators import taylor_linear
-from dynamics.solver import Solver, solve_taylor
+from mechviz.dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
+from mechviz.dynamics.cyclotron import CyclotronParams
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.hoop import HoopParams
+from mechviz.dynamics.integrators import taylor_linear
+from mechviz.dynamics.solver import Solver, solve_taylor
 
 CASES = [
     (Cyclotron(), Cyclotron(CyclotronParams(charge=-2.0, mass=1.5, field=0.7))),

@@ -1,5 +1,5 @@
 """Stability where methods fail: each test measures a method through the driver and asserts the
-closed-form prediction (:mod:`dynamics.stability`). No timing is asserted anywhere.
+closed-form prediction (:mod:`mechviz.dynamics.stability`). No timing is asserted anywhere.
 
 omega is the gyrofrequency (charge) or the higher normal-mode frequency (hoop); x = omega dt.
 """
@@ -11,12 +11,12 @@ import math
 import numpy as np
 import pytest
 
-from dynamics import stability
-from dynamics.disk import DiskParams
-from dynamics.hoop import mode_state, normal_modes
-from dynamics.integrators import IntegrationError
-from dynamics.simulation import Simulation
-from dynamics.systems import Cyclotron, Hoop, ReleasedDisk
+from mechviz.dynamics import stability
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.hoop import mode_state, normal_modes
+from mechviz.dynamics.integrators import IntegrationError
+from mechviz.dynamics.simulation import Simulation
+from mechviz.dynamics.systems import Cyclotron, Hoop, ReleasedDisk
 
 # Charge with q = m = B = 1 (omega = 1), moving in the plane normal to B.
 GYRATION = np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])

@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
-from dynamics.disk import DiskParams
-from dynamics.integrators import taylor
-from dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
+from mechviz.dynamics import Cyclotron, Hoop, ReleasedDisk, Simulation
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.integrators import taylor
+from mechviz.dynamics.integrators.kernels import CYCLOTRON, FREE_BODY, HOOP
 
 SYSTEMS = {
     CYCLOTRON: Cyclotron(),
@@ -203,7 +203,7 @@ def test_the_method_list_states_the_orders_the_rule_picks():
     series expansion, one per step."""
     import re
 
-    from dynamics.integrators import METHODS
+    from mechviz.dynamics.integrators import METHODS
 
     text = METHODS["taylor"].order_text()
     for label in ("1e-3", "1e-9", "1e-12"):

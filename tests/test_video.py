@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from commands import mechviz
 
-from viz import record as rec
-from viz import video
+from mechviz.viz import record as rec
+from mechviz.viz import video
 
 SIZE = (320, 180)
 
@@ -76,7 +76,7 @@ def test_a_file_that_is_not_a_recording_is_refused(capsys, tmp_path):
 
 
 def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_and_data(tmp_path):
-    from viz import recording_edit
+    from mechviz.viz import recording_edit
 
     res = rec.record(rec.load_demo("helix").with_overrides(duration=0.5, fps=10), tmp_path)
     page = res.paths[".html"].read_bytes()
@@ -92,7 +92,7 @@ def test_a_recording_with_the_shadows_turned_off_first_plays_the_same_messages_a
 
 
 def test_a_video_draws_the_recording_with_a_sky_light_for_the_viewers_environment(tmp_path):
-    from viz import recording_edit as edit
+    from mechviz.viz import recording_edit as edit
 
     res = rec.record(rec.load_demo("helix").with_overrides(duration=0.5, fps=10), tmp_path)
     page = res.paths[".html"].read_bytes()
@@ -255,7 +255,7 @@ def test_frames_drawn_side_by_side_by_two_pages_are_the_recording_at_their_times
     """A video's frames are drawn by two copies of the page side by side, each picture taken one
     animation frame after its seek; each must be the picture of that moment drawn on its own
     (after several animation frames), and not of the moment before or after it."""
-    from viz.player import Player, decode
+    from mechviz.viz.player import Player, decode
 
     clip = video.clip_from_file(recording / "helix.viser")
     times = [t + 1e-6 for t in (0.1, 0.3, 0.4, 0.6, 0.9)]
@@ -283,7 +283,7 @@ def _exhibit_rows(frame: np.ndarray, top: int = 0, bottom: int = 0) -> float:
 @pytest.mark.browser
 @pytest.mark.parametrize("overlay", [True, False])
 def test_the_exhibit_fills_most_of_the_frames_height(capsys, recording, tmp_path, overlay):
-    from viz.overlay import Overlay
+    from mechviz.viz.overlay import Overlay
 
     size = (640, 360)
     target = tmp_path / "framed.mp4"
@@ -347,7 +347,7 @@ def test_the_kicks_figures_appear_on_frames_after_the_kick_only(capsys, tmp_path
     _, frames = _mp4_frames(tmp_path / "radial-kick.mp4")
     assert len(frames) == 14
 
-    from viz.overlay import Overlay
+    from mechviz.viz.overlay import Overlay
 
     clip = video.clip_from_file(tmp_path / "radial-kick.viser")
     times = [clip.simulated(t) for t in clip.playback_times()]
@@ -389,8 +389,8 @@ def test_the_sky_light_looks_like_the_viewers_environment_map(recording):
     """Videos swap the viewer's environment map for a hemisphere light (cheaper in software
     WebGL): the exhibit's colours stay close to the environment-lit picture, and the light is
     what keeps them close (without it the lit parts go dark)."""
-    from viz import recording_edit as edit
-    from viz.player import Player, decode
+    from mechviz.viz import recording_edit as edit
+    from mechviz.viz.player import Player, decode
 
     page = video.clip_from_file(recording / "helix.viser").page
     lit = edit.page_with_messages_first(page, [edit.NO_SHADOWS])

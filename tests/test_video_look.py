@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from commands import mechviz
 
-from viz import framing, video
-from viz import record as rec
-from viz.overlay import Overlay, true_at
-from viz.record.run import trace_demo
+from mechviz.viz import framing, video
+from mechviz.viz import record as rec
+from mechviz.viz.overlay import Overlay, true_at
+from mechviz.viz.record.run import trace_demo
 
 SIZE = (960, 540)
 
@@ -132,8 +132,8 @@ def test_the_overlay_draws_only_in_its_two_bands():
 
 # --------------------------------------------------------------------------- sessions
 def test_a_session_carries_the_viewers_camera_and_the_exhibits_title():
-    from viz.app import MechvizApp
-    from viz.live_record import session_info
+    from mechviz.viz.app import MechvizApp
+    from mechviz.viz.live_record import session_info
 
     app = MechvizApp(port=0, start_loop=False)
     try:

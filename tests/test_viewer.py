@@ -14,20 +14,20 @@ import urllib.request
 import numpy as np
 import pytest
 
-import dynamics
-from dynamics import cyclotron as cy
-from dynamics import disk as dk
-from dynamics import hoop as hp
+from mechviz import dynamics
+from mechviz.dynamics import cyclotron as cy
+from mechviz.dynamics import disk as dk
+from mechviz.dynamics import hoop as hp
 
 viser = pytest.importorskip("viser")
 
 
 from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps.py)
 
-from viz import geometry as geo  # noqa: E402
-from viz.model import HoopConfig  # noqa: E402
-from viz.scene import DiskExhibit, HoopExhibit  # noqa: E402
-from viz.scene.disk import LIFT, P  # noqa: E402
+from mechviz.viz import geometry as geo  # noqa: E402
+from mechviz.viz.model import HoopConfig  # noqa: E402
+from mechviz.viz.scene import DiskExhibit, HoopExhibit  # noqa: E402
+from mechviz.viz.scene.disk import LIFT, P  # noqa: E402
 
 # every test here starts the viewer's server
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]
@@ -307,7 +307,7 @@ def test_the_first_view_a_page_gets_is_the_all_preset_with_everything_in_it(app)
 
 
 def test_camera_presets_frame_each_exhibit_large_left_of_the_panel(app):
-    from viz.scene import framing
+    from mechviz.viz.scene import framing
 
     for size in ((1280, 800), (1440, 900), (1920, 1080)):
         free = size[0] - framing.PANEL_PX

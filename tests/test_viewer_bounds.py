@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from viz.app import MechvizApp
-from viz.scene.hoop import CONFIG_SIZE
+from mechviz.viz.app import MechvizApp
+from mechviz.viz.scene.hoop import CONFIG_SIZE
 
 # every test here starts the viewer's server
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]

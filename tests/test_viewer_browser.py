@@ -129,7 +129,7 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
         wait_until(lambda: "ω1 =" in app.figures["hoop"].text, 20, "the key figures")
         # drawn: dark ink right of the label's corner (software WebGL draws slowly with the
         # lighting on), as many lines as the figures have
-        from viz.scene import framing
+        from mechviz.viz.scene import framing
 
         client = next(iter(app.server.get_clients().values()))
         label = app.figures["hoop"]

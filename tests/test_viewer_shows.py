@@ -15,20 +15,20 @@ import urllib.request
 import numpy as np
 import pytest
 
-from dynamics import cyclotron as cy
-from dynamics import disk as dk
-from dynamics import hoop as hp
+from mechviz.dynamics import cyclotron as cy
+from mechviz.dynamics import disk as dk
+from mechviz.dynamics import hoop as hp
 
 viser = pytest.importorskip("viser")
 
 import screen  # noqa: E402  (tests/screen.py)
 from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps.py)
 
-from mechviz_bench.frame_cost import measure_frame_cost  # noqa: E402
-from viz import geometry as geo  # noqa: E402
-from viz.model import CyclotronConfig, HoopConfig  # noqa: E402
-from viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
-from viz.scene.disk import P  # noqa: E402
+from mechviz.bench.frame_cost import measure_frame_cost  # noqa: E402
+from mechviz.viz import geometry as geo  # noqa: E402
+from mechviz.viz.model import CyclotronConfig, HoopConfig  # noqa: E402
+from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
+from mechviz.viz.scene.disk import P  # noqa: E402
 
 # every test here starts the viewer's server
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]
@@ -139,7 +139,7 @@ def test_measure_frame_cost_reports_milliseconds_per_frame():
 def test_view_command_prints_the_url_and_stops_cleanly_on_ctrl_c():
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "viz.cli", "view", "--port", "0"],
+        [sys.executable, "-m", "mechviz.viz.cli", "view", "--port", "0"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -185,7 +185,7 @@ def test_the_theme_switch_darkens_the_page_and_the_floor(app):
 
 
 def test_a_chart_keeps_its_history_across_a_window_change_and_its_axis_fits_the_errors(app):
-    from viz.app import log_axis
+    from mechviz.viz.app import log_axis
 
     enter(app, "speed", "10")
     frames(app, 120)  # 20 s of simulated time at 10x

@@ -9,10 +9,10 @@ and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit
 
 API for other tools (the recorder, the bench)
 ---------------------------------------------
-Exhibits work without the app (:mod:`viz.scene` holds them and describes the contract)::
+Exhibits work without the app (:mod:`mechviz.viz.scene` holds them and describes the contract)::
 
-    from viz.model import CyclotronConfig
-    from viz.scene import CyclotronExhibit
+    from mechviz.viz.model import CyclotronConfig
+    from mechviz.viz.scene import CyclotronExhibit
 
     ex = CyclotronExhibit(server, CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
     ex.advance(1 / 30)                 # simulated seconds; a blow-up pauses it (ex.paused, ex.failure)
@@ -37,7 +37,7 @@ The whole app, headless and without its loop thread::
     app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
     app.stop()
 
-:func:`viz.frame_cost.measure_frame_cost` times frames of the whole app for ``mechviz bench``.
+:func:`mechviz.viz.frame_cost.measure_frame_cost` times frames of the whole app for ``mechviz bench``.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ from .scene.panel import Panel, parse_number
 from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-# m: where each exhibit stands, in the order of viz.scene.EXHIBITS, left to right as the first
+# m: where each exhibit stands, in the order of mechviz.viz.scene.EXHIBITS, left to right as the first
 # view sees them; staggered in depth so that view (views.OVERVIEW) shows them one below another
 # as well as side by side
 ORIGINS = dict(zip(EXHIBITS, ((-3.95, 1.7, 0.0), (0.0, 1.4, 0.0), (2.4, -3.4, 0.0)), strict=True))
@@ -129,7 +129,9 @@ class MechvizApp(Views):
         self.common_folder = None
         self.typing = Typing()  # number fields holding typed text not yet read
         self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
-        self.rewind_control = RewindControl(self)  # pause and scrub back (viz.rewind_control)
+        self.rewind_control = RewindControl(
+            self
+        )  # pause and scrub back (mechviz.viz.rewind_control)
 
         scene = server.scene
         scene.set_up_direction("+z")
@@ -173,7 +175,9 @@ class MechvizApp(Views):
             self._draw()
         server.on_client_connect(self._frame_new_client)
         self.gui = None
-        self.recorder = None  # the Record toggle's viz.live_record.LiveRecorder (with the GUI)
+        self.recorder = (
+            None  # the Record toggle's mechviz.viz.live_record.LiveRecorder (with the GUI)
+        )
         if gui:
             self._build_gui()
             self._build_figures()
@@ -307,7 +311,7 @@ class MechvizApp(Views):
                 self._syncing = False
 
     def _apply_theme(self, theme: str) -> None:
-        """Page and floor for ``theme``; the scene's palette reads on both (viz.geometry)."""
+        """Page and floor for ``theme``; the scene's palette reads on both (mechviz.viz.geometry)."""
         self.theme = theme
         if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
             self._syncing = True

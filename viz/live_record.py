@@ -3,7 +3,7 @@
 Everything the scene shows is recorded (kicks, mode changes, method switches, pauses), timed by
 the wall clock; GUI panels are not part of the scene. The page is viser's own self-contained
 player (``StateSerializer.as_html``): it plays from file:// with no server and no Python. It also
-carries what a video of it needs (:func:`viz.video.with_session_info`): the camera the viewer
+carries what a video of it needs (:func:`mechviz.viz.video.with_session_info`): the camera the viewer
 had when recording started, the title of the exhibit it looked at, and that exhibit's bounds.
 """
 
@@ -145,7 +145,7 @@ def session_info(app, client=None) -> dict[str, Any]:
 
 
 def add_record_toggle(app) -> LiveRecorder:
-    """Add the Record checkbox to the viewer's common GUI folder (:class:`viz.app.MechvizApp`)
+    """Add the Record checkbox to the viewer's common GUI folder (:class:`mechviz.viz.app.MechvizApp`)
     and return its :class:`LiveRecorder`. Call once, after the app built its GUI."""
     recorder = LiveRecorder(app)
     folder = app.common_folder

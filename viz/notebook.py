@@ -1,13 +1,13 @@
 """mechviz in a Jupyter notebook: a recorded demo or the live viewer, inline.
 
->>> from viz import notebook
+>>> from mechviz.viz import notebook
 >>> notebook.show("radial-kick", dv=0.8)      # the demo recorded headless, played inline
 >>> notebook.live()                           # the viewer with its GUI, inline
 
-:func:`show` runs a demo headless (the recorder's own run, :func:`viz.record.run_demo`: the
+:func:`show` runs a demo headless (the recorder's own run, :func:`mechviz.viz.record.run_demo`: the
 viewer's exhibit for the demo's settings) and returns an :class:`Embed`, which a notebook shows
 as two outputs: a still of the scene (a PNG of viser's player paused at the last frame,
-:mod:`viz.page_still`), and viser's self-contained player in an ``<iframe srcdoc>`` (play/pause,
+:mod:`mechviz.viz.page_still`), and viser's self-contained player in an ``<iframe srcdoc>`` (play/pause,
 time, scrubber, speed; the view turns with the mouse) with the measured-against-predicted
 figures below it. Each is stored once, with a one-line text form. Jupyter drops the player from
 a notebook that is not trusted (one opened from someone else, until its cells are run), and
@@ -16,7 +16,7 @@ GitHub shows no live page: the still shows there. The player carries viser's bro
 beside it (``kick.png``), to files instead: the notebook then holds only a linked picture and an
 ``<iframe src>`` (under 1 kB). The files must sit under the folder Jupyter serves.
 
-:func:`live` starts the viewer (:class:`viz.app.MechvizApp`) inside the kernel, once, and
+:func:`live` starts the viewer (:class:`mechviz.viz.app.MechvizApp`) inside the kernel, once, and
 embeds an ``<iframe>`` to its address, 127.0.0.1 and a port of its own: the browser showing the
 notebook must run on the machine of the kernel. It does not reach a browser through JupyterHub,
 Colab, Binder or a remote VS Code session (which forward only Jupyter's own port); there, use
@@ -210,7 +210,7 @@ def show(
     display, with a still of its last frame (``still=False`` leaves the still out; it needs
     Chromium and playwright, and takes seconds). ``save`` (a path ending in ``.html``) writes
     the page there and the still beside it (``.png``), and the notebook links to them."""
-    from dynamics.files import write_files_atomically
+    from mechviz.dynamics.files import write_files_atomically
 
     from . import record as rec
     from .page_still import StillUnavailable, page_still

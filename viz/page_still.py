@@ -1,9 +1,9 @@
-"""A still of a recorded page for a notebook: the PNG :class:`viz.player.Player` draws of the
+"""A still of a recorded page for a notebook: the PNG :class:`mechviz.viz.player.Player` draws of the
 recording at a moment (the same player ``mechviz still`` and the videos use).
 
 A notebook keeps this picture beside the player: Jupyter drops an ``<iframe>`` from an
 untrusted notebook's outputs, and GitHub and nbviewer show no live page, but every one of them
-shows a PNG. Chromium is the system's (:mod:`viz.chromium`), driven through playwright (the
+shows a PNG. Chromium is the system's (:mod:`mechviz.viz.chromium`), driven through playwright (the
 ``notebook`` and ``video`` extras); without either, :func:`page_still` raises
 :class:`StillUnavailable` saying why.
 """
@@ -29,7 +29,7 @@ def page_still(page: bytes, at: float, *, width: int = 800, height: int = 450) -
         import playwright.sync_api  # noqa: F401
     except ImportError:
         raise StillUnavailable(
-            "playwright is not installed (pip install 'mechviz[notebook]')"
+            "playwright is not installed (pip install 'mechviz-lab[notebook]')"
         ) from None
     # playwright's sync API refuses to run in a thread with a running event loop (a Jupyter
     # kernel's): it gets a thread of its own.

@@ -14,12 +14,12 @@ The server answers five kinds of request and nothing else:
     that folder with a single name (a hard link may lead anywhere, so a file with more than one
     link is not served); anything else is 404, so a link to ``/etc/passwd`` is never served.
     The recordings that ``mechviz record`` writes are links into its hidden set folder
-    (:mod:`dynamics.fileset`), inside the folder: each request serves the current set.
+    (:mod:`mechviz.dynamics.fileset`), inside the folder: each request serves the current set.
 
-The server (:mod:`viz.play_server`) has header and answer timeouts, a normal listen backlog and
+The server (:mod:`mechviz.viz.play_server`) has header and answer timeouts, a normal listen backlog and
 limits on connections per client and in all, so idle connections cannot starve a real request.
 A client that closes its connection early is not an error (no traceback). Names are printed
-with control characters escaped (:func:`viz.printable.printable`). :func:`reachable_urls`
+with control characters escaped (:func:`mechviz.viz.printable.printable`). :func:`reachable_urls`
 and :func:`exposure_note` say where a server bound to HOST can be reached; ``mechviz view`` prints
 them too.
 """

@@ -21,7 +21,7 @@ another page's frame can be drawn.
 The page is laid out at 360 CSS pixels high whatever the picture's size and drawn at
 ``height / 360`` device pixels per CSS pixel, so the scene's labels (a fixed size in CSS pixels)
 keep their share of the picture: 15 px at 960x540, 60 px at 3840x2160. The camera comes from
-URL parameters of viser's client (:meth:`viz.framing.Camera.query`), which override the
+URL parameters of viser's client (:meth:`mechviz.viz.framing.Camera.query`), which override the
 recording's initial camera.
 """
 

@@ -1,7 +1,7 @@
 """The viewer's Rewind control: pause, then scrub back through the last minute of the show.
 
 A number field over a slider track from -60 s to 0 s, in seconds of the show (what the hall
-saw, whatever the speed; :mod:`viz.model.rewind`). Moving it pauses every exhibit and shows each
+saw, whatever the speed; :mod:`mechviz.viz.model.rewind`). Moving it pauses every exhibit and shows each
 as it was that long before the moment paused at: the scene, the readouts (``t = ...``) and the
 charts, which end at the moment shown. Play then goes on *from the moment shown*, as a video
 player plays on from where its playhead stands: what came after it is dropped (a kick given

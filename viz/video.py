@@ -2,14 +2,14 @@
 slide needs.
 
 A recording's self-contained page (``DEMO.html``, a live session's download, or a page built
-around a ``DEMO.viser``) is opened in headless Chromium (:mod:`viz.player`) and *seeked* to each
+around a ``DEMO.viser``) is opened in headless Chromium (:mod:`mechviz.viz.player`) and *seeked* to each
 frame's playback time, so frame ``k`` is the recording exactly as it stands at
 ``start + k / fps``, one WebGL render per frame, whatever the machine's speed. Frames cross to
 Python as JPEGs, get the title, caption and the figures true at that moment drawn in
-(:mod:`viz.overlay`) on a worker thread while the browser draws the next one, and go to the
-encoder (:mod:`viz.encoders`: H.264 MP4 or GIF). A still is one lossless picture (PNG).
+(:mod:`mechviz.viz.overlay`) on a worker thread while the browser draws the next one, and go to the
+encoder (:mod:`mechviz.viz.encoders`: H.264 MP4 or GIF). A still is one lossless picture (PNG).
 
-The camera (:mod:`viz.framing`): a demo's recording is framed on its exhibit (the exhibit's
+The camera (:mod:`mechviz.viz.framing`): a demo's recording is framed on its exhibit (the exhibit's
 bounding box fills most of the height the words leave free), from the exhibit's own view or a
 preset, or from a given position; a live session is filmed from the camera the viewer had when
 recording started. A video of ``duration`` seconds at ``fps`` has ``round(duration * fps)``
@@ -273,8 +273,8 @@ def require_chromium() -> str:
         import playwright.sync_api  # noqa: F401
     except ImportError:
         raise NoChromium(
-            "the Python package playwright is needed to drive Chromium: pip install -e "
-            "'.[video]' (never playwright install; the system's Chromium is used)"
+            "the Python package playwright is needed to drive Chromium: pip install "
+            "'mechviz-lab[video]' (never playwright install; the system's Chromium is used)"
         ) from None
     return path
 
@@ -372,9 +372,9 @@ def write_video(
 ) -> VideoResult:
     """Film ``clip`` into ``path`` (format from ``fmt`` or the suffix), atomically.
 
-    ``antialias``, ``pages`` (:class:`viz.player.Player`; default :func:`pages_for` the video's
+    ``antialias``, ``pages`` (:class:`mechviz.viz.player.Player`; default :func:`pages_for` the video's
     frames), ``shadows`` (the default lights' shadow maps) and ``environment`` (the viewer's default
-    environment map, otherwise a hemisphere light; :mod:`viz.recording_edit`) say how the frames
+    environment map, otherwise a hemisphere light; :mod:`mechviz.viz.recording_edit`) say how the frames
     are drawn; the defaults are the fastest way that gives nearly the same picture.
 
     Raises ``ValueError`` for a request that cannot be met (:func:`check_request`, the camera),

@@ -1,7 +1,7 @@
 """What ``mechviz video`` accepts: a recording (and the manifest beside it) read and checked, so
 that a crafted or damaged file is refused with one line instead of failing midway.
 
-:func:`read_clip` wraps :func:`viz.video.clip_from_file`: a path the system cannot use (too long,
+:func:`read_clip` wraps :func:`mechviz.viz.video.clip_from_file`: a path the system cannot use (too long,
 unreadable), a recording whose numbers are not a playback (``durationSeconds = 1e308``, a frame
 rate of 0, a value of the wrong kind in the manifest, JSON nested too deeply) raises
 ``ValueError`` naming the file and what is wrong; so does a clip of more than
@@ -18,7 +18,7 @@ import numpy as np
 from . import video
 from .printable import printable
 
-MAX_FRAMES = 100_000  # as many as a demo may record (viz.record.demo.MAX_FRAMES)
+MAX_FRAMES = 100_000  # as many as a demo may record (mechviz.viz.record.demo.MAX_FRAMES)
 MAX_FPS = 240
 
 

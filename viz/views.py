@@ -1,6 +1,6 @@
 """What the viewer shows each browser: camera presets framed for its page, presentation mode
 with its key figures, and the error chart's fitted axis (:class:`Views`, a part of
-:class:`viz.app.MechvizApp`)."""
+:class:`mechviz.viz.app.MechvizApp`)."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def page_size(client) -> tuple[int, int]:
 
 
 class Views:
-    """The app's camera presets and presentation mode (mixed into :class:`viz.app.MechvizApp`,
+    """The app's camera presets and presentation mode (mixed into :class:`mechviz.viz.app.MechvizApp`,
     whose ``exhibits``, ``server``, ``figures``, ``presenting`` and ``theme`` they use)."""
 
     def _frame_new_client(self, client) -> None:
@@ -85,7 +85,7 @@ class Views:
         self, view: str, width: int = 1280, height: int = 800, panel_px: int = PANEL_PX
     ):
         """``(position, look_at)`` of a preset for a page of ``width`` x ``height`` pixels whose
-        right ``panel_px`` the GUI panel covers (:func:`viz.scene.framing.frame`): an exhibit's
+        right ``panel_px`` the GUI panel covers (:func:`mechviz.viz.scene.framing.frame`): an exhibit's
         own view frames its box to ``FILL`` of the height, in the middle of the page left of
         the panel; *All* frames the three together (as large as the free width allows); *Top*
         looks straight down on the cyclotron's orbit."""

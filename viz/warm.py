@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-import dynamics
+from mechviz import dynamics
 
 from .model import MODELS
 
@@ -116,7 +116,7 @@ def _warm_chunk(pairs: list[tuple[str, str]], parent: int) -> None:
     """A worker process: compile ``pairs``, Taylor's parallel ensemble loop included; it ends
     with ``parent`` (:func:`_end_with_parent`)."""
     _end_with_parent(parent)
-    from dynamics.integrators import taylor
+    from mechviz.dynamics.integrators import taylor
 
     # this process only: the single-state warm-up takes the serial loop, the two-member one
     # the parallel loop (which ensembles of ``PARALLEL_MIN`` members or more use)

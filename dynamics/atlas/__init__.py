@@ -9,7 +9,7 @@ method, computed in chunks on a Dask cluster and kept in a Zarr store.
 - :mod:`.maps`: PNG and SVG maps;
 - :mod:`.bench`: the cost per cell, parallel efficiency and scheduling overhead.
 
-Needs the ``atlas`` extra (``pip install -e '.[atlas]'``: dask, distributed, xarray, zarr).
+Needs the ``atlas`` extra (``pip install 'mechviz-lab[atlas]'``: dask, distributed, xarray, zarr).
 Never imports viser.
 """
 

@@ -3,7 +3,7 @@
 Measures, on the chaos map of the hoop (the map that outgrows one machine):
 
 - *cost per cell*: one chunk run as an ensemble (:func:`.kernels.compute_chunk`) against the same
-  cells run one at a time, each its own :class:`dynamics.Simulation` (ratio below 1: the
+  cells run one at a time, each its own :class:`mechviz.dynamics.Simulation` (ratio below 1: the
   ensemble is cheaper);
 - *parallel efficiency*: the same atlas on a ``LocalCluster`` (TCP) of one worker process and of
   two, workers warmed first (compiled kernels, not timed); speed-up ``T1 / T2``;

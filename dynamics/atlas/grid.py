@@ -195,7 +195,7 @@ class AtlasSpec:
 
     # ---------------------------------------------------------------- the system
     def make_system(self):
-        """The :mod:`dynamics.systems` adapter with :attr:`params`."""
+        """The :mod:`mechviz.dynamics.systems` adapter with :attr:`params`."""
         from .theory import make_system
 
         return make_system(self.system, dict(self.params))

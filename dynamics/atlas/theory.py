@@ -8,7 +8,7 @@ Amplitude, per system (the x axis of the stability and accuracy maps):
 - free-body: the released disk with an extra spin ``(A, 0, A)`` [rad/s] in the disk's frame.
 
 Lines: the linear stability limit ``dt = x_max / omega_fast`` of each fixed-step method
-(:mod:`dynamics.stability`), the hoop's two normal-mode lines in its start plane at rest
+(:mod:`mechviz.dynamics.stability`), the hoop's two normal-mode lines in its start plane at rest
 (``theta2 = theta1`` and ``theta2 = -(M + m)/m theta1``), and where the nonlinear mode 1 (the whole
 body swinging as one pendulum, ``theta1 = theta2 = A``) is unstable to the bead's motion:
 the Floquet multipliers of its period map. That map is symplectic with two trivial multipliers
@@ -31,7 +31,7 @@ from ..systems import SYSTEMS, Hoop
 
 
 def make_system(name: str, params: dict[str, float]):
-    """The system adapter ``name`` (:data:`dynamics.systems.SYSTEMS`) with the parameter fields
+    """The system adapter ``name`` (:data:`mechviz.dynamics.systems.SYSTEMS`) with the parameter fields
     ``params`` (defaults otherwise)."""
     try:
         cls = SYSTEMS[name]

@@ -1,15 +1,15 @@
 """The integrator interface: a method is data (name, order, structure, what it applies to) plus
-a step. The driver (:mod:`dynamics.simulation`) owns time and counts the work.
+a step. The driver (:mod:`mechviz.dynamics.simulation`) owns time and counts the work.
 
 Implementers add a :class:`Method` to :data:`METHODS`:
 
 - ``backend="numba"``, ``adaptive=False``: ``kernel`` names the step in
-  :mod:`dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
+  :mod:`mechviz.dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
   ``run_fixed`` with it.
 - ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``), or with
-  ``kernel="taylor"`` Taylor's method (:mod:`dynamics.integrators.taylor`).
+  ``kernel="taylor"`` Taylor's method (:mod:`mechviz.dynamics.integrators.taylor`).
 - ``backend="scipy"``: ``scipy_name`` is a ``solve_ivp`` method or ``"odeint"``; the driver calls
-  :func:`dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
+  :func:`mechviz.dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
 - ``backend="exact"``: the system's closed-form flow.
 
 What the driver gives every method for free: validation of the step size or tolerance, the time
@@ -66,7 +66,7 @@ class Method:
     #: What a system must have for this method to apply: ``"rhs"`` a compiled right-hand side,
     #: ``"closed-form"`` its exact flow from every state, ``"symmetric"`` a symmetric
     #: second-order step of its own (which the method composes), or that step's name (the
-    #: method *is* that system's own step). Systems state theirs (:mod:`dynamics.systems`).
+    #: method *is* that system's own step). Systems state theirs (:mod:`mechviz.dynamics.systems`).
     needs: str
     backend: Literal["numba", "scipy", "exact"]
     kernel: str | None = None
@@ -76,7 +76,7 @@ class Method:
     counts: str = "right-hand-side evaluations"
 
     def applies_to(self, system: Any) -> bool:
-        """Whether this method can advance ``system`` (a :mod:`dynamics.systems` adapter or its
+        """Whether this method can advance ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its
         class)."""
         if self.needs == "closed-form":
             return system.closed_form
@@ -90,7 +90,7 @@ class Method:
 
     def step_options(self, dt: float | None, rtol: float | None) -> dict[str, float]:
         """Of a step size ``dt`` [s] and a tolerance ``rtol``, the one this method takes, as
-        keyword arguments for :class:`dynamics.Simulation`: ``rtol`` when adaptive, ``dt`` when it
+        keyword arguments for :class:`mechviz.dynamics.Simulation`: ``rtol`` when adaptive, ``dt`` when it
         takes fixed steps, nothing for the closed-form flow (evaluated at the times asked for).
         Callers that hold both settings (the viewer, the recorder) let the method choose."""
         if self.adaptive:
@@ -110,7 +110,7 @@ class Method:
 
     def order_text(self) -> str:
         """The order in words: ``"order 4"``; for Taylor's method the orders its rule
-        (:func:`dynamics.integrators.taylor.order_for`) picks, from the rule itself."""
+        (:func:`mechviz.dynamics.integrators.taylor.order_for`) picks, from the rule itself."""
         if self.kernel == "taylor":
             from .taylor import STEP_COST, order_for  # deferred: the compiled series are not needed
 
@@ -359,6 +359,6 @@ def get_method(name: str) -> Method:
 
 
 def methods_for(system: Any) -> list[Method]:
-    """The methods that apply to ``system`` (a :mod:`dynamics.systems` adapter or its class; by
-    name: ``methods_for(dynamics.SYSTEMS[name])``), in the order of :data:`METHODS`."""
+    """The methods that apply to ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its class; by
+    name: ``methods_for(mechviz.dynamics.SYSTEMS[name])``), in the order of :data:`METHODS`."""
     return [m for m in METHODS.values() if m.applies_to(system)]

@@ -32,10 +32,10 @@ from .. import cyclotron, disk, hoop
 from .._jit import njit
 from ..ids import CYCLOTRON, FREE_BODY, HOOP  # noqa: F401  (re-exported)
 
-# System ids (:mod:`dynamics.ids`): index into the tables at the bottom.
+# System ids (:mod:`mechviz.dynamics.ids`): index into the tables at the bottom.
 
 # Status codes written to ``status[0]`` (``status = [code, step index, member index]``);
-# :func:`dynamics.integrators.base.integration_error` words them.
+# :func:`mechviz.dynamics.integrators.base.integration_error` words them.
 OK, NONFINITE, NO_CONVERGENCE, TOO_SMALL_STEP = 0, 1, 2, 3
 
 MIDPOINT_TOL = 1e-14

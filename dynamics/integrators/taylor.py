@@ -85,7 +85,7 @@ def charge_expand(A, p, order):
 
 @njit(cache=True, fastmath=FUSED)
 def free_body_expand(A, p, order):
-    """Euler's equations and ``q' = q (0, w) / 2`` (:func:`dynamics.disk.free_derivatives`).
+    """Euler's equations and ``q' = q (0, w) / 2`` (:func:`mechviz.dynamics.disk.free_derivatives`).
 
     Each of the seven sums adds one term per index: the three products of a quaternion
     component are formed first, off the chain of dependent additions (1.7x faster at order 5).
@@ -119,7 +119,7 @@ def free_body_expand(A, p, order):
 
 @njit(cache=True, fastmath=SUMS)
 def hoop_expand(A, p, order):
-    """The hoop and bead (:func:`dynamics.hoop.acceleration`): with ``u = th1 - th2``,
+    """The hoop and bead (:func:`mechviz.dynamics.hoop.acceleration`): with ``u = th1 - th2``,
     ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``, ``r2 = sin(u) w1^2 - (g/a) sin th2``, the
     accelerations solve the mass-matrix system ``(2M + m) w1' + m cos(u) w2' = r1``,
     ``cos(u) w1' + w2' = r2``.

@@ -114,7 +114,7 @@ def charge_steps(y, w, t, c, t1, order, ctl, K, e0, e1, e2):
     ``K[:, 0]``, the compensations in ``K[0:3, 1]``) and ``y`` is left at ``t1``. Returns
     ``(steps, base, comp, span)``, the kept step's start and length; ``span`` is ``-1`` for a
     step that is not finite or lost in round-off (``y`` then holds the last state reached).
-    ``ctl``: the step rule's constants (:func:`dynamics.integrators.taylor.controls`)."""
+    ``ctl``: the step rule's constants (:func:`mechviz.dynamics.integrators.taylor.controls`)."""
     aw = abs(w)
     # The logarithms of the last two orders' coefficients over |v_perp| (module docstring):
     # |v^[k]| = |w|^k / k! |v_perp|, |r^[k]| = |w|^(k-1) / k! |v_perp|.

@@ -1,6 +1,6 @@
 """The ``mechviz`` command: one entry point, a subcommand per use.
 
-``analyze`` and ``simulate`` come from :mod:`viz.cli.analysis` and need no viewer; ``view``,
+``analyze`` and ``simulate`` come from :mod:`mechviz.viz.cli.analysis` and need no viewer; ``view``,
 ``record``, ``play``, ``bench``, ``video``, ``still`` and ``atlas`` import what they need only
 when run.
 """
@@ -13,15 +13,15 @@ import sys
 
 from ..interrupts import hold_sigint, release_sigint
 
-# One module per command (analyze and simulate in viz.cli.analysis): view, record and play,
+# One module per command (analyze and simulate in mechviz.viz.cli.analysis): view, record and play,
 # bench, video, still, atlas.
 _COMMAND_MODULES = (
-    "viz.cli.view",
-    "viz.cli.record",
-    "viz.cli.bench",
-    "viz.cli.video",
-    "viz.cli.still",
-    "viz.cli.atlas",
+    "mechviz.viz.cli.view",
+    "mechviz.viz.cli.record",
+    "mechviz.viz.cli.bench",
+    "mechviz.viz.cli.video",
+    "mechviz.viz.cli.still",
+    "mechviz.viz.cli.atlas",
 )
 _LIGHT_COMMANDS = ("analyze", "simulate")  # no viewer, no meshes
 
@@ -35,7 +35,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from mechviz import __version__
+
     parser = _Parser(prog="mechviz", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"mechviz {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     from .analysis import add_commands  # numpy and numba: inside main's Ctrl-C handling
 
@@ -49,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     # Ctrl-C is held from the first instruction until the libraries are imported, so that none
-    # of them can swallow it (viz.interrupts), and then delivered: status 130, nothing written.
+    # of them can swallow it (mechviz.viz.interrupts), and then delivered: status 130, nothing written.
     held = hold_sigint()
     from ..interrupts import exit_status, signals_end_like_ctrl_c
 

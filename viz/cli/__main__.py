@@ -1,4 +1,4 @@
-"""``python -m viz.cli``: the ``mechviz`` command."""
+"""``python -m mechviz.viz.cli``: the ``mechviz`` command."""
 
 import sys
 

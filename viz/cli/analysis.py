@@ -1,11 +1,11 @@
 """``mechviz analyze`` and ``mechviz simulate``: the dynamics from the command line, headless.
 
-Registered on the ``mechviz`` parser by :mod:`viz.cli`; nothing here imports viser.
+Registered on the ``mechviz`` parser by :mod:`mechviz.viz.cli`; nothing here imports viser.
 
 Bad input is one line naming the flag, exit status 2: a value that is not a finite number, and
 also one whose *consequences* are not representable (a gyrofrequency that overflows, a kinetic
 energy that underflows to 0, a step count beyond ``--max-steps``). ``simulate`` estimates its work
-before it starts (:meth:`dynamics.Simulation.estimated_steps`), shows progress on a terminal for
+before it starts (:meth:`mechviz.dynamics.Simulation.estimated_steps`), shows progress on a terminal for
 runs longer than a few seconds, and stops within about a second on Ctrl-C (exit 130), even inside
 numba's compiler.
 ``--json`` is always valid JSON: a number that is not finite is ``null``, and ``null_reasons``
@@ -26,20 +26,20 @@ from typing import Any
 
 import numpy as np
 
-from dynamics import analysis
-from dynamics.files import json_safe
-from dynamics.integrators import METHODS, IntegrationError
-from dynamics.params import TINY, SettingError, blamed
-from dynamics.simulation import (
+from mechviz.dynamics import analysis
+from mechviz.dynamics.files import json_safe
+from mechviz.dynamics.integrators import METHODS, IntegrationError
+from mechviz.dynamics.params import TINY, SettingError, blamed
+from mechviz.dynamics.simulation import (
     MIN_COMPARED_TOL,
     REFERENCE_TOL,
     Simulation,
     reference_description,
 )
-from dynamics.spec import Setup, SystemSpec, checked_state
-from dynamics.steps import Fixed
-from dynamics.systems import SPECS, SYSTEMS
-from viz.interrupts import ctrl_c_within_a_second
+from mechviz.dynamics.spec import Setup, SystemSpec, checked_state
+from mechviz.dynamics.steps import Fixed
+from mechviz.dynamics.systems import SPECS, SYSTEMS
+from mechviz.viz.interrupts import ctrl_c_within_a_second
 
 from ..progress import progress_bar
 from .errors import CliError, number
@@ -54,7 +54,7 @@ PROGRESS_STEPS = 2e6
 
 
 def flag_for(field: str) -> str:
-    """The command-line flag of a setting (:class:`dynamics.params.SettingError` ``field``):
+    """The command-line flag of a setting (:class:`mechviz.dynamics.params.SettingError` ``field``):
     ``bead_mass`` -> ``--bead-mass``, ``initial.speed`` -> ``--speed``."""
     return "--" + field.removeprefix("initial.").replace("_", "-")
 
@@ -106,7 +106,7 @@ _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 # --------------------------------------------------------------------------- analyze
 def analyze(system: str, args: argparse.Namespace) -> dict[str, Any]:
     """The seed's analytic results for ``system`` as a JSON-ready dict
-    (:func:`dynamics.analysis.analyze`); :class:`CliError` naming the flag otherwise."""
+    (:func:`mechviz.dynamics.analysis.analyze`); :class:`CliError` naming the flag otherwise."""
     spec = SPECS[system]
     given = _given(args, [s.name for s in spec.params] + list(spec.analysis_start))
     try:

@@ -6,7 +6,7 @@ existing one), writing each chunk into ``OUT/atlas.zarr`` (an xarray Dataset) as
 and when complete draws ``OUT/KIND.png`` and ``OUT/KIND.svg``. Ctrl-C cancels the cluster's work
 and keeps the chunks already written; ``--resume`` continues the same run (the same flags: the
 store's run key must match). ``--bench OUT`` measures the atlas's costs instead and writes
-``OUT/atlas-bench.json``. Needs the ``atlas`` extra (``pip install -e '.[atlas]'``).
+``OUT/atlas-bench.json``. Needs the ``atlas`` extra (``pip install 'mechviz-lab[atlas]'``).
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ import sys
 from dataclasses import fields
 from pathlib import Path
 
-from dynamics.atlas.grid import SYSTEM_NAMES
-from dynamics.systems import SYSTEMS
+from mechviz.dynamics.atlas.grid import SYSTEM_NAMES
+from mechviz.dynamics.systems import SYSTEMS
 
 from .errors import command
 
@@ -94,10 +94,10 @@ def _as_flag(message: str) -> str:
 
 
 def build_spec(args: argparse.Namespace):
-    """The :class:`dynamics.atlas.AtlasSpec` the flags describe (``ValueError`` naming the flag)."""
-    from dynamics import SYSTEMS, Hoop, methods_for
-    from dynamics.atlas.grid import AtlasSpec, Axis
-    from dynamics.atlas.theory import make_system, start_states
+    """The :class:`mechviz.dynamics.atlas.AtlasSpec` the flags describe (``ValueError`` naming the flag)."""
+    from mechviz.dynamics import SYSTEMS, Hoop, methods_for
+    from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
+    from mechviz.dynamics.atlas.theory import make_system, start_states
 
     system_name = Hoop.name if args.kind == "chaos" else args.system
     params = dict(args.param or ())
@@ -118,7 +118,7 @@ def build_spec(args: argparse.Namespace):
     lo, hi = SYSTEMS[system_name].amplitude[2]
     amp = Axis("amplitude", *(args.amplitude or (lo, hi, 48, "linear")))
     extra = {}
-    from dynamics.atlas.grid import CHAOS_SECTIONS
+    from mechviz.dynamics.atlas.grid import CHAOS_SECTIONS
 
     section = args.section or "rest"
     if args.section and args.kind != "chaos":
@@ -132,7 +132,7 @@ def build_spec(args: argparse.Namespace):
         if name not in (y_name, x_name):
             raise ValueError(f"{name}: the section {section} has the axes {x_name} and {y_name}")
     if args.kind == "chaos":
-        from dynamics.hoop import normal_modes
+        from mechviz.dynamics.hoop import normal_modes
 
         # rates up to 1.5 times the top of the mode-1 pendulum's separatrix, 2 omega_1
         top = 3.0 * float(normal_modes(system.params)[0][0])
@@ -184,12 +184,12 @@ def _run(args: argparse.Namespace) -> int:
         import zarr  # noqa: F401
     except ImportError as exc:
         raise CliError(
-            f"mechviz atlas needs the atlas extra (pip install -e '.[atlas]'): {exc}"
+            f"mechviz atlas needs the atlas extra (pip install 'mechviz-lab[atlas]'): {exc}"
         ) from None
     if args.workers is not None and args.workers < 1:
         raise CliError(f"--workers must be at least 1, got {args.workers}")
     if args.bench:
-        from dynamics.atlas.bench import format_summary, run_bench
+        from mechviz.dynamics.atlas.bench import format_summary, run_bench
 
         result = run_bench(Path(args.bench), quick=args.quick, progress=not args.no_progress)
         print(format_summary(result))
@@ -206,9 +206,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
-    from dynamics.atlas import store
-    from dynamics.atlas.driver import AtlasInterrupted, run_atlas
-    from dynamics.atlas.maps import save_maps
+    from mechviz.dynamics.atlas import store
+    from mechviz.dynamics.atlas.driver import AtlasInterrupted, run_atlas
+    from mechviz.dynamics.atlas.maps import save_maps
 
     from .errors import CliError
 

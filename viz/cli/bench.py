@@ -1,21 +1,20 @@
 """``mechviz bench``: speed against accuracy.
 
-Runs :func:`mechviz_bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
+Runs :func:`mechviz.bench.run_bench` (work-precision sweeps of our methods and scipy's, long-run
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
 ``--out`` (default a temporary folder, ``TMP/mechviz-bench``; ``make bench-docs`` writes the
-committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install -e
-'.[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
+committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install 'mechviz-lab[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
 least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
-``--video`` runs only the video benchmark (:mod:`mechviz_bench.video_speed`: a 10 s helix at
+``--video`` runs only the video benchmark (:mod:`mechviz.bench.video_speed`: a 10 s helix at
 960x540 and 30 fps, today's path beside one page with and without shadow maps, as ratios to real
 time; 3 s with ``--quick``), writes ``video.json`` to ``--out``; the exit status is 1 if videos
 are made slower than real time.
 
 ``--endurance SECONDS`` runs only the viewer's endurance benchmark instead
-(:func:`mechviz_bench.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
+(:func:`mechviz.bench.endurance.run_endurance`: the live viewer with ``--clients`` headless Chromium pages
 for SECONDS, frame rate per 10 s window, memory trend) and writes ``endurance.json`` to ``--out``.
 """
 
@@ -35,7 +34,7 @@ def _viewer_measurements(quick: bool) -> dict:
     """Frame cost of the viewer and speed of the recorder, or why they are not available."""
     out: dict = {}
     try:
-        from mechviz_bench.frame_cost import measure_frame_cost
+        from mechviz.bench.frame_cost import measure_frame_cost
 
         out["frame_cost"] = measure_frame_cost(100 if quick else 300)
     except (ImportError, AttributeError) as exc:
@@ -43,7 +42,7 @@ def _viewer_measurements(quick: bool) -> dict:
     except Exception as exc:  # a measurement that breaks must not lose the whole benchmark
         out["frame_cost"] = f"failed ({exc.__class__.__name__}: {exc})"
     try:
-        from viz.record import measure_record_speed
+        from mechviz.viz.record import measure_record_speed
 
         out["record_speed"] = measure_record_speed(duration=5.0 if quick else 30.0)
     except (ImportError, AttributeError) as exc:
@@ -56,7 +55,7 @@ def _viewer_measurements(quick: bool) -> dict:
 def _endurance(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from mechviz_bench.endurance import EnduranceUnavailable, format_summary, run_endurance
+    from mechviz.bench.endurance import EnduranceUnavailable, format_summary, run_endurance
 
     from .errors import CliError
 
@@ -83,7 +82,7 @@ def _endurance(args: argparse.Namespace) -> int:
 
 
 def _video(args: argparse.Namespace) -> int:
-    from mechviz_bench.video_speed import format_video_speed, measure_video_speed
+    from mechviz.bench.video_speed import format_video_speed, measure_video_speed
 
     from .errors import CliError
 
@@ -125,7 +124,7 @@ def _run(args: argparse.Namespace) -> int:
         return _endurance(args)
     if args.video:
         return _video(args)
-    from mechviz_bench import PROBLEMS, peers, run_bench, summary
+    from mechviz.bench import PROBLEMS, peers, run_bench, summary
 
     from ..interrupts import ctrl_c_within_a_second
     from ..warm import fill_cache_in_parallel
@@ -139,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         viewer = _viewer_measurements(args.quick)
         viewer_s = time.perf_counter() - t0
-    from mechviz_bench.exhibits import bench_cases
+    from mechviz.bench.exhibits import bench_cases
 
     result = run_bench(
         quick=args.quick,
@@ -192,7 +191,7 @@ def _run(args: argparse.Namespace) -> int:
                 )
                 print(f"  {peer:14s} {key:7s} {cells}")
     if result.get("fastest_peers"):
-        from mechviz_bench.fastest_report import case_table, distribution_table
+        from mechviz.bench.fastest_report import case_table, distribution_table
 
         fast = result["fastest_peers"]
         print(f"peers in their fastest form (seed {fast['seed']}; peer / ours, kept, fresh):")
@@ -241,7 +240,7 @@ def add_commands(sub) -> None:
     p.add_argument(
         "--peers",
         action="store_true",
-        help="also run CyRK and heyoka (pip install -e '.[peers]'); each not installed is skipped "
+        help="also run CyRK and heyoka (pip install 'mechviz-lab[peers]'); each not installed is skipped "
         "with the reason",
     )
     p.add_argument(
@@ -271,7 +270,7 @@ def add_commands(sub) -> None:
     p.add_argument(
         "--video",
         action="store_true",
-        help="run only the video benchmark (Chromium; pip install -e '.[video]'): a 10 s "
+        help="run only the video benchmark (Chromium; pip install 'mechviz-lab[video]'): a 10 s "
         "960x540 video, as a ratio to real time beside one page with and without shadow maps; "
         "writes video.json; exit status 1 if slower than real time",
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from dynamics.params import SettingError, parse_number
+from mechviz.dynamics.params import SettingError, parse_number
 
 
 def command(sub, name: str, about: str, **kwargs) -> argparse.ArgumentParser:
@@ -21,7 +21,7 @@ class CliError(Exception):
 
 def number(text: str) -> float:
     """argparse type: a number by the one rule for typed numbers
-    (:func:`dynamics.params.parse_number`)."""
+    (:func:`mechviz.dynamics.params.parse_number`)."""
     try:
         return parse_number("value", text)
     except SettingError as exc:

@@ -1,6 +1,6 @@
-"""``mechviz record`` (record built-in demos headless) and ``mechviz play`` (:mod:`viz.play`).
+"""``mechviz record`` (record built-in demos headless) and ``mechviz play`` (:mod:`mechviz.viz.play`).
 
-Registered on the ``mechviz`` parser by :mod:`viz.cli`; viser and matplotlib are imported only
+Registered on the ``mechviz`` parser by :mod:`mechviz.viz.cli`; viser and matplotlib are imported only
 when a command runs.
 """
 
@@ -68,7 +68,7 @@ def _option_error(exc: ValueError, args) -> CliError:
 
 
 def run_record(args: argparse.Namespace) -> int:
-    from dynamics.fileset import check_room
+    from mechviz.dynamics.fileset import check_room
 
     with ctrl_c_within_a_second():  # a Ctrl-C that an import swallows (trimesh's) still counts
         from .. import record as rec

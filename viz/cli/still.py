@@ -3,7 +3,7 @@ camera, at slide resolution.
 
 A built-in demo (or a demo ``.toml``) is recorded headless up to that moment into a temporary
 folder, by the recorder, and the picture is drawn from that recording by the same player as
-videos (:func:`viz.video.write_still`); a ``.viser`` or recorded ``.html`` is drawn directly.
+videos (:func:`mechviz.viz.video.write_still`); a ``.viser`` or recorded ``.html`` is drawn directly.
 The PNG is written atomically. Bad input exits with status 2 and one line naming the flag.
 """
 
@@ -28,7 +28,7 @@ one PNG of a demo or a recording at a chosen moment (slide resolution)
 Draw one picture of a built-in demo (or a demo .toml, recorded headless up to that moment) or of
 a recording (.viser or recorded .html) at playback time --at, framed on the exhibit or from
 --camera, with the title, caption and the figures true at that moment (or --no-overlay), and
-write it as a PNG atomically. Needs Chromium and pip install -e '.[video]'.
+write it as a PNG atomically. Needs Chromium and pip install 'mechviz-lab[video]'.
 """
 
 

@@ -1,9 +1,9 @@
 """``mechviz video``: a recording (``.viser``, or a recorded ``.html`` page such as the live
 viewer's downloaded session) filmed into an MP4 or a GIF; and the ``--video`` options of
 ``mechviz record``. The options that say how a clip is shown (camera, words, part) are shared
-with ``mechviz still`` (:mod:`viz.cli.still`).
+with ``mechviz still`` (:mod:`mechviz.viz.cli.still`).
 
-Registered on the ``mechviz`` parser by :mod:`viz.cli`; playwright and the encoders are
+Registered on the ``mechviz`` parser by :mod:`mechviz.viz.cli`; playwright and the encoders are
 imported only when a video is made. Bad input exits with status 2 and one line naming the
 flag; a failure with status 1; Ctrl-C with 130. No half-written video is ever left behind.
 """
@@ -25,7 +25,7 @@ from ..printable import printable
 from ..video_input import read_clip
 from .errors import CliError, command, number
 
-# ValueError prefixes from viz.video and viz.framing -> the flag that set the value
+# ValueError prefixes from mechviz.viz.video and mechviz.viz.framing -> the flag that set the value
 FLAGS = {
     "size": "--size",
     "fps": "--fps",
@@ -111,7 +111,7 @@ MP4 (yuv420p: browsers, PowerPoint, Keynote) or GIF, framed on the exhibit, with
 caption and the measured-against-predicted figures true at each moment drawn in. A demo manifest
 beside the file (FILE.json, as mechviz record writes it) gives the duration, fps, words and
 framing; a live session's page its title and the viewer's camera. The video is written
-atomically. Needs Chromium and pip install -e '.[video]'.
+atomically. Needs Chromium and pip install 'mechviz-lab[video]'.
 """
 
 
@@ -259,7 +259,7 @@ def add_record_options(p: argparse.ArgumentParser) -> None:
         "--video",
         choices=video.FORMATS,
         help="also film the recording into DEMO.mp4 or DEMO.gif (headless Chromium; pip install "
-        "-e '.[video]')",
+        "'mechviz-lab[video]')",
     )
     p.add_argument(
         "--size",
@@ -302,7 +302,7 @@ def check_record_options(args: argparse.Namespace, demos) -> None:
 
 
 def film_record(res, args: argparse.Namespace) -> int:
-    """Film a finished recording (:class:`viz.record.RecordResult`) into DEMO.mp4 / DEMO.gif
+    """Film a finished recording (:class:`mechviz.viz.record.RecordResult`) into DEMO.mp4 / DEMO.gif
     beside its other files; the exit status (0 when done)."""
     clip = video.clip_from_manifest(res.paths[".html"].read_bytes(), res.manifest)
     flags = {**FLAGS, "video": "--video"}

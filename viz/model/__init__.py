@@ -1,7 +1,7 @@
 """The exhibits' headless models: settings, runs, events, samples and measured figures.
 
 Nothing here imports viser: the recorder's data, the notebook's runs and the tests use these
-alone; :mod:`viz.scene` draws them.
+alone; :mod:`mechviz.viz.scene` draws them.
 """
 
 from .base import ExhibitConfig, ExhibitModel

@@ -3,7 +3,7 @@ chosen method's step stays stable.
 
 - The **chaos map** of the hoop's start plane at rest, ``(theta1, theta2)`` [rad] over
   [-3, 3] rad each (:func:`chaos_spec`): the largest Lyapunov exponent [1/s] of each start from
-  renormalised twin runs (:mod:`dynamics.atlas.kernels`), RK4 at 0.01 s over 30 s, for the
+  renormalised twin runs (:mod:`mechviz.dynamics.atlas.kernels`), RK4 at 0.01 s over 30 s, for the
   hoop's current parameters. A point of the map is a start: :meth:`ChaosMap.angles_at` turns a
   place on the picture into the angles, :meth:`ChaosMap.place_of` the angles into a place.
 - The **stability map** of one fixed-step method (:func:`stability_spec`): bounded or not after
@@ -14,11 +14,11 @@ chosen method's step stays stable.
 Places on a map are fractions ``(u, v)`` of its width and height, ``u`` from the left and ``v``
 from the top, so a picture of any size (the panel's figure, the scene's texture) maps alike.
 
-Both are computed by the atlas's own kernel (:func:`dynamics.atlas.kernels.compute_chunk`, the
+Both are computed by the atlas's own kernel (:func:`mechviz.dynamics.atlas.kernels.compute_chunk`, the
 whole grid one chunk) in a background process (:class:`MapWorker`): the compiled loops hold
 the interpreter's lock for their whole call, which in a thread would stall the viewer's frames.
 The default hoop's maps are shipped (``assets/atlas/hoop-maps.npz``: the chaos map and each
-fixed-step method's stability map, written by ``python -m viz.model.atlas_map``) and loaded at
+fixed-step method's stability map, written by ``python -m mechviz.viz.model.atlas_map``) and loaded at
 once, so the viewer starts with them; other parameters compute theirs in the background (a few
 seconds each). Needs neither Dask nor xarray.
 """
@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dynamics import Hoop, assets, hoop, methods_for
-from dynamics.atlas.grid import AtlasSpec, Axis
+from mechviz.dynamics import Hoop, assets, hoop, methods_for
+from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
 
 #: The chaos map's angles [rad]: both axes, inside the viewer's start range (-pi, pi).
 CHAOS_RANGE = (-3.0, 3.0)
@@ -102,7 +102,7 @@ def _dt_axis(p: hoop.HoopParams) -> Axis:
 def compute(spec_json: str) -> dict[str, np.ndarray]:
     """The map of the spec (JSON of :meth:`AtlasSpec.as_dict`): its arrays, the whole grid one
     chunk. What the background process runs."""
-    from dynamics.atlas.kernels import compute_chunk
+    from mechviz.dynamics.atlas.kernels import compute_chunk
 
     spec = AtlasSpec.from_dict(json.loads(spec_json))
     out = compute_chunk(spec, (0, 0, 0))
@@ -204,7 +204,7 @@ class StabilityMap:
 
     def linear_limit(self) -> np.ndarray:
         """The largest linearly stable step [s] per amplitude of the map."""
-        from dynamics.atlas.theory import linear_limit_dt
+        from mechviz.dynamics.atlas.theory import linear_limit_dt
 
         return linear_limit_dt(self.spec.make_system(), self.spec.methods[0], self.spec.x.values())
 
@@ -213,7 +213,7 @@ def start_amplitude(p: hoop.HoopParams, angles) -> float:
     """The larger of the two normal-mode amplitudes [rad] of a start at rest (the stability
     map's abscissa: each mode displaced by it)."""
     _, shapes = hoop.normal_modes(p)
-    from dynamics.measure import modal_coordinates
+    from mechviz.dynamics.measure import modal_coordinates
 
     return float(np.abs(modal_coordinates(np.asarray(angles, float)[None, :2], shapes)).max())
 
@@ -283,7 +283,7 @@ def write_shipped(path: Path | None = None) -> Path:
 # --------------------------------------------------------------------------- in the background
 class MapWorker:
     """Maps computed in background processes, one per request (``python -m
-    viz.model.atlas_map --compute SPEC OUT``: a process of its own imports nothing of the
+    mechviz.viz.model.atlas_map --compute SPEC OUT``: a process of its own imports nothing of the
     caller's, and is simply killed when its map is no longer wanted). :meth:`request` asks for
     the map of a spec in a slot (a request still running in that slot is killed); :meth:`poll`
     returns ``(spec, arrays)`` once it is done, or None."""
@@ -405,5 +405,5 @@ class HoopMaps:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--compute"]:  # a background request (MapWorker)
         _compute_to(sys.argv[2], sys.argv[3])
-    else:  # python -m viz.model.atlas_map [PATH]: the shipped maps
+    else:  # python -m mechviz.viz.model.atlas_map [PATH]: the shipped maps
         print(write_shipped(Path(sys.argv[1]) if len(sys.argv) > 1 else None))

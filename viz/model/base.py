@@ -1,9 +1,9 @@
 """What the three exhibits' models share: the settings base class and the headless model of an
-exhibit (its sample buffers are in :mod:`viz.model.history`).
+exhibit (its sample buffers are in :mod:`mechviz.viz.model.history`).
 
-An exhibit's *model* owns the :class:`dynamics.Simulation` (s) of one system, its events, the
+An exhibit's *model* owns the :class:`mechviz.dynamics.Simulation` (s) of one system, its events, the
 samples its readouts and charts need, and the figures measured from them; it imports no viser and
-draws nothing. The view (:mod:`viz.scene`) subclasses it to draw the scene and build the panel;
+draws nothing. The view (:mod:`mechviz.viz.scene`) subclasses it to draw the scene and build the panel;
 the recorder, the notebook and the tests run the model alone. Every model has
 
 - ``config``: a frozen, validated settings dataclass (:class:`ExhibitConfig`); change it with
@@ -14,12 +14,12 @@ the recorder, the notebook and the tests run the model alone. Every model has
 - ``apply(command)``: ``{"op": "reset"}``, ``{"op": "set", ...}`` and the exhibit's own
   operations (a kick); an invalid value raises ``ValueError`` naming the field, changing nothing,
 - ``state``, ``sample``, ``t``, ``paused``, ``failure``, ``measured()`` (the figures measured
-  from the motion, by name, from :mod:`dynamics.measure`), ``chart_data()``, ``runs()`` (the
+  from the motion, by name, from :mod:`mechviz.dynamics.measure`), ``chart_data()``, ``runs()`` (the
   simulations a recording traces, by role),
 - ``revision``: bumped by every change; while unchanged, a view would show the same thing,
 - ``plot_variables(config)``, ``plot_curves(config, x, y, samples)``, ``pictures(config)``
   and ``default_plot(config)``: what a plot of any variable against any other and a recording's
-  pictures draw (:mod:`viz.model.plot`); ``plot_samples()`` the main run's samples over the
+  pictures draw (:mod:`mechviz.viz.model.plot`); ``plot_samples()`` the main run's samples over the
   chart window.
 """
 
@@ -33,8 +33,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-from dynamics import params as _v
+from mechviz import dynamics
+from mechviz.dynamics import params as _v
 
 from .history import History, LongHistory, Motion, Ring  # noqa: F401  (re-exported)
 from .plot import Curve, Samples, Variable, common_variables
@@ -56,7 +56,7 @@ def log10_abs(x) -> float:
 
 def fmt(x, digits: int = 4) -> str:
     """A number to ``digits`` significant digits, "—" for ``None``; a
-    :class:`dynamics.measure.Estimate` shows its value or "not resolved (reason)"."""
+    :class:`mechviz.dynamics.measure.Estimate` shows its value or "not resolved (reason)"."""
     if hasattr(x, "text"):
         return x.text(digits)
     return "—" if x is None else f"{x:.{digits}g}"
@@ -72,11 +72,11 @@ class ExhibitConfig:
     """Settings every exhibit has; subclasses add their own and ``_validate`` them.
 
     ``method`` is integrated with ``dt`` [s] if it takes fixed steps, ``rtol`` if adaptive (the
-    method picks, :meth:`dynamics.Method.step_options`). ``params`` are the system's physical
+    method picks, :meth:`mechviz.dynamics.Method.step_options`). ``params`` are the system's physical
     parameters by name (its ``Params`` dataclass checks them). Validated on construction, so an
     instance always holds settings a run can start from."""
 
-    system_name: ClassVar[str]  # the driver's name of the system (:data:`dynamics.SYSTEMS`)
+    system_name: ClassVar[str]  # the driver's name of the system (:data:`mechviz.dynamics.SYSTEMS`)
     spec: ClassVar[dynamics.SystemSpec]  # the system's description: parameters, start, step
     demo_initial_keys: ClassVar[frozenset[str]] = frozenset()  # a demo's [initial] keys
 
@@ -114,7 +114,7 @@ class ExhibitConfig:
 
     def physics(self):
         """The validated parameter dataclass of :mod:`dynamics` for ``params``
-        (:meth:`dynamics.SystemSpec.parameters`)."""
+        (:meth:`mechviz.dynamics.SystemSpec.parameters`)."""
         return self.spec.parameters(self.params)
 
 
@@ -205,7 +205,7 @@ class ExhibitModel(Rewinding):
         return out
 
     def _make_simulation(self, system, method: str, state, *, dt=None, rtol=None, reference="auto"):
-        """A :class:`dynamics.Simulation` of ``method`` with the step setting it takes (``dt``
+        """A :class:`mechviz.dynamics.Simulation` of ``method`` with the step setting it takes (``dt``
         and ``rtol`` default to the config's)."""
         c = self.config
         m = dynamics.get_method(method)
@@ -232,7 +232,7 @@ class ExhibitModel(Rewinding):
         self, sim_seconds: float, *, measure: bool = True, shown: float | None = None
     ) -> None:
         """Advance every simulation by ``sim_seconds`` (no-op while paused; scrubbed back, the
-        run goes on from the moment shown, :mod:`viz.model.rewind`). ``measure``: also sample
+        run goes on from the moment shown, :mod:`mechviz.viz.model.rewind`). ``measure``: also sample
         the energy and error (a chart point, and the divergence check); the live app measures
         each exhibit on every third frame, as a sample costs more than the step. ``shown``: the
         seconds of the show this advance stands for (default ``sim_seconds``, as at 1x)."""
@@ -305,7 +305,7 @@ class ExhibitModel(Rewinding):
     def set_chart_window(self, seconds: float) -> None:
         """Spread the chart's points evenly over the last ``seconds`` of simulated time (the
         number of points stays the same), taken from the long history (ten minutes,
-        :mod:`viz.model.history`): the chart keeps what it showed; the trace starts afresh."""
+        :mod:`mechviz.viz.model.history`): the chart keeps what it showed; the trace starts afresh."""
         self.chart_spacing = float(seconds) / self.history.maxlen
         self.chart_window = float(seconds)
         self.history.clear()
@@ -349,9 +349,9 @@ class ExhibitModel(Rewinding):
 
     def stability_text(self) -> str:
         """Where the running method's step stops being stable (markdown, for the step control):
-        the largest stable dt from :func:`dynamics.stability.stability_limit` for the current
+        the largest stable dt from :func:`mechviz.dynamics.stability.stability_limit` for the current
         parameters and state, and whether the chosen dt is inside it."""
-        from dynamics import stability
+        from mechviz.dynamics import stability
 
         sim = self.sim
         m = sim.method
@@ -453,7 +453,7 @@ class ExhibitModel(Rewinding):
 
     def _jump_to_start(self) -> None:
         """Put every run at the configured start without restarting it
-        (:meth:`dynamics.Simulation.jump`), for exhibits that list ``start_fields``."""
+        (:meth:`mechviz.dynamics.Simulation.jump`), for exhibits that list ``start_fields``."""
         raise NotImplementedError
 
     def reset(self) -> None:
@@ -477,7 +477,7 @@ class ExhibitModel(Rewinding):
     # ------------------------------------------------------------------ any variable against any other
     @classmethod
     def plot_variables(cls, config) -> dict[str, Variable]:
-        """The quantities the exhibit can plot for ``config``, by name (:mod:`viz.model.plot`):
+        """The quantities the exhibit can plot for ``config``, by name (:mod:`mechviz.viz.model.plot`):
         at least time, the state, energy and the errors."""
         system = dynamics.SYSTEMS[cls.system_for(config)]
         return {**common_variables(system.state_labels), **cls.quantities(config)}
@@ -485,7 +485,7 @@ class ExhibitModel(Rewinding):
     @classmethod
     def quantities(cls, config) -> dict[str, Variable]:
         """The system's own quantities beyond the state, as its description names them
-        (:attr:`dynamics.systems.Cyclotron.quantity_labels` and the like)."""
+        (:attr:`mechviz.dynamics.systems.Cyclotron.quantity_labels` and the like)."""
         system = dynamics.SYSTEMS[cls.system_for(config)](config.physics())
         return {
             name: Variable(label, lambda s, name=name: system.quantities(s.states)[name])
@@ -494,7 +494,7 @@ class ExhibitModel(Rewinding):
 
     @classmethod
     def system_for(cls, config) -> str:
-        """The name of the :data:`dynamics.SYSTEMS` entry a run of ``config`` integrates."""
+        """The name of the :data:`mechviz.dynamics.SYSTEMS` entry a run of ``config`` integrates."""
         return config.system_name
 
     @classmethod
@@ -535,7 +535,7 @@ class ExhibitModel(Rewinding):
     @classmethod
     def recorded_figures(cls, config, tr) -> list[dict[str, Any]]:
         """The figures a recording of ``config`` reports, measured from its traces
-        (:class:`viz.model.traces.Traces`) against theory (:mod:`viz.model.figures`)."""
+        (:class:`mechviz.viz.model.traces.Traces`) against theory (:mod:`mechviz.viz.model.figures`)."""
         return []
 
     def method_line(self, sim: dynamics.Simulation) -> str:

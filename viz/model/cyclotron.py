@@ -2,9 +2,9 @@
 
 The charge starts on a circle (or from a whole state), optionally with a comparison method and a
 beam of charges from the same point with a spread of speeds, advanced in one batched call. A
-radial kick (``dynamics.cyclotron.radial_kick``) changes the state at the current time without
+radial kick (``mechviz.dynamics.cyclotron.radial_kick``) changes the state at the current time without
 restarting the run; the circle theory predicts moves at once, and the estimators start a new
-segment of samples. The view is :class:`viz.scene.cyclotron.CyclotronExhibit`.
+segment of samples. The view is :class:`mechviz.viz.scene.cyclotron.CyclotronExhibit`.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-from dynamics import cyclotron as cy
-from dynamics import measure
-from dynamics.systems import CYCLOTRON
+from mechviz import dynamics
+from mechviz.dynamics import cyclotron as cy
+from mechviz.dynamics import measure
+from mechviz.dynamics.systems import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
 from .figures import figure, keep
@@ -159,7 +159,8 @@ class CyclotronModel(ExhibitModel):
 
     def measured(self) -> dict:
         """Gyrofrequency and circle of the charge since its start or last kick
-        (:func:`dynamics.measure.gyrofrequency`, :func:`dynamics.measure.fit_circle`), and each
+        (:func:`mechviz.dynamics.measure.gyrofrequency`,
+        :func:`mechviz.dynamics.measure.fit_circle`), and each
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
         out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
@@ -200,7 +201,7 @@ class CyclotronModel(ExhibitModel):
 
     def kick_effects(self, dv: float) -> dict[str, dict]:
         """Kick every run (and the beam) radially by ``dv`` [m/s] at the current time, without a
-        restart (:meth:`dynamics.Simulation.jump`); returns, by run, the state before and what
+        restart (:meth:`mechviz.dynamics.Simulation.jump`); returns, by run, the state before and what
         theory predicts: each member's new centre and radius and the shift ``|dv| / |Omega|``."""
         p = self.params
         out = {}
@@ -363,7 +364,7 @@ class CyclotronModel(ExhibitModel):
 
 def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
     """The charge's radial motion in its effective potential: ``p_phi`` is conserved, so
-    ``E_perp = p_r^2/2m + V_eff(r)`` (:func:`dynamics.cyclotron.radial_coordinates`) and ``r``
+    ``E_perp = p_r^2/2m + V_eff(r)`` (:func:`mechviz.dynamics.cyclotron.radial_coordinates`) and ``r``
     swings between the orbit's closest and farthest distances from the axis, where
     ``V_eff = E_perp``. Returns the chart's ``x`` (radii [m], the charge's ``r`` and the well's
     bottom ``r0`` among them), ``V`` [J], the ``level`` E_perp [J], ``point`` and ``bottom`` (V at

@@ -1,11 +1,11 @@
 """The spinning disk's model: a disk with a bead on its rim, turned about an axle along a
 diameter, headless.
 
-*Driven*: the exact uniform rotation (``dynamics.DrivenDisk``, method ``exact``), whose bearing
-forces (``dynamics.disk.bearing_force_a/b``) the motion's dL/dt measures. *Released*: the axle is
-removed at ``t = 0`` and the free body tumbles (``dynamics.ReleasedDisk``, integrated by the chosen
+*Driven*: the exact uniform rotation (``mechviz.dynamics.DrivenDisk``, method ``exact``), whose bearing
+forces (``mechviz.dynamics.disk.bearing_force_a/b``) the motion's dL/dt measures. *Released*: the axle is
+removed at ``t = 0`` and the free body tumbles (``mechviz.dynamics.ReleasedDisk``, integrated by the chosen
 method); the wobble's growth rate and the polhode's period are measured from the motion. The view
-is :class:`viz.scene.disk.DiskExhibit`.
+is :class:`mechviz.viz.scene.disk.DiskExhibit`.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-from dynamics import disk as dk
-from dynamics import measure
-from dynamics.systems import DISK
+from mechviz import dynamics
+from mechviz.dynamics import disk as dk
+from mechviz.dynamics import measure
+from mechviz.dynamics.systems import DISK
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
@@ -146,8 +146,8 @@ class DiskModel(ExhibitModel):
 
     def measured(self) -> dict:
         """Driven: the bearing force amplitude at B from dL/dt of the sampled motion
-        (:func:`dynamics.measure.bearing_force_amplitude`); released: the wobble's growth rate
-        (:func:`dynamics.measure.wobble_growth_rate`)."""
+        (:func:`mechviz.dynamics.measure.bearing_force_amplitude`); released: the wobble's growth rate
+        (:func:`mechviz.dynamics.measure.wobble_growth_rate`)."""
         t, x = self.motion.arrays()
         if self.config.mode == "driven":
             return {

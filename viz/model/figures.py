@@ -1,6 +1,6 @@
 """Measured against predicted: the figure a model reports for a recording, as a JSON-ready dict.
 
-Every measured number comes from :mod:`dynamics.measure` applied to the recorded frames, the
+Every measured number comes from :mod:`mechviz.dynamics.measure` applied to the recorded frames, the
 same estimators the viewer's readouts apply to the samples a model keeps; every predicted number
 from the system's module in :mod:`dynamics`. A figure the frames cannot support (too short a
 stretch, too few crossings, aliased) has no measured value and says why (``not_resolved``)
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from dynamics import measure
+from mechviz.dynamics import measure
 
 
 def figure(

@@ -105,7 +105,7 @@ class History:
 class Motion:
     """Samples of a run's motion since it started or last jumped: the times and one array per
     sample (a velocity, the angles, ...), the newest ``maxlen``. The estimators of
-    :mod:`dynamics.measure` read them, exactly as the recorder reads its frames."""
+    :mod:`mechviz.dynamics.measure` read them, exactly as the recorder reads its frames."""
 
     def __init__(self, shape: tuple[int, ...], maxlen: int = 1800) -> None:
         self.shape = tuple(shape)

@@ -1,10 +1,10 @@
 """The hoop's model: a hoop swinging in its own plane about a pivot on its rim, a bead sliding on
 it without friction, headless.
 
-Beside the nonlinear motion, linear theory from the same start (``dynamics.hoop.linear_solution``)
+Beside the nonlinear motion, linear theory from the same start (``mechviz.dynamics.hoop.linear_solution``)
 gives the ghost. Both normal-mode frequencies are measured from the motion: the angles are
 projected on the mode shapes and each modal coordinate is timed between its zero crossings
-(:mod:`dynamics.measure`). The view is :class:`viz.scene.hoop.HoopExhibit`.
+(:mod:`mechviz.dynamics.measure`). The view is :class:`mechviz.viz.scene.hoop.HoopExhibit`.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-import dynamics
-from dynamics import hoop as hp
-from dynamics import measure
-from dynamics.systems import HOOP, HOOP_MODES
+from mechviz import dynamics
+from mechviz.dynamics import hoop as hp
+from mechviz.dynamics import measure
+from mechviz.dynamics.systems import HOOP, HOOP_MODES
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
@@ -124,7 +124,7 @@ class HoopModel(ExhibitModel):
 
     def measured(self) -> dict:
         """Both normal-mode frequencies from the sampled angles
-        (:func:`dynamics.measure.mode_frequencies`)."""
+        (:func:`mechviz.dynamics.measure.mode_frequencies`)."""
         t, angles = self.motion.arrays()
         return {"mode_frequencies": measure.mode_frequencies(t, angles, self.shapes)}
 

@@ -2,10 +2,10 @@
 another with the exact curves of the system's theory beside the motion.
 
 One path for the live viewer and the recordings. An exhibit names its quantities
-(:meth:`viz.scene.base.Exhibit.plot_variables`: state, energy, errors and the quantities its
+(:meth:`mechviz.viz.scene.base.Exhibit.plot_variables`: state, energy, errors and the quantities its
 theory is told in, such as the charge's ``r`` and ``V_eff`` or the hoop's modal coordinates),
 each computed from :class:`Samples` of a run; and the exact curves that go with a pair
-(:meth:`~viz.scene.base.Exhibit.plot_curves`: the well ``V_eff(r)``, the mode-1 pendulum's
+(:meth:`~mechviz.viz.scene.base.Exhibit.plot_curves`: the well ``V_eff(r)``, the mode-1 pendulum's
 separatrix, the mode lines of configuration space). The live panel draws the main run's samples
 over the chart window into an image (:class:`PlotImage`); a recording writes the same quantities
 as CSV columns and draws the exhibit's pictures (``Exhibit.pictures``) in its PNG, both with
@@ -31,7 +31,7 @@ CURVE_COLOURS = ("#8e44c9", "#7f7f7f", "#d08a00", "#1a9e77")
 @dataclass(frozen=True)
 class Samples:
     """Samples of one run (one member of an ensemble), oldest first: times ``t`` [s] (K,),
-    ``states`` (K, d), ``energy`` [J], ``energy_error`` (relative, see :mod:`dynamics.simulation`)
+    ``states`` (K, d), ``energy`` [J], ``energy_error`` (relative, see :mod:`mechviz.dynamics.simulation`)
     and ``error`` (relative, NaN where nothing is measured), each (K,)."""
 
     t: np.ndarray

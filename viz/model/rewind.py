@@ -6,7 +6,7 @@ viewer passes simulated seconds over its speed; a model run alone counts simulat
 1x). At 10x a minute of the show is ten simulated minutes, at 0.1x six simulated seconds: either
 way the picture can go back to what was on the screen a minute ago.
 
-The runs' states (:mod:`dynamics.snapshot`: the whole of every simulation, the reference run
+The runs' states (:mod:`mechviz.dynamics.snapshot`: the whole of every simulation, the reference run
 included) are kept in one preallocated buffer, at most one every ``SECONDS / rows`` of the show,
 where ``rows`` is the display rate's worth for ``SECONDS`` (one a frame at 60 Hz) or fewer when a
 row is large (a beam of many charges), so the memory never exceeds ``BUDGET`` bytes whatever the
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dynamics import snapshot as snap
+from mechviz.dynamics import snapshot as snap
 
 from .history import Ring
 
@@ -101,7 +101,7 @@ class Rewind:
 
 
 class Rewinding:
-    """What an exhibit's model (:class:`viz.model.base.ExhibitModel`) gets to go back in its run:
+    """What an exhibit's model (:class:`mechviz.viz.model.base.ExhibitModel`) gets to go back in its run:
     ``scrub(seconds_back)`` shows the runs as they were that long ago in the show (the
     simulations themselves are put back, so everything drawn and read out from them, ``t`` first,
     is of that moment; the newer states stay kept until the run goes on), and the run goes on
@@ -159,7 +159,7 @@ class Rewinding:
 
     def _timed_samples(self) -> list:
         """Everything kept in time order that can forget what came after a moment: the charts'
-        points, the plot's trace and the estimators' samples (:class:`viz.model.history.Motion`)."""
+        points, the plot's trace and the estimators' samples (:class:`mechviz.viz.model.history.Motion`)."""
         from .history import Motion
 
         kept = [self.history, self.long_history, self.trace]

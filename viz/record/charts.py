@@ -1,7 +1,7 @@
 """A recording's chart as files: PNG always, SVG and PDF on request (slides and papers), and
 the rule for equal aspect in its pictures.
 
-The chart is drawn once (:func:`viz.record.outputs.chart_figure`) and saved in each format
+The chart is drawn once (:func:`mechviz.viz.record.outputs.chart_figure`) and saved in each format
 asked for; vector formats are on request because each is a full second drawing of a figure
 with every frame's samples. A picture whose two axes share a unit (the orbit ``x``-``y``, the
 disk's ``L_x``-``L_z``, the body rates of the polhode, the hoop's configuration space) is drawn

@@ -9,7 +9,7 @@ times faster).
 
 The schema is a set of :mod:`msgspec` structs: a key the schema does not know, or a value of the
 wrong kind, is refused with the file name and the key's path (``helix.toml: events[0].t: ...``).
-:meth:`Demo.config` maps a valid demo onto the settings of its exhibit (:mod:`viz.model`): every
+:meth:`Demo.config` maps a valid demo onto the settings of its exhibit (:mod:`mechviz.viz.model`): every
 demo the schema allows is expressible there, so the recorder draws every demo with the viewer's
 own exhibits.
 """
@@ -25,9 +25,9 @@ from typing import Any, Literal
 
 import msgspec
 
-import dynamics
-from dynamics import hoop
-from dynamics.assets import asset
+from mechviz import dynamics
+from mechviz.dynamics import hoop
+from mechviz.dynamics.assets import asset
 
 from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
 from ..printable import printable
@@ -150,7 +150,7 @@ class Demo(_Struct):
         return d
 
     def config(self) -> ExhibitConfig:
-        """The settings of this demo's exhibit (:mod:`viz.model`); ``ValueError`` naming the
+        """The settings of this demo's exhibit (:mod:`mechviz.viz.model`); ``ValueError`` naming the
         setting if the demo's values are out of range for it."""
         cls = MODELS[self.exhibit].Config
         base = cls()
@@ -277,10 +277,11 @@ def _schema_message(text: str) -> str:
 # =========================================================================== checks
 def with_defaults(d: Demo) -> Demo:
     """``d`` with what it leaves out taken from its system's description
-    (:data:`dynamics.SPECS`): the title, the disk's motion and the method."""
+    (:data:`mechviz.dynamics.SPECS`): the title, the disk's motion and the method."""
     if d.exhibit not in dynamics.SPECS:
         raise dynamics.SettingError(
-            "exhibit", f"exhibit must be one of {', '.join(dynamics.SPECS)}; got {d.exhibit!r}"
+            "exhibit",
+            f"exhibit must be one of {', '.join(dynamics.SPECS)}; got {d.exhibit!r}",
         )
     spec = dynamics.SPECS[d.exhibit]
     changes: dict[str, Any] = {}
@@ -297,7 +298,7 @@ def with_defaults(d: Demo) -> Demo:
 
 
 def demo_key(d: Demo, field: str) -> str:
-    """The demo key of a setting (:class:`dynamics.SettingError` ``field``): a physical
+    """The demo key of a setting (:class:`mechviz.dynamics.SettingError` ``field``): a physical
     parameter under ``parameters.``, a start setting under ``initial.``, the rest as named."""
     spec = dynamics.SPECS[d.exhibit]
     if field in {s.name for s in spec.params}:
@@ -382,7 +383,7 @@ def check(d: Demo) -> None:
 
 
 #: Limits that keep a recording's work in proportion to the demo; each is refused up front
-#: with the key that passes it. The step count is bounded separately (viz.record.scales.MAX_STEPS).
+#: with the key that passes it. The step count is bounded separately (mechviz.viz.record.scales.MAX_STEPS).
 MAX_EVENTS = 100  # scripted events per recording: each cuts the run and is drawn in the chart
 MIN_RTOL = 1e-15  # below it float64 rounding, not the tolerance, limits the step (and Taylor's
 #                  method raises its order, and its cost per step, without end)
@@ -405,7 +406,7 @@ def check_scale(d: Demo) -> None:
 
 def _check_run(d: Demo, where: str, method: str, dt, rtol, eff_dt, eff_rtol) -> None:
     """``dt`` / ``rtol``: what the run's own table gives; ``eff_*``: what it runs with. The
-    method and step are checked by the system's description (:meth:`dynamics.SystemSpec.setup`),
+    method and step are checked by the system's description (:meth:`mechviz.dynamics.SystemSpec.setup`),
     as everywhere else; a refusal names the key here (``compare.dt``)."""
     spec = dynamics.SPECS[d.exhibit]
     m = dynamics.METHODS.get(method)

@@ -1,6 +1,6 @@
 """Measured against predicted: the figures a recording's manifest and chart report, as each
-exhibit's model lists them (:meth:`viz.model.base.ExhibitModel.recorded_figures`,
-:mod:`viz.model.figures`)."""
+exhibit's model lists them (:meth:`mechviz.viz.model.base.ExhibitModel.recorded_figures`,
+:mod:`mechviz.viz.model.figures`)."""
 
 from __future__ import annotations
 

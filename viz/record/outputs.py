@@ -2,13 +2,13 @@
 
 ``DEMO.csv`` holds one row per run, member and frame: ``run, member, t``, the state (names from
 :mod:`dynamics`), the energy, the relative energy error and the error against the exact
-solution or the tight reference (:class:`dynamics.Simulation`), then the exhibit's other
-quantities, as the viewer's plot names them (:meth:`viz.model.base.ExhibitModel.plot_variables`: the
+solution or the tight reference (:class:`mechviz.dynamics.Simulation`), then the exhibit's other
+quantities, as the viewer's plot names them (:meth:`mechviz.viz.model.base.ExhibitModel.plot_variables`: the
 charge's ``r``, ``p_r``, ``p_phi``, ``V_eff``; the hoop's modal coordinates ``q1``, ``q2``; the
 disk's ``L``). ``DEMO.png`` charts the motion with the predictions marked, the energy error and
-the error, and below them the exhibit's pictures (:meth:`~viz.model.base.ExhibitModel.pictures`:
+the error, and below them the exhibit's pictures (:meth:`~mechviz.viz.model.base.ExhibitModel.pictures`:
 the well, configuration space, the phase portrait, the polhode) with their exact curves, drawn
-by the viewer's own :func:`viz.model.plot.draw_xy`. ``DEMO.json`` is the manifest.
+by the viewer's own :func:`mechviz.viz.model.plot.draw_xy`. ``DEMO.json`` is the manifest.
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from typing import Any
 import msgspec
 import numpy as np
 
-import dynamics
-from dynamics import cyclotron, disk, hoop, measure
-from dynamics.systems import CYCLOTRON, DISK
+from mechviz import dynamics
+from mechviz.dynamics import cyclotron, disk, hoop, measure
+from mechviz.dynamics.systems import CYCLOTRON, DISK
 
 from ..model import MODELS
 from ..model.plot import Curve, Samples, draw_xy
@@ -149,7 +149,7 @@ def draw_pictures(d: Demo, tr: Traces, axes) -> None:
 
 
 def chart_png(d: Demo, tr: Traces, figs: list[dict[str, Any]]) -> bytes:
-    """:func:`chart_figure` as PNG (:mod:`viz.record.charts` saves it in other formats too)."""
+    """:func:`chart_figure` as PNG (:mod:`mechviz.viz.record.charts` saves it in other formats too)."""
     return charts.save(chart_figure(d, tr, figs))[".png"]
 
 

@@ -2,8 +2,8 @@
 
 ``DEMO.viser`` (viser's scene recording, played by ``mechviz play`` with a time slider),
 ``DEMO.html`` (the same in viser's self-contained page; plays from file://), ``DEMO.csv``,
-``DEMO.png`` and ``DEMO.json`` (:mod:`viz.record.outputs`). All five are built in memory, then
-written as one set by :func:`dynamics.fileset.write_set` (the names in the folder are links into
+``DEMO.png`` and ``DEMO.json`` (:mod:`mechviz.viz.record.outputs`). All five are built in memory, then
+written as one set by :func:`mechviz.dynamics.fileset.write_set` (the names in the folder are links into
 a hidden set folder, switched by a single rename): a recording that fails, is interrupted or is
 killed leaves the folder with the whole old set or the whole new one, a second recording into
 the same folder waits for the first, and :class:`RecordingFailed` says what the folder holds.
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import dynamics
-from dynamics.files import WriteFailed, WriteInterrupted, json_safe
-from dynamics.fileset import WaitFn, check_room, write_set
+from mechviz import dynamics
+from mechviz.dynamics.files import WriteFailed, WriteInterrupted, json_safe
+from mechviz.dynamics.fileset import WaitFn, check_room, write_set
 
 from . import charts
 from .demo import Demo, load_demo
@@ -77,7 +77,7 @@ def record(
     plots: tuple[str, ...] | str = (),
 ) -> RecordResult:
     """Record ``demo`` into ``out_dir`` (the five files of the module docstring, and the chart
-    in each of ``plots`` as well: ``"svg"``, ``"pdf"``, :mod:`viz.record.charts`).
+    in each of ``plots`` as well: ``"svg"``, ``"pdf"``, :mod:`mechviz.viz.record.charts`).
 
     ``progress(frame, frames)`` is called after each frame. Raises :class:`RecordingFailed`
     (the cause chained) if a run blows up or anything fails before the files are in place;

@@ -1,8 +1,8 @@
 """Running a demo frame by frame, one frame every ``1 / fps`` of playback.
 
-:func:`trace_demo` runs the demo's model alone (:mod:`viz.model`, no viser): it advances it
+:func:`trace_demo` runs the demo's model alone (:mod:`mechviz.viz.model`, no viser): it advances it
 frame by frame (simulated time ``speed / fps`` per frame), fires the scripted events at their
-times (a kick is a jump of the same runs, :meth:`dynamics.Simulation.jump`: time and counters go
+times (a kick is a jump of the same runs, :meth:`mechviz.dynamics.Simulation.jump`: time and counters go
 on) and keeps every run's samples and the measured figures as :class:`Traces`; the CSV, the
 figures and the charts of a recording come from these. :func:`run_demo` does the same with the
 viewer's own exhibit in a headless viser server, drawing every frame into two scene serializers
@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-import dynamics
+from mechviz import dynamics
 
 from ..model import MODELS
 from ..model.base import ExhibitModel
@@ -62,7 +62,7 @@ def build_exhibit(server, demo: Demo):
 
 def trace_demo(demo: Demo, progress: ProgressFn | None = None) -> Traces:
     """Run ``demo``'s model headless (no viser) and return every run's samples and the figures
-    measured from them. Raises :class:`dynamics.IntegrationError` if a run blows up."""
+    measured from them. Raises :class:`mechviz.dynamics.IntegrationError` if a run blows up."""
     model = MODELS[demo.exhibit](demo.config(), history_len=8)
     check_work(model, demo)
     return _run(model, demo, progress)
@@ -70,7 +70,7 @@ def trace_demo(demo: Demo, progress: ProgressFn | None = None) -> Traces:
 
 def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "light") -> Recorded:
     """Run ``demo`` headless and record it (see the module docstring); ``theme`` ("light" or
-    "dark") is the page of the ``.html``. Raises :class:`dynamics.IntegrationError` if a run
+    "dark") is the page of the ``.html``. Raises :class:`mechviz.dynamics.IntegrationError` if a run
     blows up."""
     if theme not in ("light", "dark"):
         raise ValueError(f"theme must be light or dark, got {theme!r}")
@@ -187,7 +187,7 @@ def _run(
 
 def check_work(ex: ExhibitModel, demo: Demo) -> None:
     """Refuse, before anything runs, a demo whose runs would take more than :data:`MAX_STEPS`
-    steps (:meth:`dynamics.Simulation.estimated_steps`), naming what sets the count."""
+    steps (:meth:`mechviz.dynamics.Simulation.estimated_steps`), naming what sets the count."""
     steps = sum(sim.estimated_steps(demo.simulated_time) for sim in ex.simulations())
     if not steps <= MAX_STEPS:
         raise ValueError(
@@ -215,7 +215,7 @@ def _order(sim: dynamics.Simulation) -> int | None:
     """The order the run used: Taylor's from its tolerance, ``None`` for LSODA's variable one."""
     m = sim.method
     if m.kernel == "taylor":
-        from dynamics.integrators.taylor import order_for
+        from mechviz.dynamics.integrators.taylor import order_for
 
         return order_for(sim.rtol, sim.atol, sim.system.sys_id)[0]
     return None if m.variable_order else m.order

@@ -2,7 +2,7 @@
 
 The schema and the exhibit's settings check each value on its own; these checks look at what
 the values make together, with the rule ``mechviz analyze`` applies to its flags
-(:func:`dynamics.analysis.unrepresentable`), so the command line and demo files refuse the same
+(:func:`mechviz.dynamics.analysis.unrepresentable`), so the command line and demo files refuse the same
 parameters:
 
 - every number in the file is 0 or a normal double (a subnormal such as ``5e-324`` keeps a few
@@ -25,10 +25,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-import dynamics
-from dynamics import analysis
-from dynamics.params import blamed
-from dynamics.systems import CYCLOTRON, HOOP
+from mechviz import dynamics
+from mechviz.dynamics import analysis
+from mechviz.dynamics.params import blamed
+from mechviz.dynamics.systems import CYCLOTRON, HOOP
 
 from ..model import MODELS
 

@@ -1,5 +1,5 @@
 """The three scenes, one module each: its exhibit drawn with viser over the headless model of
-:mod:`viz.model` (whose ``Config`` holds the settings), and its GUI panel. :data:`EXHIBITS` is
+:mod:`mechviz.viz.model` (whose ``Config`` holds the settings), and its GUI panel. :data:`EXHIBITS` is
 the one registry of exhibits, in the order the viewer lays them out and shows their tabs."""
 
 from .base import Exhibit

@@ -5,10 +5,10 @@ viser 1.1 reports no click position on a GUI image; a scene image node does (``o
 the pointer's ray in world coordinates). So the chaos map stands in the scene above the
 configuration-space square, in the same plane (theta1 across, theta2 up), and a click there is
 turned into a start at rest: the ray meets the map's plane at a place ``(u, v)``, which
-:meth:`viz.model.atlas_map.ChaosMap.angles_at` turns into ``(theta1, theta2)``. The tab shows
+:meth:`mechviz.viz.model.atlas_map.ChaosMap.angles_at` turns into ``(theta1, theta2)``. The tab shows
 the same map with its axes, colour bar, normal-mode lines and the current start, and the
 stability map of the running method with the current step marked (a magenta line at ``dt`` and
-a dot at the start's amplitude). The maps come from :class:`viz.model.atlas_map.HoopMaps`.
+a dot at the start's amplitude). The maps come from :class:`mechviz.viz.model.atlas_map.HoopMaps`.
 """
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ class MapPicture:
 
 def draw_chaos(pic: MapPicture, m: ChaosMap, start, dark: bool) -> np.ndarray:
     """The chaos map with its colour bar, the two normal-mode lines and the current start."""
-    from dynamics.atlas.theory import normal_mode_slopes
+    from mechviz.dynamics.atlas.theory import normal_mode_slopes
 
     ax = pic.start(dark)
     spec = m.spec

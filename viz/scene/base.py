@@ -1,13 +1,14 @@
 """What the three scenes share: the exhibit, the viser view of an exhibit's model.
 
-An *exhibit* is a model (:class:`viz.model.base.ExhibitModel`: the runs, events, samples and
+An *exhibit* is a model (:class:`mechviz.viz.model.base.ExhibitModel`: the runs, events, samples and
 measured figures, headless) drawn in a viser scene, with its GUI panel. The live viewer
-(:mod:`viz.app`) and the recorder's ``.viser`` files (:mod:`viz.record`) draw the same exhibits, so a
+(:mod:`mechviz.viz.app`)
+and the recorder's ``.viser`` files (:mod:`mechviz.viz.record`) draw the same exhibits, so a
 demo reaches the screen by one path. Besides the model's interface every exhibit has
 
 - ``draw()``: handle assignments only; the caller wraps ``server.atomic()``,
 - ``readout()`` (markdown), ``camera``, ``bounds``, ``labels()``,
-- ``build_panel(panel)``: its controls, in the tab the app gives it (:mod:`viz.scene.panel`),
+- ``build_panel(panel)``: its controls, in the tab the app gives it (:mod:`mechviz.viz.scene.panel`),
 
 and the hooks ``_build`` (scene nodes, once) and ``_started`` (reset what is drawn for a new start).
 """
@@ -93,7 +94,7 @@ class Exhibit(ExhibitModel):
         """Pictures of the exhibit's own in its panel, refreshed with the readout (5 Hz)."""
 
     def sync_panel(self, panel) -> None:
-        """Widgets of the exhibit's own that :meth:`viz.scene.panel.Panel.sync` does not know."""
+        """Widgets of the exhibit's own that :meth:`mechviz.viz.scene.panel.Panel.sync` does not know."""
 
     @property
     def camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:

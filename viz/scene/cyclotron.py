@@ -2,7 +2,7 @@
 
 Shows the field as arrows, the charge with a capped trail of its helix, its guiding centre and
 the circle theory predicts for its current energy (radius ``sqrt(2 m E_perp) / |qB|``). A radial
-kick (``dynamics.cyclotron.radial_kick``) changes the state at the current time without
+kick (``mechviz.dynamics.cyclotron.radial_kick``) changes the state at the current time without
 restarting the run, and the predicted circle moves at once. A beam of charges leaving the
 charge's start point in its direction, with a spread of speeds, advanced in one batched call,
 shows that every orbit has the same period. Coordinates are the dynamics' own, relative to the
@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from dynamics import cyclotron as cy
+from mechviz.dynamics import cyclotron as cy
 
 from .. import geometry as geo
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)

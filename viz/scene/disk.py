@@ -1,10 +1,10 @@
 """Spinning-disk exhibit: a disk with a bead on its rim, turned about an axle along a diameter.
 
-*Driven*: the exact uniform rotation (``dynamics.DrivenDisk``, method ``exact``); the bearing
-forces at A and B (``dynamics.disk.bearing_force_a/b``) are drawn as arrows that turn with the
+*Driven*: the exact uniform rotation (``mechviz.dynamics.DrivenDisk``, method ``exact``); the bearing
+forces at A and B (``mechviz.dynamics.disk.bearing_force_a/b``) are drawn as arrows that turn with the
 disk, scaled to their magnitude, beside the angular velocity (along the axle) and the angular
 momentum about A (not along it: that is why the bearings must push). *Released*: the axle is
-removed at ``t = 0`` and the free body tumbles (``dynamics.ReleasedDisk``, integrated by the chosen
+removed at ``t = 0`` and the free body tumbles (``mechviz.dynamics.ReleasedDisk``, integrated by the chosen
 method); drawn by default in the frame moving with its centre of mass.
 
 World mapping: the dynamics' disk frame (axle along +y) is drawn with the axle vertical and the
@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from dynamics import disk as dk
+from mechviz.dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
@@ -35,7 +35,7 @@ DISK_OPACITY = {"driven": 0.85, "released": 0.3}
 
 
 class PoinsotPicture:
-    """Poinsot's construction for the released disk (:func:`dynamics.disk.poinsot`), drawn at
+    """Poinsot's construction for the released disk (:func:`mechviz.dynamics.disk.poinsot`), drawn at
     the centre of mass: the inertia ellipsoid turning with the body, the invariable plane fixed
     in space (normal to L), the polhode traced on the ellipsoid and the herpolhode on the plane.
     Lengths are 1/sqrt(kg m^2) times ``scale`` [m], chosen so the longest semi-axis is 0.6 R."""
@@ -94,7 +94,7 @@ class PoinsotPicture:
             h.visible = shown
 
     def draw(self, pc: dict, cm_world: np.ndarray) -> None:
-        """``pc`` from :func:`dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
+        """``pc`` from :func:`mechviz.dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
         relative to the exhibit origin)."""
         self.frame.position = cm_world
         self.frame.wxyz = geo.quat_from_matrix(P @ pc["rotation"])

@@ -4,7 +4,7 @@ viser sends a text box's content to the server on every keystroke, so ``2`` arri
 to ``2.5e-2``: reading the box after a pause in the typing applies half-typed numbers (a step of
 2 s blows the hoop up in front of the class). Each :class:`NumberField` therefore sits in a form
 of its own (viser's ``add_form`` without a header): Enter in the box submits the form, and only
-then is the text read, by the one rule for typed numbers (:func:`dynamics.params.parse_number`).
+then is the text read, by the one rule for typed numbers (:func:`mechviz.dynamics.params.parse_number`).
 Text typed and left without Enter is read when the person touches any other control of the
 panel (:class:`Typing` keeps what is pending), which is as close to "leaving the box" as the
 server can see.

@@ -4,9 +4,9 @@ sliding on it without friction.
 The dynamics' swing plane (x right, y up, pivot at the origin, gravity along -y) is drawn in the
 world's x-z plane: ``(x, y)_plane -> (x, 0, y) + pivot`` with the pivot ``2a + 0.4`` m above the
 exhibit origin. Beside the nonlinear motion the linear-theory motion from the same initial state
-(``dynamics.hoop.linear_solution``) is drawn as a faint ghost, so the difference at large amplitude
+(``mechviz.dynamics.hoop.linear_solution``) is drawn as a faint ghost, so the difference at large amplitude
 shows. Both normal-mode frequencies are measured from the motion: the angles are projected on the
-mode shapes and each modal coordinate is timed between its zero crossings (:mod:`dynamics.measure`).
+mode shapes and each modal coordinate is timed between its zero crossings (:mod:`mechviz.dynamics.measure`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from dynamics import hoop as hp
+from mechviz.dynamics import hoop as hp
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
@@ -34,7 +34,7 @@ MODE_COLOURS = ((230, 60, 60), (60, 110, 240))  # mode 1 and mode 2 directions (
 class ConfigurationSpace:
     """The motion in the (theta1, theta2) plane: the run's path (bead colour) and linear
     theory's (ghost), with the two mode-shape directions through the origin, (1, 1) for mode 1
-    and (m, -(M + m)) for mode 2 (:func:`dynamics.hoop.normal_modes`). A start on a mode line
+    and (m, -(M + m)) for mode 2 (:func:`mechviz.dynamics.hoop.normal_modes`). A start on a mode line
     stays on it at small amplitude; at large amplitude the path leaves it."""
 
     def __init__(self, scene, root: str, centre: np.ndarray, cap: int, bounded: bool) -> None:

@@ -1,21 +1,21 @@
 """The controls an exhibit's tab is built from: readout, chart, parameter inputs, integrator.
 
-A :class:`Panel` is what :meth:`viz.scene.base.Exhibit.build_panel` receives: the GUI, the app's
+A :class:`Panel` is what :meth:`mechviz.viz.scene.base.Exhibit.build_panel` receives: the GUI, the app's
 widget table and a ``send`` that queues a command for the exhibit. Callbacks run on viser's
 threads and only queue commands; the app applies them between frames and then calls
 :meth:`Panel.sync` so every widget shows the setting actually in force (a refused value
 springs back).
 
 One rule for every number a person types, the command line's and the demo files' too
-(:func:`dynamics.params.parse_number`): what a person writes is read as Python reads a float
+(:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a float
 (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
 non-finite or subnormal value or one outside the control's range is refused with a notification
 that names the field as the panel labels it, and the box goes back to the value in force.
-Number fields are text boxes read on Enter (:mod:`viz.scene.fields`) for that reason: the
+Number fields are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`) for that reason: the
 browser's own number input rewrites scientific notation as it is typed. A parameter's range is
-the one its system's description gives for a live exhibit (:attr:`dynamics.spec.Setting.span`);
+the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
 a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
-taken with a warning beyond the method's stability limit (:mod:`dynamics.stability`).
+taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-import dynamics
+from mechviz import dynamics
 
 from ..model.plot import PlotImage
 from ..warm import warm_method
@@ -53,8 +53,8 @@ def parse_number(
     label: str, text, lo: float | None = None, hi: float | None = None, why: str = ""
 ) -> float:
     """The number typed into the field ``label``, read by the one rule for typed numbers
-    (:func:`dynamics.params.parse_number`) and held to the control's range, or a
-    :class:`dynamics.params.SettingError` with one line naming the field as the panel labels it."""
+    (:func:`mechviz.dynamics.params.parse_number`) and held to the control's range, or a
+    :class:`mechviz.dynamics.params.SettingError` with one line naming the field as the panel labels it."""
     x = dynamics.parse_number(label, text)
     if (lo is not None and x < lo) or (hi is not None and x > hi):
         raise dynamics.SettingError(
@@ -127,7 +127,7 @@ class Panel:
         track=None,
         why="",
     ):
-        """A number field (:class:`viz.scene.fields.NumberField`): ``apply(x)`` gets the value
+        """A number field (:class:`mechviz.viz.scene.fields.NumberField`): ``apply(x)`` gets the value
         once it is submitted (Enter, or another control touched), read by :func:`parse_number`
         and held to ``lo``..``hi``; ``check(x)`` may refuse it further (``ValueError``) or warn
         (returns a message). ``current()`` is the value in force. With ``track = (lo, hi, step)``
@@ -208,7 +208,7 @@ class Panel:
 
     def explain(self, exc: ValueError) -> str:
         """A settings error as the panel names things: the field of a
-        :class:`dynamics.params.SettingError` (``mass``) by its label (``Mass m [kg]``)."""
+        :class:`mechviz.dynamics.params.SettingError` (``mass``) by its label (``Mass m [kg]``)."""
         message = str(exc)
         field = getattr(exc, "field", "").removeprefix("initial.")
         label = self.labels.get(field)
@@ -256,7 +256,7 @@ class Panel:
         step would jump over a whole turn, and at the viewer's speeds the exhibit would stand
         still for seconds between steps); return a warning if it is beyond the running method's
         stability limit (the run will blow up: worth showing, not worth hiding)."""
-        from dynamics import stability
+        from mechviz.dynamics import stability
 
         sim = self.exhibit.sim
         label = self.labels.get("dt", "dt")
@@ -278,7 +278,7 @@ class Panel:
 
     def param_inputs(self) -> None:
         """A number field for each physical parameter of the exhibit's system, labelled as its
-        description says (:attr:`dynamics.spec.SystemSpec.params`)."""
+        description says (:attr:`mechviz.dynamics.spec.SystemSpec.params`)."""
         with self.gui.add_folder("Physical parameters"):
             for setting in self.exhibit.Config.spec.params:
                 name, label = setting.name, setting.panel_label
@@ -359,7 +359,7 @@ class Panel:
 
     def plot(self, note: str) -> None:
         """The plot of any variable against any other: two dropdowns naming the quantities as
-        their axes do, and the image (:mod:`viz.model.plot`), over the chart window; ``note``
+        their axes do, and the image (:mod:`mechviz.viz.model.plot`), over the chart window; ``note``
         says what the exhibit's first pair shows."""
         ex = self.exhibit
         variables = ex.plot_variables(ex.config)

@@ -1,5 +1,5 @@
 """``mechviz bench --video``: how fast videos are made, as a ratio to real time, with today's
-path (:mod:`viz.player`: two copies of the page drawing the frames side by side, each frame a
+path (:mod:`mechviz.viz.player`: two copies of the page drawing the frames side by side, each frame a
 seek, one render without the default lights' shadow maps and a JPEG copied from the canvas; the
 words and the encoder on a worker thread) beside the same with one page, and with one page and the
 shadow maps; on request also an older path (the player playing on a faked clock at 0.5x, four
@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from viz.chromium import find_chromium, first_page, launch
+from mechviz.viz.chromium import find_chromium, first_page, launch
 
 LOAD_TIMEOUT_S = 180.0
 TARGET_RATIO = 1.0
@@ -154,8 +154,8 @@ def _decode_png(png: bytes, W: int, H: int) -> np.ndarray:
 
 def _baseline(clip, size: tuple[int, int], cpu) -> dict[str, Any]:
     """The replaced path: frames drawn and encoded (overlay and H.264, as before)."""
-    from viz.encoders import Mp4Writer
-    from viz.overlay import Overlay
+    from mechviz.viz.encoders import Mp4Writer
+    from mechviz.viz.overlay import Overlay
 
     times = [clip.simulated(t) for t in clip.playback_times()]
     overlay = Overlay(
@@ -283,8 +283,8 @@ def measure_video_speed(
     it (``end_to_end_ratio``), and the CPU seconds per frame of this process and its children
     (Chromium, ffmpeg), which depend less on the machine's load; whether the target (today's
     path: ratio >= 1) is met, beside the load averages before and after."""
-    from viz import record as rec
-    from viz import video
+    from mechviz.viz import record as rec
+    from mechviz.viz import video
 
     if find_chromium() is None:
         raise RuntimeError("no Chromium (apt-get install chromium)")

@@ -1,6 +1,6 @@
 """Ours against the peers in their fastest form, on the benchmark problems and on random cases.
 
-For every case (the three benchmark problems and :func:`mechviz_bench.untuned.draw`'s random
+For every case (the three benchmark problems and :func:`mechviz.bench.untuned.draw`'s random
 cases) and every contender, the tolerance ``rtol = atol = tol`` is swept down a grid of
 half-decades (:data:`GRID`) and each solve's error is measured against the case's reference
 (the same for every contender). At each accuracy target a contender's pick is its loosest
@@ -10,8 +10,8 @@ each pick's fastest round is kept), and the ratios are peer / ours: below 1 the 
 
 Contenders, by family (a family's time is its fastest member's):
 
-- ours, **kept**: a :class:`~dynamics.simulation.Simulation` built once and ``restart()``-ed per
-  solve (``taylor`` and ``dop853``), and a :class:`~dynamics.solver.Solver` built once per
+- ours, **kept**: a :class:`~mechviz.dynamics.simulation.Simulation` built once and ``restart()``-ed per
+  solve (``taylor`` and ``dop853``), and a :class:`~mechviz.dynamics.solver.Solver` built once per
   system kind and tolerance and handed each case's start and parameters; ours, **fresh**: a new
   ``Simulation`` (or ``Solver``) per solve (the cost of a user who builds one for every
   problem);
@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dynamics.simulation import Simulation
+from mechviz.dynamics.simulation import Simulation
 
 from . import fast_peers as fp
 from .peer_equations import heyoka_pars
@@ -91,9 +91,9 @@ def _ours_fresh(pb: Problem, method: str):
 
 
 def _solver_kept(pb: Problem):
-    """One :class:`~dynamics.solver.Solver` per system kind and tolerance, handed the case's
+    """One :class:`~mechviz.dynamics.solver.Solver` per system kind and tolerance, handed the case's
     start and parameters at every solve (as heyoka's integrator is)."""
-    from dynamics.solver import Solver
+    from mechviz.dynamics.solver import Solver
 
     p = np.ascontiguousarray(pb.system.kernel_params(), dtype=np.float64)
 
@@ -108,7 +108,7 @@ def _solver_kept(pb: Problem):
 
 
 def _solver_fresh(pb: Problem):
-    from dynamics.solver import Solver
+    from mechviz.dynamics.solver import Solver
 
     def make(tol: float):
         system, y0, t_end = pb.system, pb.y0, pb.t_end

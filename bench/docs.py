@@ -7,11 +7,11 @@ A block in the README is the text between ``<!-- bench:NAME -->`` and ``<!-- /be
 is left as it is, and rendering twice changes nothing. ``make bench-docs`` runs the benchmark
 into ``docs/bench`` and then this module::
 
-    python -m mechviz_bench.docs docs/bench README.md          # tables.md, charts, README
-    python -m mechviz_bench.docs --check README.md             # only check the README's blocks
+    python -m mechviz.bench.docs docs/bench README.md          # tables.md, charts, README
+    python -m mechviz.bench.docs --check README.md             # only check the README's blocks
 
 A README whose blocks are missing, repeated or unknown is refused before anything is written
-(exit status 2). Each file is replaced whole (:func:`dynamics.files.write_files_atomically`),
+(exit status 2). Each file is replaced whole (:func:`mechviz.dynamics.files.write_files_atomically`),
 the charts and ``tables.md`` as one set first: rendering again from the same ``results.json``
 repairs an interrupted render.
 """
@@ -24,7 +24,7 @@ import re
 import sys
 from pathlib import Path
 
-from dynamics.files import WriteFailed, write_files_atomically
+from mechviz.dynamics.files import WriteFailed, write_files_atomically
 
 from . import charts, report
 
@@ -101,7 +101,7 @@ def render(out: Path, readme: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m mechviz_bench.docs", description=__doc__.split("\n\n")[0]
+        prog="python -m mechviz.bench.docs", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument("--check", action="store_true", help="only check the README's blocks")
     parser.add_argument("paths", nargs="+", metavar="PATH", help="[RESULTS_DIR] README")

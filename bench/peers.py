@@ -103,8 +103,8 @@ def _cyrk_rhs(kind: int):
     """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
     import numba as nb
 
-    from dynamics import cyclotron, disk, hoop
-    from dynamics.integrators.kernels import CYCLOTRON, HOOP
+    from mechviz.dynamics import cyclotron, disk, hoop
+    from mechviz.dynamics.integrators.kernels import CYCLOTRON, HOOP
 
     if kind in _CFUNCS:
         return _CFUNCS[kind]
@@ -176,7 +176,7 @@ def cyrk_py_run(problem: Problem, tol: float) -> PeerRun:
     """CyRK's ``pysolve_ivp`` (DOP853) with a jitted right-hand side called from C++ via Python."""
     from CyRK import pysolve_ivp
 
-    from dynamics.integrators.kernels import RHS
+    from mechviz.dynamics.integrators.kernels import RHS
 
     rhs = RHS[problem.system.sys_id]
     p = np.ascontiguousarray(problem.system.kernel_params(), dtype=np.float64)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 import time
 
-from dynamics.simulation import Simulation
+from mechviz.dynamics.simulation import Simulation
 
 from .problems import PROBLEMS
 
@@ -35,7 +35,7 @@ def construction_costs() -> dict:
 
 FIRST_ANSWER_OURS = """
 import time; t0 = time.perf_counter()
-from dynamics import Hoop, Simulation
+from mechviz.dynamics import Hoop, Simulation
 sim = Simulation(Hoop(), {method!r}, rtol=1e-9, atol=1e-9, state=[0.5, -0.3, 0.0, 0.0],
                  reference=None)
 sim.advance_to(20.0)
@@ -43,7 +43,7 @@ print(time.perf_counter() - t0, float(sim.state[0, 0]))
 """
 FIRST_ANSWER_AOT = """
 import time; t0 = time.perf_counter()
-from dynamics.aot import solve
+from mechviz.dynamics.aot import solve
 y = solve("hoop", [0.5, -0.3, 0.0, 0.0], 20.0, params=[1.0, 0.5, 1.0, 9.81], rtol=1e-9)
 print(time.perf_counter() - t0, float(y[0]))
 """
@@ -65,7 +65,7 @@ print(time.perf_counter() - t0, float(y[-1, 0]))
 
 def first_answer(repeats: int = 3) -> dict:
     """Seconds from a fresh interpreter's start to the hoop's state at t = 20 s at 1e-9, ours
-    (Taylor and DOP853 through a Simulation; Taylor compiled ahead of time, :mod:`dynamics.aot`,
+    (Taylor and DOP853 through a Simulation; Taylor compiled ahead of time, :mod:`mechviz.dynamics.aot`,
     built first if it is not) against scipy's odeint with a plain Python right-hand side; the
     whole process is timed (interpreter start, imports, compilation or cache load, the solve),
     the scripts interleaved round by round. The first of our runs may fill the compiled-code
@@ -73,7 +73,7 @@ def first_answer(repeats: int = 3) -> dict:
     import statistics
     import subprocess
 
-    from dynamics import aot
+    from mechviz.dynamics import aot
 
     aot_built = aot.path() is not None
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """What an endurance run measured, summarised: frame-rate windows, the memory trend, the
 pass/fail verdict against the targets, and the one-screen text of it
-(:func:`mechviz_bench.endurance.run_endurance` writes these)."""
+(:func:`mechviz.bench.endurance.run_endurance` writes these)."""
 
 from __future__ import annotations
 
@@ -108,7 +108,7 @@ def _summarize(
     )
     return {
         "about": "mechviz endurance benchmark: the live viewer's server loop with "
-        "headless Chromium clients connected; see mechviz_bench/endurance.py",
+        "headless Chromium clients connected; see bench/endurance.py",
         "command": f"mechviz bench --endurance {seconds:g} --clients {clients}",
         "date": datetime.datetime.fromtimestamp(started, datetime.UTC).strftime(
             "%Y-%m-%dT%H:%M:%SZ"

@@ -3,7 +3,7 @@
 The target: the viewer holds 60 frames per second for 10 minutes with three browser clients
 connected, with memory flat (trails capped). :func:`run_endurance` measures exactly that:
 
-1. The real viewer (:class:`viz.app.MechvizApp` with its 60 Hz loop thread, every exhibit at its
+1. The real viewer (:class:`mechviz.viz.app.MechvizApp` with its 60 Hz loop thread, every exhibit at its
    defaults) runs in a **child process** bound to 127.0.0.1 on a free port. The child is the
    *server process* measured here; the browsers are driven from this (parent) process, so
    playwright never shares a Python process, an interpreter lock or a heap with the loop (in one
@@ -12,7 +12,7 @@ connected, with memory flat (trails capped). :func:`run_endurance` measures exac
    with its own empty profile; ``playwright install`` is never run) open the page and wait until
    viser shows "Connected". After ``settle_s`` seconds the measurement starts and lasts ``seconds``.
 3. Inside the server process a sampler thread reads the loop's frame log
-   (:class:`viz.frames.FrameLog`: start time and server-side cost of every frame) and, every
+   (:class:`mechviz.viz.frames.FrameLog`: start time and server-side cost of every frame) and, every
    ``rss_every_s`` seconds, the resident set size (``/proc/self/statm``), the process CPU time and
    the number of connected viser clients.
 4. At the end every page must still show "Connected" and its status line's simulated time must
@@ -50,8 +50,8 @@ from typing import Any
 
 import numpy as np
 
-from dynamics.files import write_json_atomically
-from viz.chromium import CANDIDATES, find_chromium, first_page, launch
+from mechviz.dynamics.files import write_json_atomically
+from mechviz.viz.chromium import CANDIDATES, find_chromium, first_page, launch
 
 from .endurance_report import (  # noqa: F401  (re-exported: the report of a run)
     TARGET_FPS,
@@ -86,7 +86,7 @@ def check_browser() -> str:
     except ImportError:
         raise EnduranceUnavailable(
             "the endurance benchmark drives Chromium through the Python package playwright, "
-            "which is not installed (pip install -e '.[test]')."
+            "which is not installed (pip install 'mechviz-lab[test]')."
         ) from None
     return exe
 
@@ -119,7 +119,7 @@ def _serve(
         with contextlib.suppress(AttributeError, OSError):
             os.sched_setaffinity(0, cpus)
     try:
-        from viz.app import MechvizApp, warm_up
+        from mechviz.viz.app import MechvizApp, warm_up
 
         if warm:
             warm_up("defaults")  # as `mechviz view` does; else the first frames compile

@@ -26,10 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dynamics.cyclotron import CyclotronParams
-from dynamics.disk import DiskParams
-from dynamics.hoop import HoopParams
-from dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
+from mechviz.dynamics.cyclotron import CyclotronParams
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.hoop import HoopParams
+from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
 
 from .problems import LONG_DOUBLE_TOL, Problem
 

@@ -1,12 +1,12 @@
 """Model no more than a scene needs: the cheapest method and step for each viewer exhibit.
 
 For each exhibit (its default parameters and initial state, given by the viewer, which owns them:
-``viz.scene.bench_cases``) and each candidate fixed-step method, the step is halved from one
+``mechviz.viz.scene.bench_cases``) and each candidate fixed-step method, the step is halved from one
 display frame (1/60 s) down until the largest on-screen position error over 10 minutes of
 simulated time, sampled every second against a tight reference, is below ``1e-3`` of the
 exhibit's size. The cheapest of the passing (method, step) pairs, by measured compute time per
 simulated second, is the default; its step must also lie below the method's stability limit
-(:mod:`dynamics.stability`).
+(:mod:`mechviz.dynamics.stability`).
 
 On-screen error, per exhibit:
 
@@ -24,10 +24,11 @@ import time
 
 import numpy as np
 
-from dynamics import cyclotron, disk, hoop, stability
-from dynamics.integrators.base import IntegrationError
-from dynamics.simulation import Simulation
-from dynamics.systems import CYCLOTRON, HOOP
+from mechviz import dynamics
+from mechviz.dynamics import cyclotron, disk, hoop, stability
+from mechviz.dynamics.integrators.base import IntegrationError
+from mechviz.dynamics.simulation import Simulation
+from mechviz.dynamics.systems import CYCLOTRON, HOOP
 
 SPAN = 600.0  # 10 minutes of simulated time [s]
 SAMPLE = 1.0  # error sampled every second [s]
@@ -172,8 +173,7 @@ def choose_defaults(cases: dict, quick: bool = False, progress=None) -> dict:
 def bench_cases() -> dict[str, dict]:
     """The viewer's default exhibits as the bench's exhibit-defaults sweep takes them
     (:func:`choose_defaults`): system, initial state and a note."""
-    import dynamics
-    from viz.model import CyclotronConfig, DiskConfig, HoopConfig
+    from mechviz.viz.model import CyclotronConfig, DiskConfig, HoopConfig
 
     cyc, hoop, disk = CyclotronConfig(), HoopConfig(), DiskConfig()
     released = dynamics.ReleasedDisk(disk.physics(), tuple(disk.extra_spin))

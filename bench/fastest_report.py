@@ -1,6 +1,6 @@
-"""Markdown and terminal text for :mod:`mechviz_bench.fastest`'s results: the ratios per case,
+"""Markdown and terminal text for :mod:`mechviz.bench.fastest`'s results: the ratios per case,
 their distribution over the random cases, and every case where a peer is faster; and the
-comparison alone from the command line (``python -m mechviz_bench.fastest_report``: exit
+comparison alone from the command line (``python -m mechviz.bench.fastest_report``: exit
 status 1 when a peer is faster in any case)."""
 
 from __future__ import annotations
@@ -156,7 +156,7 @@ def verdict_line(result: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m mechviz_bench.fastest_report``: :mod:`.fastest`'s comparison alone; exit
+    """``python -m mechviz.bench.fastest_report``: :mod:`.fastest`'s comparison alone; exit
     status 1 if a peer is faster in any case (each listed), 2 on bad input."""
     import argparse
     import json
@@ -164,10 +164,10 @@ def main(argv: list[str] | None = None) -> int:
     import secrets
     import sys
 
-    from dynamics.files import write_json_atomically
+    from mechviz.dynamics.files import write_json_atomically
 
     parser = argparse.ArgumentParser(
-        prog="python -m mechviz_bench.fastest_report", description=__doc__.split("\n\n")[0]
+        prog="python -m mechviz.bench.fastest_report", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument("--seed", type=int, default=None, help="random cases' seed (default: new)")
     parser.add_argument("--cases", type=int, default=21, help="random cases (default 21)")

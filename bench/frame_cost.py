@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
-from viz.app import MechvizApp, warm_up
-from viz.model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
+from mechviz.viz.app import MechvizApp, warm_up
+from mechviz.viz.model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
 
 
 def measure_frame_cost(

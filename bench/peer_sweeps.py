@@ -24,7 +24,7 @@ from .sweeps import (
 
 def run_peer_point(problem: Problem, peer: str, settings: Settings, tol: float) -> Point:
     """One peer at one tolerance: built and run once untimed (heyoka compiles when built, a
-    CyRK callback at its first call), then timed as ours (:func:`mechviz_bench.timing.time_calls`),
+    CyRK callback at its first call), then timed as ours (:func:`mechviz.bench.timing.time_calls`),
     its error against the same reference."""
 
     def solve() -> Solved:

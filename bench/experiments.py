@@ -3,9 +3,9 @@
 - :func:`long_run_energy`: relative energy error over ``10^4`` periods at one loose step, RK4
   against the symplectic / symmetric methods (the regime of a viewer whose step is fixed).
 - :func:`stability_points`: the measured amplification factor per step against ``omega dt``,
-  beside the closed forms of :mod:`dynamics.stability`.
+  beside the closed forms of :mod:`mechviz.dynamics.stability`.
 - :func:`per_step_costs`: ns per compiled step of the direct kernels through
-  :func:`dynamics.integrators.kernels.run_direct`, and the same steps written in C
+  :func:`mechviz.dynamics.integrators.kernels.run_direct`, and the same steps written in C
   (``c_steps.c``, built with gcc ``-O2`` when a compiler is found), measured in the same run.
 """
 
@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from dynamics import hoop, stability
-from dynamics.integrators import kernels
-from dynamics.integrators.base import IntegrationError
-from dynamics.simulation import Simulation
-from dynamics.systems import DISK, HOOP, Cyclotron, Hoop
+from mechviz.dynamics import hoop, stability
+from mechviz.dynamics.integrators import kernels
+from mechviz.dynamics.integrators.base import IntegrationError
+from mechviz.dynamics.simulation import Simulation
+from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop
 
 from .problems import PROBLEMS
 
@@ -41,7 +41,7 @@ LONG_RUNS = {
 
 def long_run_energy(periods: float = 1e4, samples: int = 400, progress=None) -> dict:
     """Relative energy error at ``samples`` times over ``periods`` periods: ``(E - E0)`` over
-    the energy that moves, ``E0 - E_floor`` (:meth:`dynamics.Simulation.energy_scale`), both
+    the energy that moves, ``E0 - E_floor`` (:meth:`mechviz.dynamics.Simulation.energy_scale`), both
     from ``energy_above_floor`` (no cancellation), as everywhere else."""
     out = {}
     for key, (dt, methods) in LONG_RUNS.items():
@@ -254,7 +254,7 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
             row["within_2x_of_c"] = row["ratio_to_c"] <= 2.0
     return {
         "rows": rows,
-        "c": "gcc -O2, same arithmetic, state in locals (mechviz_bench/c_steps.c)"
+        "c": "gcc -O2, same arithmetic, state in locals (bench/c_steps.c)"
         if isinstance(c, dict)
         else c,
         "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "
@@ -278,7 +278,7 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
 
     import numba
 
-    from dynamics.integrators import taylor
+    from mechviz.dynamics.integrators import taylor
 
     rounds = 2 if quick else 5
     member_steps = ENSEMBLE_MEMBER_STEPS // (2 if quick else 1)

@@ -4,15 +4,15 @@ The parameters enter as the combinations the right-hand sides use (:func:`heyoka
 heyoka's runtime parameters ``hy.par[i]``: one compiled integrator then serves every case of a
 system. The combinations are formed in double precision, as our kernels form them, so that a
 run in extended precision (the references) solves the very equations our methods solve. The
-equations are those of :mod:`dynamics.cyclotron`, :mod:`dynamics.hoop` and the free body of
-:mod:`dynamics.disk` (kernel parameters as in :mod:`dynamics.integrators.kernels`).
+equations are those of :mod:`mechviz.dynamics.cyclotron`, :mod:`mechviz.dynamics.hoop` and the free body of
+:mod:`mechviz.dynamics.disk` (kernel parameters as in :mod:`mechviz.dynamics.integrators.kernels`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from dynamics.integrators.kernels import CYCLOTRON, HOOP
+from mechviz.dynamics.integrators.kernels import CYCLOTRON, HOOP
 
 
 def heyoka_pars(sys_id: int, params: np.ndarray) -> np.ndarray:

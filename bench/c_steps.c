@@ -110,7 +110,7 @@ static double rk4_free(long n, double h) {
     return a[0] + a[1] + a[2] + a[3] + a[4] + a[5] + a[6];
 }
 
-/* Exact flow of L_i^2 / 2 I_i, as dynamics.disk._rotation (two libm calls). */
+/* Exact flow of L_i^2 / 2 I_i, as mechviz.dynamics.disk._rotation (two libm calls). */
 static inline void rotation(double angle, double lj, double lk, double ij, double ik,
                             double *wj, double *wk, double *q0, double *qi, double *qj,
                             double *qk) {

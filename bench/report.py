@@ -175,7 +175,7 @@ def targets_summary(result: dict) -> str:
         verdict = "met" if first else f"missed by {ours / theirs:.1f}x"
         aot = (
             f", {fa['taylor-aot']['median_s']} s with `taylor` compiled ahead of time "
-            "(`dynamics.aot`)"
+            "(`mechviz.dynamics.aot`)"
             if "taylor-aot" in fa
             else ""
         )

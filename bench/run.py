@@ -19,9 +19,9 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-from dynamics.integrators.base import get_method
-from dynamics.simulation import Simulation
-from viz.progress import progress_bar
+from mechviz.dynamics.integrators.base import get_method
+from mechviz.dynamics.simulation import Simulation
+from mechviz.viz.progress import progress_bar
 
 from . import exhibits, experiments
 from .first_answer import construction_costs as _construction_costs
@@ -64,7 +64,7 @@ class Phases:
 
 
 class Progress:
-    """The bench's progress: a bar of its steps on stderr (tqdm, :func:`viz.progress.progress_bar`)
+    """The bench's progress: a bar of its steps on stderr (tqdm, :func:`mechviz.viz.progress.progress_bar`)
     with the current step's label; silent off a terminal."""
 
     def __init__(self, total: int, enabled: bool | None = None) -> None:
@@ -192,7 +192,7 @@ def run_bench(
                 result["first_answer"],
                 result["fastest_peers"],
             )
-    from dynamics.files import write_files_atomically
+    from mechviz.dynamics.files import write_files_atomically
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
     try:  # the figures are measured: a table that cannot be made must not lose them

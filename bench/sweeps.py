@@ -23,8 +23,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from dynamics.integrators.base import IntegrationError, get_method
-from dynamics.simulation import Simulation
+from mechviz.dynamics.integrators.base import IntegrationError, get_method
+from mechviz.dynamics.simulation import Simulation
 
 from .peers import PEERS
 from .peers import prepare as prepare_peer
@@ -173,7 +173,7 @@ def measure_point(
 ) -> Point:
     """One sweep point: ``solve()`` runs it once untimed (raising :class:`PointFailed` when it
     fails), its final state is measured against the problem's reference, and the run is timed
-    (:func:`mechviz_bench.timing.time_calls`). A non-finite final state is a failed point."""
+    (:func:`mechviz.bench.timing.time_calls`). A non-finite final state is a failed point."""
     ref = reference_state(problem)
     try:
         run = solve()

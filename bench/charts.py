@@ -232,7 +232,7 @@ def per_step(result: dict) -> dict[str, bytes]:
 
 def render_charts(result: dict) -> dict[str, bytes]:
     """Every chart of ``result``, file name -> PNG bytes, for the caller to write with the
-    files they belong with (:func:`dynamics.files.write_files_atomically`)."""
+    files they belong with (:func:`mechviz.dynamics.files.write_files_atomically`)."""
     files = work_precision(result)
     for part, chart in (("long_run", long_run), ("stability", stability), ("per_step", per_step)):
         if result.get(part):

@@ -14,7 +14,7 @@ disk      the seed's disk and bead (M = R = 1, bead   50 s                 as fo
 
 Error: relative 2-norm of the final state against the reference; for the charge the norm of the
 reference is that of its transverse part ``(x, y, vx, vy)``, so that the drift along B does not
-hide the gyration error (:meth:`dynamics.systems.Cyclotron.error`). The references for the hoop
+hide the gyration error (:meth:`mechviz.dynamics.systems.Cyclotron.error`). The references for the hoop
 and the disk are computed once by :func:`compute_references` and stored with the library
 versions in ``assets/bench/references.json``: heyoka's Taylor integrator in 80-bit long double
 at ``tol = 1e-19`` (about 1e-16 from the true solution, 10^4 below the tightest target 1e-12),
@@ -35,13 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
-from dynamics.assets import asset
-from dynamics.cyclotron import CyclotronParams
-from dynamics.disk import DiskParams
-from dynamics.files import write_json_atomically
-from dynamics.hoop import HoopParams
-from dynamics.simulation import Simulation
-from dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
+from mechviz.dynamics.assets import asset
+from mechviz.dynamics.cyclotron import CyclotronParams
+from mechviz.dynamics.disk import DiskParams
+from mechviz.dynamics.files import write_json_atomically
+from mechviz.dynamics.hoop import HoopParams
+from mechviz.dynamics.simulation import Simulation
+from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
 
 REFERENCE_PATH = asset("bench", "references.json")
 REFERENCE_TOL = 1e-13  # the DOP853 cross-check
@@ -198,7 +198,7 @@ def _mpmath_final(problem: Problem, digits: int = MPMATH_DIGITS) -> tuple[np.nda
     """mpmath's ``odefun`` (a Taylor series method in arbitrary precision) to ``T``."""
     import mpmath
 
-    from dynamics.integrators.kernels import FREE_BODY, HOOP
+    from mechviz.dynamics.integrators.kernels import FREE_BODY, HOOP
 
     p = [mpmath.mpf(float(v)) for v in problem.system.kernel_params()]
     if problem.system.sys_id == HOOP:
@@ -247,7 +247,7 @@ def compute_references(
             f"{LONG_DOUBLE_TOL:g} (mpmath odefun at {MPMATH_DIGITS} digits without heyoka), "
             f"cross-checked against mpmath odefun ({MPMATH_DIGITS} digits), compiled DOP853 at "
             f"rtol = atol = {REFERENCE_TOL:g} and scipy Radau at {CROSS_CHECK_TOL:g}. "
-            "Written by `python -m mechviz_bench.problems`."
+            "Written by `python -m mechviz.bench.problems`."
         ),
         "versions": versions(),
         "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),

@@ -2,7 +2,7 @@
 
 ``run_bench(quick=..., out=...)`` runs everything on the fixed problems of :mod:`.problems`,
 writes ``results.json`` and PNG charts to ``out`` and returns the result. ``mechviz bench``
-(:mod:`viz.cli.bench`) is the command-line entry. Nothing here imports viser; matplotlib is
+(:mod:`mechviz.viz.cli.bench`) is the command-line entry. Nothing here imports viser; matplotlib is
 imported only by :mod:`.charts`.
 """
 
