@@ -144,7 +144,7 @@ def test_a_students_dynamics_py_and_viz_py_change_nothing(installed, tmp_path):
     code = (
         "from mechviz.dynamics import api\n"
         "from mechviz.viz import notebook\n"
-        "run = api.simulate('hoop', duration=0.5)\n"
+        "run = api.simulate('hoop', t_end=0.5)\n"
         "print('ok', run.t[-1])\n"
     )
     for argv in (["-c", code], ["-m", "mechviz.viz.cli", "--version"]):

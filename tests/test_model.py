@@ -80,11 +80,12 @@ def test_the_headless_model_records_what_the_drawn_exhibit_records():
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for pkg in ("dynamics", "viz", "mechviz.bench"):
-        for path in (ROOT / pkg).rglob("*.py"):
+    for folder in ("dynamics", "viz", "bench"):  # mapped to mechviz.<folder> (pyproject.toml)
+        for path in (ROOT / folder).rglob("*.py"):
             parts = path.relative_to(ROOT).with_suffix("").parts
-            name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+            name = ".".join(("mechviz", *(parts[:-1] if parts[-1] == "__init__" else parts)))
             out[name] = path
+    assert len(out) > 100, sorted(out)  # the scan found the package
     return out
 
 

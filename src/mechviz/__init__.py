@@ -5,7 +5,7 @@ their physics and integrators in :mod:`mechviz.dynamics` (no viser there), the v
 videos and notebooks in :mod:`mechviz.viz`. A notebook starts with::
 
     from mechviz.dynamics import api
-    run = api.simulate("hoop", duration=10.0)
+    run = api.simulate("hoop", t_end=10.0)
 
 The ``mechviz`` command is :func:`mechviz.viz.cli.main`.
 """
