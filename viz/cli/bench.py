@@ -4,7 +4,8 @@ Runs :func:`mechviz.bench.run_bench` (work-precision sweeps of our methods and s
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
 ``--out`` (default a temporary folder, ``TMP/mechviz-bench``; ``make bench-docs`` writes the
-committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install 'mechviz-lab[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
+committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install
+'mechviz-lab[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
 least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
