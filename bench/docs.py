@@ -1,16 +1,17 @@
 """The benchmark's documents rendered from its ``results.json``: ``tables.md`` and the charts
-beside it and the README's benchmark blocks, so that every figure the README quotes from a run
-comes from that run, and a change to a chart's drawing needs no new run.
+beside it and the benchmark blocks of the site's speed page (``docs/speed.md``), so that every
+figure the page quotes from a run comes from that run, and a change to a chart's drawing needs no
+new run.
 
-A block in the README is the text between ``<!-- bench:NAME -->`` and ``<!-- /bench:NAME -->``
+A block in the page is the text between ``<!-- bench:NAME -->`` and ``<!-- /bench:NAME -->``
 (each marker on a line of its own); NAME is one of :data:`BLOCKS`. Everything outside the blocks
 is left as it is, and rendering twice changes nothing. ``make bench-docs`` runs the benchmark
 into ``docs/bench`` and then this module::
 
-    python -m mechviz.bench.docs docs/bench README.md          # tables.md, charts, README
-    python -m mechviz.bench.docs --check README.md             # only check the README's blocks
+    python -m mechviz.bench.docs docs/bench docs/speed.md      # tables.md, charts, the page
+    python -m mechviz.bench.docs --check docs/speed.md         # only check the page's blocks
 
-A README whose blocks are missing, repeated or unknown is refused before anything is written
+A page whose blocks are missing, repeated or unknown is refused before anything is written
 (exit status 2). Each file is replaced whole (:func:`mechviz.dynamics.files.write_files_atomically`),
 the charts and ``tables.md`` as one set first: rendering again from the same ``results.json``
 repairs an interrupted render.
@@ -66,13 +67,11 @@ def check(text: str) -> None:
     closed = [m.group("name") for m in _BLOCK.finditer(text)]
     for name in opened:
         if name not in BLOCKS:
-            raise ValueError(
-                f"README: unknown benchmark block {name!r} (known: {', '.join(BLOCKS)})"
-            )
+            raise ValueError(f"unknown benchmark block {name!r} (known: {', '.join(BLOCKS)})")
     for name in BLOCKS:
         if opened.count(name) != 1 or closed.count(name) != 1:
             raise ValueError(
-                f"README: benchmark block {name!r} must appear once, as '<!-- bench:{name} -->' "
+                f"benchmark block {name!r} must appear once, as '<!-- bench:{name} -->' "
                 f"... '<!-- /bench:{name} -->' (found {opened.count(name)} opening, "
                 f"{closed.count(name)} closed)"
             )
@@ -91,7 +90,7 @@ def splice(text: str, result: dict) -> str:
 
 
 def render(out: Path, readme: Path) -> None:
-    """Write ``out/tables.md``, the charts and the README's blocks from ``out/results.json``."""
+    """Write ``out/tables.md``, the charts and the page's blocks from ``out/results.json``."""
     result = json.loads((out / "results.json").read_text())
     text = splice(readme.read_text(), result)
     files = {**charts.render_charts(result), "tables.md": report.markdown(result).encode()}
@@ -103,23 +102,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m mechviz.bench.docs", description=__doc__.split("\n\n")[0]
     )
-    parser.add_argument("--check", action="store_true", help="only check the README's blocks")
-    parser.add_argument("paths", nargs="+", metavar="PATH", help="[RESULTS_DIR] README")
+    parser.add_argument("--check", action="store_true", help="only check the page's blocks")
+    parser.add_argument("paths", nargs="+", metavar="PATH", help="[RESULTS_DIR] PAGE")
     args = parser.parse_args(argv)
     try:
         if args.check:
             if len(args.paths) != 1:
-                parser.error("--check takes the README only")
+                parser.error("--check takes the page only")
             check(Path(args.paths[0]).read_text())
             return 0
         if len(args.paths) != 2:
-            parser.error("give the results folder and the README")
+            parser.error("give the results folder and the page")
         render(Path(args.paths[0]), Path(args.paths[1]))
     except WriteFailed as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    except (OSError, ValueError, KeyError) as exc:  # a missing file, bad JSON, a bad README
-        print(f"error: {exc}", file=sys.stderr)
+    except (OSError, ValueError, KeyError) as exc:  # a missing file, bad JSON, a bad page
+        print(f"error: {Path(args.paths[-1]).name}: {exc}", file=sys.stderr)
         return 2
     return 0
 

@@ -106,8 +106,8 @@ def gyrofrequency(
     min_turn: float = 0.5,
     max_uncertainty: float = 3e-5,
 ) -> Estimate:
-    """|rate of turn| [rad/s] of the transverse velocity ``v_perp`` (K, 2), or (K, N, 2) for an
-    ensemble (the value is then the per-member rates): the least-squares slope of its angle.
+    """Magnitude of the rate of turn [rad/s] of the transverse velocity ``v_perp`` (K, 2), or
+    (K, N, 2) for an ensemble (the value is then the per-member rates): the least-squares slope of its angle.
 
     The velocity of a charge in a uniform field turns at the gyrofrequency whatever its speed;
     a slope over the whole stretch averages out the step-to-step jitter of an integrator.

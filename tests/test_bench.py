@@ -165,16 +165,16 @@ def _committed_result() -> dict:
     return json.loads((ROOT / "docs" / "bench" / "results.json").read_text())
 
 
-def test_the_readme_and_tables_quote_the_committed_run():
-    """Every figure of a run in the README and docs/bench/tables.md is rendered from
-    docs/bench/results.json (`make bench-docs`): hand edits or a stale render fail here."""
+def test_the_speed_page_and_tables_quote_the_committed_run():
+    """Every figure of a run on the site's speed page and in docs/bench/tables.md is rendered
+    from docs/bench/results.json (`make bench-docs`): hand edits or a stale render fail here."""
     from mechviz.bench import docs, report
 
     result = _committed_result()
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "docs" / "speed.md").read_text()
     assert docs.splice(readme, result) == readme
     assert (ROOT / "docs" / "bench" / "tables.md").read_text() == report.markdown(result)
-    # the README says which run it quotes, and the targets it reports are that run's
+    # the page says which run it quotes, and the targets it reports are that run's
     assert result["date"] in readme and result["command"] in readme
 
 
@@ -217,7 +217,7 @@ def test_a_readme_with_broken_blocks_is_refused_and_left_as_it_was(tmp_path, cap
     assert docs.main(["--check", str(readme)]) == 2
     assert docs.main([str(out), str(readme)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and all(line.startswith("error: README: ") for line in err)
+    assert len(err) == 2 and all(line.startswith("error: README.md: ") for line in err)
     assert readme.read_text() == damage(text)
     assert sorted(p.name for p in out.iterdir()) == ["results.json"]  # no tables.md written
 

@@ -250,11 +250,11 @@ def test_each_estimator_is_within_its_stated_accuracy_or_says_why_not(name, fps)
         assert (e and abs(e.value / truth - 1) < ACCURACY[name][1]) or (not e and e.reason)
 
 
-def test_the_readme_states_the_accuracies_the_tests_measure():
-    """The README's table of estimator accuracies states, for each, the two bounds above."""
+def test_the_manual_states_the_accuracies_the_tests_measure():
+    """The manual's table of estimator accuracies states, for each, the two bounds above."""
     from pathlib import Path
 
-    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).parents[1] / "docs" / "recording.md").read_text(encoding="utf-8")
     rows = {
         line.split("|")[1].strip().strip("`"): line
         for line in readme.splitlines()
