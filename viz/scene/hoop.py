@@ -20,7 +20,7 @@ from mechviz.dynamics import hoop as hp
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import MAP_SIZE, add_maps
-from .base import Exhibit, against_theory, fmt
+from .base import Exhibit, against_theory, error_text, fmt
 from .panel import number_text
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -296,10 +296,10 @@ class HoopExhibit(HoopModel, Exhibit):
                 f"| 1 at amplitude {abs(c.amplitude):.3g} rad (exact, elliptic) | {fmt(w_nl)} | |"
             )
         kind = self.sim.reference_kind or "—"
-        err = float(np.max(smp.error)) if smp.error is not None else 0.0
         lines += [
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
-            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 | {err:.2e} |",
+            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 "
+            f"| {error_text(smp)} |",
             "",
             "Grey ghost: linear theory from the same start." if c.ghost else "",
         ]
