@@ -241,8 +241,10 @@ def simulate(
     [m/s]; the hoop's ``modes`` (amplitudes of mode 1 and mode 2 [rad], at rest); the disk's
     ``motion`` (``"driven"`` or ``"released"``) and ``extra_spin`` [rad/s] (disk-frame
     components, added at release). ``state`` (``(d,)`` or an ensemble ``(N, d)``, layout
-    :attr:`Run.columns`) replaces the start. ``method`` defaults to the system's, ``dt`` to its
-    step for fixed-step methods; ``rtol`` (default 1e-9) and ``atol`` (default ``rtol``, in the
+    :attr:`Run.columns`) replaces the start (the disk's ``motion`` still says which
+    system it is a state of: ``motion="released"`` with the free body's state). ``method``
+    defaults to the system's, ``dt`` to its step for fixed-step methods; ``rtol`` (default
+    1e-9) and ``atol`` (default ``rtol``, in the
     state's units: a motion much smaller than 1 is then held to ``atol``, not to ``rtol`` of
     itself) are for adaptive ones.
     ``reference`` as in :class:`mechviz.dynamics.Simulation` (``None`` skips the error measurement, which
@@ -255,9 +257,12 @@ def simulate(
         raise SettingError(
             "reference", f"reference must be 'auto', 'exact' or None; got {reference!r}"
         )
-    if state is not None and start:
+    # A word setting (the disk's motion) picks the system the state is of; the others shape the
+    # initial state, which ``state`` gives whole.
+    shaping = [k for k in start if not spec.setting(k).choices]
+    if state is not None and shaping:
         raise SettingError(
-            next(iter(start)), "state gives the whole start; leave out " + ", ".join(start)
+            shaping[0], "state gives the whole start; leave out " + ", ".join(shaping)
         )
     try:
         setup = spec.setup(params, start, method=method, dt=dt, rtol=rtol, atol=atol, state=state)
