@@ -204,7 +204,7 @@ def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
         "title": m.title,
         "order": _order(sim),
         "evaluations": m.counts,
-        "structure": list(m.structure),
+        "structure": list(m.structure_on(sim.system)),
         "step": sim.step_label(),
         "dt": sim.dt,
         "rtol": sim.rtol,
