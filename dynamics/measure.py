@@ -254,11 +254,10 @@ def _zero_crossings(
 ) -> np.ndarray:
     """Times where ``y`` passes from below ``-band`` to above ``band`` or back (hysteresis: a
     wobble inside the band is not a crossing). Each is located, when ``y`` changes sign once on
-    the way, from the four samples about the sign change: as the root of the least-squares
-    ``c + a cos(w t) + b sin(w t)`` through them given the frequency ``w`` (exact for a sinusoid
-    however few samples a period), else of the cubic through them (a line's root is off by the
-    curve's bend: 2e-5 of a period at 10 samples a half period); else (noise near zero) as the
-    root of a least-squares line through the samples of that passage."""
+    the way, from the four samples about the sign change (:func:`_root_between`: the cubic
+    through them, or given the frequency ``w`` the sinusoid if it fits better; a line's root is
+    off by the curve's bend, 2e-5 of a period at 10 samples a half period); else (noise near
+    zero) as the root of a least-squares line through the samples of that passage."""
     side = np.where(y > band, 1, np.where(y < -band, -1, 0))
     idx = np.nonzero(side)[0]
     if len(idx) < 2:
@@ -278,43 +277,65 @@ def _zero_crossings(
 
 
 def _root_between(t: np.ndarray, y: np.ndarray, j: int, w: float | None = None) -> float:
-    """The zero of ``y`` between samples ``j`` and ``j + 1`` (which differ in sign): of the
-    sinusoid of frequency ``w`` (if given) or the cubic through samples ``j - 1 .. j + 2`` (at
-    the record's ends the four nearest), else of the line through the two."""
+    """The zero of ``y`` between samples ``j`` and ``j + 1`` (which differ in sign), from the
+    four samples ``j - 1 .. j + 2`` (at the record's ends the four nearest): of the cubic through
+    them, or, given the frequency ``w``, of the least-squares ``c + a cos(w t) + b sin(w t)``
+    through them if that predicts the next samples out better (a sinusoid's crossing exactly
+    however few samples a period, where the cubic is off by ``(w dt)^4``; a swing far from a
+    sinusoid's shape is the cubic's); of the line through the two where there are not four."""
     h = t[j + 1] - t[j]
     x = -y[j] * h / (y[j + 1] - y[j])
     if len(t) < 4:
         return float(t[j] + x)
     first = min(max(j - 1, 0), len(t) - 4)  # at the record's ends, the four samples nearest
     ts, ys = t[first : first + 4] - t[j], y[first : first + 4]
-    if w is not None:
-        A = np.column_stack([np.ones(4), np.cos(w * ts), np.sin(w * ts)])
-        c0, ca, cb = np.linalg.lstsq(A, ys, rcond=None)[0]
-        amp = math.hypot(ca, cb)
-        if amp > abs(c0):  # c0 + amp cos(w z - delta) = 0: w z = delta +- arccos(-c0 / amp)
-            delta, spread = math.atan2(cb, ca), math.acos(-c0 / amp)
-            for root in (delta + spread, delta - spread):
-                z = (root % (2.0 * math.pi)) / w
-                for cand in (z, z - 2.0 * math.pi / w):
-                    if -1e-9 * h <= cand <= h * (1 + 1e-9):
-                        return float(t[j] + cand)
-        return float(t[j] + x)
     c = np.polyfit(ts, ys, 3)
-    lo, hi = 0.0, h  # the cubic's root by Newton kept inside the bracket (bisection otherwise)
+    root = _cubic_root(c, x, h)
+    if w is None:
+        return float(t[j] + root)
+    A = np.column_stack([np.ones(4), np.cos(w * ts), np.sin(w * ts)])
+    c0, ca, cb = np.linalg.lstsq(A, ys, rcond=None)[0]
+    amp = math.hypot(ca, cb)
+    if not amp > abs(c0):
+        return float(t[j] + root)
+    outer = [k for k in (first - 1, first + 4) if 0 <= k < len(t)]
+    if outer:
+        to = t[outer] - t[j]
+        wave = c0 + ca * np.cos(w * to) + cb * np.sin(w * to)
+        if np.sum((wave - y[outer]) ** 2) >= np.sum((np.polyval(c, to) - y[outer]) ** 2):
+            return float(t[j] + root)
+    # c0 + amp cos(w z - delta) = 0: w z = delta +- arccos(-c0 / amp)
+    delta, spread = math.atan2(cb, ca), math.acos(-c0 / amp)
+    for phase in (delta + spread, delta - spread):
+        z = (phase % (2.0 * math.pi)) / w
+        for cand in (z, z - 2.0 * math.pi / w):
+            if -1e-9 * h <= cand <= h * (1 + 1e-9):
+                return float(t[j] + cand)
+    return float(t[j] + root)
+
+
+def _cubic_root(c: np.ndarray, x: float, h: float) -> float:
+    """The root in ``[0, h]`` of the cubic ``c`` (highest power first), whose ends differ in
+    sign: Newton from ``x``, kept inside the bracket (bisection otherwise)."""
+    lo, hi = 0.0, h
     f_lo = c[3]
     z = x
     for _ in range(60):
         f = ((c[0] * z + c[1]) * z + c[2]) * z + c[3]
+        if f == 0.0:
+            break
         if (f < 0) == (f_lo < 0):
             lo, f_lo = z, f
         else:
             hi = z
         d = (3.0 * c[0] * z + 2.0 * c[1]) * z + c[2]
         step = z - f / d if d != 0.0 else math.nan
-        z = step if lo < step < hi else 0.5 * (lo + hi)
-        if hi - lo < 1e-15 * h or abs(f) == 0.0:
+        if abs(step - z) <= 1e-15 * h:
+            return step
+        z = step if lo <= step <= hi else 0.5 * (lo + hi)
+        if hi - lo <= 1e-15 * h:
             break
-    return float(t[j] + z)
+    return z
 
 
 def _sinusoid_noise(y: np.ndarray) -> float:
