@@ -304,7 +304,7 @@ def ensemble_table(result: dict) -> str:
 
 
 def peers_block(result: dict) -> str:
-    """The README's peers block: the peers in their fastest form when the run has them, else
+    """The speed page's peers block: the peers in their fastest form when the run has them, else
     the sweeps' head-to-head table."""
     if result.get("fastest_peers"):
         from .fastest_report import case_table, distribution_table

@@ -4,15 +4,19 @@ Each function takes samples of a run, times ``t`` [s] (K,) and states or coordin
 times, and returns the quantity a reader compares with theory as an :class:`Estimate`. The
 viewer (on the samples its exhibit keeps) and the recorder (on the frames it wrote) call the same
 functions, so one motion gives one number. An estimate the samples cannot support is not a
-guess: it has no value and says why (``Estimate.reason``): aliased (the motion turns too far
-between samples to tell its rate), too short an arc or too few crossings, too little growth, or
-the noise leaving the figure uncertain beyond the estimator's stated accuracy.
+guess: it has no value and says why (``Estimate.reason``, its first words the kind): aliased
+(the motion turns too far between samples to tell its rate; samples beyond the Nyquist limit are
+those of a slower motion, as clean, so the estimators take the frequency theory predicts,
+``expected``, and refuse what it puts beyond their reach), too short (an arc, too few
+crossings), drift (the mean moving), two frequencies (crossings wandering more than noise
+explains), too little growth, or noise leaving the figure uncertain beyond the estimator's
+stated accuracy.
 
 The estimators are built for frames at 10-60 per second with measurement noise: fits are made on
 centred data, circles by their geometric distance, zero crossings with hysteresis and with the
 mean removed, and derivatives with the known bias of their differences removed. Their accuracy at
 those frame rates, exact and with 0.1 % noise, is measured in ``tests/test_measure.py`` and stated
-in the README.
+in the manual (docs/recording.md).
 
 Conventions: angles in radians, frequencies in rad/s, SI units otherwise; states in the layout of
 their system module
@@ -92,6 +96,26 @@ def noise_level(y: np.ndarray) -> float:
     return float(np.max(1.4826 * mad / math.sqrt(20.0)))
 
 
+def _beyond_theory(
+    t: np.ndarray, expected: float | None, limit: float, what: str
+) -> Estimate | None:
+    """ "aliased" if the frequency theory predicts, ``expected`` [rad/s], advances the motion more
+    than ``limit`` rad between some two samples, else None. Samples of a motion beyond the
+    Nyquist limit (pi a sample) are those of a slower one, as clean: only theory tells them
+    apart, so an estimator that is told what theory predicts refuses rather than read the
+    alias."""
+    if expected is None or len(t) < 2:
+        return None
+    worst = abs(float(expected)) * float(np.max(np.diff(t)))
+    if worst > limit:
+        return unresolved(
+            f"aliased: at the {abs(float(expected)):.4g} rad/s theory predicts, {what} "
+            f"{worst:.2g} rad between samples (at most {limit:.2g} is read; the Nyquist limit "
+            "is pi)"
+        )
+    return None
+
+
 def _wrapped(a: np.ndarray) -> np.ndarray:
     """Angles wrapped to ``[-pi, pi)``."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
@@ -105,6 +129,7 @@ def gyrofrequency(
     xy: np.ndarray | None = None,
     min_turn: float = 0.5,
     max_uncertainty: float = 3e-5,
+    expected: float | None = None,
 ) -> Estimate:
     """Magnitude of the rate of turn [rad/s] of the transverse velocity ``v_perp`` (K, 2), or
     (K, N, 2) for an ensemble (the value is then the per-member rates): the least-squares slope of its angle.
@@ -115,8 +140,10 @@ def gyrofrequency(
     a frequency from its neighbours to the digits shown); when it turns more than a quarter turn
     between samples (aliased: a turn of ``phi`` and one of ``phi - 2 pi`` look alike); when the
     positions ``xy`` (K, 2) (or (K, N, 2)), if given, do not move the distance that rate implies
-    (an alias the velocity alone cannot reveal); when noise leaves the slope uncertain by more
-    than ``max_uncertainty`` of itself."""
+    (an alias the velocity alone cannot reveal); when the rate theory predicts, ``expected``
+    [rad/s] if given, turns the velocity more than a quarter turn between samples (an alias by a
+    whole turn a sample looks like a slow, clean turn: only theory or the positions reveal it);
+    when noise leaves the slope uncertain by more than ``max_uncertainty`` of itself."""
     v = np.asarray(v_perp, float)
     t = np.asarray(t, float)
     if v.ndim == 3:
@@ -128,20 +155,24 @@ def gyrofrequency(
                 xy=None if xy is None else np.asarray(xy)[:, j],
                 min_turn=min_turn,
                 max_uncertainty=max_uncertainty,
+                expected=expected,
             )
             if not e:
                 return unresolved(f"member {j}: {e.reason}")
             rates.append(e.value)
         return Estimate(np.asarray(rates))
     if len(t) < 3:
-        return unresolved("fewer than 3 samples")
+        return unresolved("too short: fewer than 3 samples")
+    beyond = _beyond_theory(t, expected, MAX_TURN_PER_SAMPLE, "the velocity turns")
+    if beyond is not None:
+        return beyond
     step = _wrapped(np.diff(np.arctan2(v[:, 1], v[:, 0])))
     worst = float(np.max(np.abs(step)))
     if worst > MAX_TURN_PER_SAMPLE:
         return unresolved(f"aliased: the velocity turns up to {worst:.2g} rad between samples")
     turned = abs(float(np.sum(step)))
     if turned < min_turn:
-        return unresolved(f"the velocity has turned {turned:.2g} of {min_turn:g} rad")
+        return unresolved(f"too short: the velocity has turned {turned:.2g} of {min_turn:g} rad")
     angle = np.concatenate([[0.0], np.cumsum(step)])
     s, se = _slope_and_error(t, angle)
     if se > max_uncertainty * abs(s):
@@ -218,11 +249,15 @@ def fit_circle(xy: np.ndarray, *, min_arc: float = 0.5, max_uncertainty: float =
 
 
 # --------------------------------------------------------------------------- oscillations
-def _zero_crossings(t: np.ndarray, y: np.ndarray, band: float) -> np.ndarray:
+def _zero_crossings(
+    t: np.ndarray, y: np.ndarray, band: float, w: float | None = None
+) -> np.ndarray:
     """Times where ``y`` passes from below ``-band`` to above ``band`` or back (hysteresis: a
-    wobble inside the band is not a crossing). Each is located by linear interpolation when ``y``
-    changes sign once on the way, else as the root of a least-squares line through the samples
-    of that passage."""
+    wobble inside the band is not a crossing). Each is located, when ``y`` changes sign once on
+    the way, from the four samples about the sign change (:func:`_root_between`: the cubic
+    through them, or given the frequency ``w`` the sinusoid if it fits better; a line's root is
+    off by the curve's bend, 2e-5 of a period at 10 samples a half period); else (noise near
+    zero) as the root of a least-squares line through the samples of that passage."""
     side = np.where(y > band, 1, np.where(y < -band, -1, 0))
     idx = np.nonzero(side)[0]
     if len(idx) < 2:
@@ -234,12 +269,119 @@ def _zero_crossings(t: np.ndarray, y: np.ndarray, band: float) -> np.ndarray:
         ys, ts = y[a : b + 1], t[a : b + 1]
         flips = np.nonzero(np.signbit(ys[:-1]) != np.signbit(ys[1:]))[0]
         if len(flips) == 1:
-            j = flips[0]
-            out.append(ts[j] - ys[j] * (ts[j + 1] - ts[j]) / (ys[j + 1] - ys[j]))
+            out.append(_root_between(t, y, a + int(flips[0]), w))
         else:
             m, c = np.polyfit(ts - ts[0], ys, 1)
             out.append(ts[0] - c / m)
     return np.asarray(out)
+
+
+def _root_between(t: np.ndarray, y: np.ndarray, j: int, w: float | None = None) -> float:
+    """The zero of ``y`` between samples ``j`` and ``j + 1`` (which differ in sign), from the
+    four samples ``j - 1 .. j + 2`` (at the record's ends the four nearest): of the cubic through
+    them, or, given the frequency ``w``, of the least-squares ``c + a cos(w t) + b sin(w t)``
+    through them if that predicts the next samples out better (a sinusoid's crossing exactly
+    however few samples a period, where the cubic is off by ``(w dt)^4``; a swing far from a
+    sinusoid's shape is the cubic's); of the line through the two where there are not four."""
+    h = t[j + 1] - t[j]
+    x = -y[j] * h / (y[j + 1] - y[j])
+    if len(t) < 4:
+        return float(t[j] + x)
+    first = min(max(j - 1, 0), len(t) - 4)  # at the record's ends, the four samples nearest
+    ts, ys = t[first : first + 4] - t[j], y[first : first + 4]
+    c = np.polyfit(ts, ys, 3)
+    root = _cubic_root(c, x, h)
+    if w is None:
+        return float(t[j] + root)
+    A = np.column_stack([np.ones(4), np.cos(w * ts), np.sin(w * ts)])
+    c0, ca, cb = np.linalg.lstsq(A, ys, rcond=None)[0]
+    amp = math.hypot(ca, cb)
+    if not amp > abs(c0):
+        return float(t[j] + root)
+    outer = [k for k in (first - 1, first + 4) if 0 <= k < len(t)]
+    if outer:
+        to = t[outer] - t[j]
+        wave = c0 + ca * np.cos(w * to) + cb * np.sin(w * to)
+        if np.sum((wave - y[outer]) ** 2) >= np.sum((np.polyval(c, to) - y[outer]) ** 2):
+            return float(t[j] + root)
+    # c0 + amp cos(w z - delta) = 0: w z = delta +- arccos(-c0 / amp)
+    delta, spread = math.atan2(cb, ca), math.acos(-c0 / amp)
+    for phase in (delta + spread, delta - spread):
+        z = (phase % (2.0 * math.pi)) / w
+        for cand in (z, z - 2.0 * math.pi / w):
+            if -1e-9 * h <= cand <= h * (1 + 1e-9):
+                return float(t[j] + cand)
+    return float(t[j] + root)
+
+
+def _cubic_root(c: np.ndarray, x: float, h: float) -> float:
+    """The root in ``[0, h]`` of the cubic ``c`` (highest power first), whose ends differ in
+    sign: Newton from ``x``, kept inside the bracket (bisection otherwise)."""
+    lo, hi = 0.0, h
+    f_lo = c[3]
+    z = x
+    for _ in range(60):
+        f = ((c[0] * z + c[1]) * z + c[2]) * z + c[3]
+        if f == 0.0:
+            break
+        if (f < 0) == (f_lo < 0):
+            lo, f_lo = z, f
+        else:
+            hi = z
+        d = (3.0 * c[0] * z + 2.0 * c[1]) * z + c[2]
+        step = z - f / d if d != 0.0 else math.nan
+        if abs(step - z) <= 1e-15 * h:
+            return step
+        z = step if lo <= step <= hi else 0.5 * (lo + hi)
+        if hi - lo <= 1e-15 * h:
+            break
+    return z
+
+
+def _sinusoid_noise(y: np.ndarray) -> float:
+    """The noise's standard deviation if ``y`` (K,) is one sampled sinusoid, an offset and white
+    noise: a sinusoid sampled at any rate obeys ``y[k+1] + y[k-1] = c y[k] + d`` exactly, so the
+    residual of that fit is the noise's, of variance ``(2 + c^2) sigma^2``. Unlike the third
+    differences (:func:`noise_level`), it does not mistake a clean oscillation a few samples a
+    period for noise; a signal that is not one sinusoid leaves a larger residual."""
+    if len(y) < 8:
+        return math.inf
+    A = np.column_stack([y[1:-1], np.ones(len(y) - 2)])
+    b = y[2:] + y[:-2]
+    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+    r = b - A @ coef
+    return math.sqrt(float(r @ r) / (len(b) - 2) / (2.0 + float(coef[0]) ** 2))
+
+
+def _period_means(t: np.ndarray, y: np.ndarray, tc: np.ndarray, w: float) -> np.ndarray:
+    """The mean of ``y`` over each whole period between crossings ``tc[k]`` and ``tc[k + 2]``:
+    the constant of a least-squares ``m + a cos(w t) + b sin(w t)`` through its samples (exact
+    for a sinusoid at any sampling, where a sum over the samples is not)."""
+    out = []
+    for k in range(len(tc) - 2):
+        inside = (t >= tc[k]) & (t <= tc[k + 2])
+        if inside.sum() < 4:
+            continue
+        ti = t[inside] - tc[k]
+        A = np.column_stack([np.ones_like(ti), np.cos(w * ti), np.sin(w * ti)])
+        out.append(np.linalg.lstsq(A, y[inside], rcond=None)[0][0])
+    return np.asarray(out)
+
+
+def _drifting(means: np.ndarray, amp: float, threshold: float) -> float | None:
+    """How far the period means move, as a fraction of ``amp``, if they move steadily (one way:
+    a drift, not the beat of a second frequency) by more than ``threshold`` of it; else None."""
+    if len(means) < 3:
+        return None
+    moved = float(np.ptp(means)) / amp
+    k = np.arange(len(means), dtype=float)
+    if moved > threshold and abs(float(np.corrcoef(k, means)[0, 1])) > 0.9:
+        return moved
+    return None
+
+
+#: A steady drift of the period means beyond this fraction of the amplitude is refused.
+MAX_DRIFT = 0.05
 
 
 def crossing_frequency(
@@ -249,6 +391,7 @@ def crossing_frequency(
     min_crossings: int = 3,
     hysteresis: float = 0.1,
     max_uncertainty: float = 1e-4,
+    expected: float | None = None,
 ) -> Estimate:
     """Angular frequency [rad/s] of an oscillating coordinate ``y`` (K,) from its zero crossings,
     up and down, each half a period apart.
@@ -258,18 +401,29 @@ def crossing_frequency(
     ``band`` the larger of ``hysteresis`` times the amplitude and four times the noise level, so
     noise near zero does not add crossings; and the crossing times ``t_k`` are fitted as
     ``t_0 + k T/2 + (-1)^k d``, the alternating term taking up any difference between the
-    up and the down half periods (an offset, an asymmetric wave). Not resolved: noise above a
-    fifth of the amplitude; below ``min_crossings`` crossings (one full period at least); fewer
-    than two samples per half period (aliased); or a half period uncertain (from the fit's
-    residuals) by more than ``max_uncertainty`` of itself."""
+    up and the down half periods (an offset, an asymmetric wave).
+
+    Samples of an oscillation beyond the Nyquist limit (pi a sample) are those of a slower one,
+    just as clean: given ``expected``, the frequency [rad/s] theory predicts (the highest the
+    motion may have), the estimate is refused as aliased when that advances more than a quarter
+    turn between samples. Not resolved, with the reason: "aliased" (that, or fewer than two
+    samples per half period); "too short" (below ``min_crossings`` crossings: one full period at
+    least); "noise" (above a fifth of the amplitude, or leaving the half period uncertain from
+    the fit's residuals by more than ``max_uncertainty`` of itself, the crossings wandering as
+    much as the noise explains); "drift" (the mean moving steadily by more than
+    :data:`MAX_DRIFT` of the amplitude, or the crossings wandering with it); "two frequencies"
+    (the crossings wandering more than noise explains, without a drift)."""
     t, y = np.asarray(t, float), np.asarray(y, float)
     if len(y) < 4:
-        return unresolved("fewer than 4 samples")
+        return unresolved("too short: fewer than 4 samples")
+    beyond = _beyond_theory(t, expected, 0.5 * math.pi, "it advances")
+    if beyond is not None:
+        return beyond
     y = y - y.mean()
     amp = 0.5 * float(np.percentile(y, 98) - np.percentile(y, 2))
     if not amp > 0.0:
         return unresolved("no oscillation")
-    sigma = noise_level(y)
+    sigma = min(noise_level(y), _sinusoid_noise(y))
     if sigma > 0.2 * amp:
         return unresolved(f"noise: {sigma / amp:.1g} of the amplitude")
     band = max(hysteresis * amp, 4.0 * sigma)
@@ -282,37 +436,71 @@ def crossing_frequency(
             y = y - float(np.sum(0.5 * (yi[1:] + yi[:-1]) * np.diff(ti))) / (ti[-1] - ti[0])
             tc = _zero_crossings(t, y, band)
     if len(tc) < min_crossings:
-        return unresolved(f"{len(tc)} zero crossings of the {min_crossings} needed")
+        return unresolved(f"too short: {len(tc)} zero crossings of the {min_crossings} needed")
     half = np.median(np.diff(tc))
     if half < 2.0 * np.median(np.diff(t)):
         return unresolved("aliased: fewer than two samples per half period")
+    gap = max(float(tc[0] - t[0]), float(np.max(np.diff(tc))), float(t[-1] - tc[-1]))
+    if gap > 3.0 * half:  # an oscillation about a fixed mean crosses it every half period
+        return unresolved(f"drift: no zero crossing for {gap:.2g} s, {gap / half:.2g} half periods")
+    tc = _zero_crossings(t, y, band, math.pi / half)  # located again, knowing the frequency
+    means = _period_means(t, y, tc, math.pi / half)
+    moved = _drifting(means, amp, MAX_DRIFT)
+    if moved is not None:
+        return unresolved(f"drift: the mean moves by {moved:.2g} of the amplitude")
     k = np.arange(len(tc), dtype=float)
     A = np.column_stack([np.ones_like(k), k, (-1.0) ** k])
     coef, *_ = np.linalg.lstsq(A, tc - tc[0], rcond=None)
+    for _ in range(3):  # located again at the fitted frequency, until it no longer moves
+        again = _zero_crossings(t, y, band, math.pi / float(coef[1]))
+        if len(again) != len(tc):
+            break
+        previous, tc = float(coef[1]), again
+        coef, *_ = np.linalg.lstsq(A, tc - tc[0], rcond=None)
+        if abs(float(coef[1]) - previous) < 1e-14 * previous:
+            break
     half_period = float(coef[1])
     if len(tc) > 3:
         r = A @ coef - (tc - tc[0])
         var = float(r @ r) / (len(tc) - 3) * float(np.linalg.inv(A.T @ A)[1, 1])
         if math.sqrt(var) > max_uncertainty * half_period:
+            spread = math.sqrt(float(r @ r) / (len(tc) - 3))
+            # a crossing's time jitters by the noise over the slope there, amp w
+            jitter = sigma * half_period / (math.pi * amp)
+            what = f"the period is uncertain by {math.sqrt(var) / half_period:.1g} of itself"
+            if spread <= 3.0 * jitter:
+                return unresolved(f"noise: {what}")
+            if _drifting(means, amp, 0.0) is not None:
+                return unresolved(f"drift: {what}, the mean moving steadily")
             return unresolved(
-                f"noise: the period is uncertain by {math.sqrt(var) / half_period:.1g} of itself"
+                f"two frequencies: {what}, the crossings wandering by {spread:.2g} s, "
+                "more than noise explains"
             )
     return Estimate(math.pi / half_period)
 
 
 def mode_frequencies(
-    t: np.ndarray, angles: np.ndarray, shapes: np.ndarray, *, min_share: float = 0.02
+    t: np.ndarray,
+    angles: np.ndarray,
+    shapes: np.ndarray,
+    *,
+    min_share: float = 0.02,
+    expected=None,
 ) -> list[Estimate]:
     """Frequencies [rad/s] of the hoop's two normal modes measured from the angles (K, 2).
 
     The angles are projected on the mode ``shapes`` (rows, :func:`mechviz.dynamics.hoop.normal_modes`),
-    giving the modal coordinates, and each is timed by :func:`crossing_frequency`. A mode whose
-    coordinate stays below ``min_share`` of the larger one is not excited: not resolved."""
+    giving the modal coordinates, and each is timed by :func:`crossing_frequency`, told the
+    frequency ``expected[k]`` theory gives it if given (linear theory's: a swing's frequency is
+    below it), so that a mode too fast for the samples is refused as aliased rather than read
+    at its alias. A mode whose coordinate stays below ``min_share`` of the larger one is not
+    excited: not resolved."""
     q = modal_coordinates(angles, shapes)
     peak = np.abs(q).max(axis=0) if len(q) else np.zeros(2)
     top = float(peak.max()) if len(q) else 0.0
+    theory = (None, None) if expected is None else tuple(float(x) for x in expected)
     return [
-        crossing_frequency(t, q[:, k])
+        crossing_frequency(t, q[:, k], expected=theory[k])
         if top > 0 and peak[k] > min_share * top
         else unresolved("not excited")
         for k in range(2)

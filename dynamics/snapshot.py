@@ -13,7 +13,8 @@ start or end one).
 Layout of a row, for a run of ``n`` members of dimension ``d``: ``t, clock, t0, steps, nfev,
 rejected, h`` (the Taylor step, NaN for none), a flag (1: a reference row follows), then
 ``state`` and ``state0`` (``n d`` each), the DOP853 step sizes (``n``) and its counters (``3 n``),
-then the reference run's row in the same layout.
+then the reference run's row in the same layout, then that of the reference's check run (the
+looser DOP853 run that measures the reference's own error).
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ def _own_width(sim: Simulation) -> int:
 
 
 def width(sim: Simulation) -> int:
-    """The length of ``sim``'s rows (its own and room for a reference run's)."""
+    """The length of ``sim``'s rows (its own and room for a reference run's and its check's)."""
     own = _own_width(sim)
-    return own + (own if sim._reference_mode == "auto" else 0)
+    return own + (2 * own if sim._reference_mode == "auto" else 0)
 
 
 def snapshot(sim: Simulation, out: np.ndarray | None = None) -> np.ndarray:
@@ -45,7 +46,8 @@ def snapshot(sim: Simulation, out: np.ndarray | None = None) -> np.ndarray:
     ref, own = sim._reference, _own_width(sim)
     if ref is not None and len(row) > own:
         row[_HEAD - 1] = 1.0
-        _write(ref, row[own:])
+        _write(ref, row[own : 2 * own])
+        _write(ref._reference, row[2 * own :])
     else:
         row[own:] = math.nan  # room for a reference run it has not (now)
     return row
@@ -68,7 +70,8 @@ def restore(sim: Simulation, row: np.ndarray) -> None:
     if sim._reference_mode == "auto" and len(row) > own and row[_HEAD - 1] == 1.0:
         if sim._reference is None:  # the run had one then (a jump has ended it since)
             sim._reference = reference_run(sim.system, sim.state0)
-        _read(sim._reference, row[own:])
+        _read(sim._reference, row[own : 2 * own])
+        _read(sim._reference._reference, row[2 * own :])
     else:
         sim._reference = None
     sim._track_error = sim._reference_mode is not None and (

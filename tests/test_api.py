@@ -264,3 +264,24 @@ def test_the_released_disks_wobble_grows_at_the_analysis_rate():
     )
     growth = api.wobble_growth_rate(run.t, run.states[:, :3])
     assert growth.value == pytest.approx(api.analyze("disk")["wobble_growth_rate"], rel=1e-3)
+
+
+def test_a_released_disk_starts_from_a_given_state():
+    """``motion="released"`` picks the free body and ``state`` its start: the run begins there,
+    keeps the free body's invariants from there, and is not the default release."""
+    default = api.simulate("disk", motion="released", t_end=2.0, samples=3, method="dop853")
+    w = np.array([0.7, -1.9, 2.6])
+    q = np.array([0.9, 0.1, -0.3, 0.2])
+    given = np.concatenate([w, q / np.linalg.norm(q)])
+    run = api.simulate(
+        "disk", motion="released", state=given, t_end=2.0, samples=3, method="dop853"
+    )
+    np.testing.assert_array_equal(run.states[0], given)
+    assert run.summary()["motion"] == "released"
+    assert not np.allclose(run.states[-1], default.states[-1])
+    assert np.max(np.abs(run.energy_error)) < 1e-8
+    L = np.stack([run.column(n) for n in ("Lx", "Ly", "Lz")], axis=-1)  # space frame
+    assert np.max(np.abs(L - L[0])) < 1e-8 * np.linalg.norm(L[0])
+    with pytest.raises(dynamics.params.SettingError) as err:
+        api.simulate("disk", motion="released", extra_spin=(0, 0, 1), state=given, t_end=1.0)
+    assert err.value.field == "extra_spin"

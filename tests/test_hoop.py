@@ -207,3 +207,38 @@ def test_energy_error_of_the_exact_mode1_motion_is_round_off_at_any_swing(amplit
         sim.state[0] = s
         worst = max(worst, float(abs(sim.sample().energy_error[0])))
     assert worst < 1e-13
+
+
+@pytest.mark.parametrize(
+    ("bead_mass", "amplitude"), [(0.5, 0.5), (0.5, 2.0), (0.05, 2.0), (0.05, 2.7)]
+)
+def test_mode1_floquet_multiplier_predicts_how_a_departure_from_mode1_grows(bead_mass, amplitude):
+    """The multiplier from one period's monodromy predicts a small departure's growth over
+    several periods of the full equations: l^k where it is unstable, bounded where it is 1;
+    the monodromy keeps volume (its determinant is 1)."""
+    p = hoop.HoopParams(bead_mass=bead_mass)
+    D = hoop.mode1_monodromy(p, amplitude)
+    assert np.linalg.det(D) == pytest.approx(1.0, abs=1e-4)
+    lam = hoop.mode1_floquet_multiplier(p, amplitude)
+    T = hoop.mode1_period(p, amplitude)
+    # a departure along the growing direction (or, if none, the transverse one), of 1e-9
+    w, V = np.linalg.eig(D)
+    grow = np.real(V[:, np.argmax(np.abs(w))]) if lam > 1.01 else np.array([1.0, -1.0, 0, 0])
+    d0 = 1e-9 * grow / np.linalg.norm(grow)
+    start = np.array([amplitude, amplitude, 0.0, 0.0])
+    periods = 3
+    sim = Simulation(
+        Hoop(p),
+        "dop853",
+        rtol=1e-13,
+        atol=1e-16,
+        state=np.stack([start, start + d0]),
+        reference=None,
+    )
+    sim.advance_to(periods * T, final=True)
+    growth = np.linalg.norm(sim.state[1] - sim.state[0]) / 1e-9
+    if lam > 1.01:
+        assert growth == pytest.approx(lam**periods, rel=0.05)
+    else:
+        assert lam == pytest.approx(1.0, abs=1e-4)
+        assert growth < 20.0

@@ -164,7 +164,7 @@ def test_wobble_about_the_intermediate_axis_grows_at_the_linear_rate():
 
 # --------------------------------------------------------------------------- accuracy
 # Each estimator's stated accuracy (relative), for exact samples and with 0.1 % Gaussian noise,
-# on the motions below at 10, 15, 30 and 60 frames per second. The README's table of estimator
+# on the motions below at 10, 15, 30 and 60 frames per second. The manual's table of estimator
 # accuracies states these numbers (checked below). Noisy: a resolved value is within the bound;
 # an unresolved one says why.
 ACCURACY = {
@@ -316,3 +316,91 @@ def test_a_jump_to_a_state_of_another_shape_is_refused_and_changes_nothing():
     with pytest.raises(ValueError, match="state must be finite"):
         sim.jump(np.full(6, np.nan))
     np.testing.assert_array_equal(sim.state, before)
+
+
+# --------------------------------------------------------------------------- refusals named truly
+W_FAST = 7.15
+
+
+@pytest.mark.parametrize("dt", [0.8, 0.9288])
+def test_crossing_frequency_refuses_an_aliased_oscillation_told_what_theory_predicts(dt):
+    """Sampled every ``dt``, a 7.15 rad/s cosine is sample for sample a slow clean one (its
+    alias |7.15 - 2 pi / dt|): the samples alone read the alias; told the frequency theory
+    predicts, the estimator refuses it as aliased."""
+    t = np.arange(0.0, 60.0, dt)
+    y = np.cos(W_FAST * t + 0.3)
+    alias = abs(W_FAST - 2 * math.pi / dt)
+    blind = measure.crossing_frequency(t, y)
+    assert not blind or blind.value == pytest.approx(alias, rel=1e-3)
+    told = measure.crossing_frequency(t, y, expected=W_FAST)
+    assert not told and told.reason.startswith("aliased")
+    # within the samples' reach, theory does not stand in the way
+    fine = np.arange(0.0, 20.0, 0.1)
+    e = measure.crossing_frequency(fine, np.cos(W_FAST * fine), expected=W_FAST)
+    assert e.value == pytest.approx(W_FAST, rel=1e-9)
+
+
+def test_crossing_frequency_names_why_it_refuses():
+    """Beyond the Nyquist limit, a steady drift, a second frequency, noise and too short a
+    record each refuse with their own name (noiseless signals are not called noise)."""
+    beyond = np.arange(0.0, 30.0, 0.5)  # 7.15 rad/s: 3.6 rad a sample
+    e = measure.crossing_frequency(beyond, np.cos(W_FAST * beyond + 0.3))
+    assert not e and e.reason.startswith("aliased"), e.reason
+    t = np.arange(0.0, 15.0, 1 / 30)
+    base = np.cos(2.3 * t + 0.4)
+    cases = {
+        "drift": [base + d * t for d in (0.003, 0.01, 0.3)] + [base + 0.02 * t * t],
+        "two frequencies": [base + a * np.cos(3.9 * t + 1.0) for a in (0.05, 0.5)],
+        "too short": [base[:60]],
+    }
+    for reason, signals in cases.items():
+        for y in signals:
+            e = measure.crossing_frequency(t[: len(y)], y)
+            assert not e and e.reason.startswith(reason), (reason, e.reason)
+    rng = np.random.default_rng(3)
+    noisy = [base + s * rng.standard_normal(len(t)) for s in (0.05, 0.3)]
+    for y in noisy:
+        e = measure.crossing_frequency(t, y)
+        assert (e and abs(e.value / 2.3 - 1) < 5e-3) or e.reason.startswith("noise"), e.reason
+    assert not measure.crossing_frequency(t, noisy[1])
+
+
+@pytest.mark.parametrize("offset", [-0.05, 0.05])
+def test_gyrofrequency_without_positions_refuses_a_whole_turn_a_sample_told_the_theory(offset):
+    """Every 2 pi / 7.15 +- 0.05 s the velocity turns a whole turn and 0.36 rad between samples:
+    without positions it reads as a slow turn at the alias; told the gyrofrequency theory
+    predicts, it is refused as aliased."""
+    dt = 2 * math.pi / W_FAST + offset
+    t = np.arange(0.0, 60.0, dt)
+    v = 0.7 * np.column_stack([np.cos(-W_FAST * t), np.sin(-W_FAST * t)])
+    blind = measure.gyrofrequency(t, v)
+    assert blind.value == pytest.approx(abs(2 * math.pi / dt - W_FAST), rel=1e-9)
+    told = measure.gyrofrequency(t, v, expected=W_FAST)
+    assert not told and told.reason.startswith("aliased")
+    fine = np.arange(0.0, 10.0, 0.05)
+    vf = 0.7 * np.column_stack([np.cos(-W_FAST * fine), np.sin(-W_FAST * fine)])
+    assert measure.gyrofrequency(fine, vf, expected=W_FAST).value == pytest.approx(W_FAST)
+
+
+@pytest.mark.parametrize("fps", FPS)
+def test_mode_frequencies_within_the_bound_for_bead_to_hoop_mass_ratios_from_a_hundredth_to_100(
+    fps,
+):
+    """Each mode at 0.05 rad, exact samples: within the stated bound, or (where the mode turns
+    more than a quarter turn a sample, as theory predicts) refused as aliased."""
+    bound = ACCURACY["mode_frequencies"][0]
+    resolved = 0
+    for ratio in np.geomspace(0.01, 100.0, 13):
+        p = hp.HoopParams(1.7, 1.7 * ratio, 0.8, 4.2)
+        freqs, shapes = hp.normal_modes(p)
+        t = np.arange(0.0, 15.0, 1 / fps)
+        for k in (0, 1):
+            amps = (0.05, 0.0) if k == 0 else (0.0, 0.05)
+            angles = hp.linear_solution(p, hp.mode_state(p, amps), t)[:, :2]
+            e = measure.mode_frequencies(t, angles, shapes, expected=freqs)[k]
+            if freqs[k] / fps > 0.5 * math.pi:
+                assert not e and e.reason.startswith("aliased"), (ratio, k, e)
+            else:
+                assert e and abs(e.value / freqs[k] - 1) < bound, (ratio, k, e)
+                resolved += 1
+    assert resolved >= 20

@@ -148,6 +148,9 @@ def test_symplectic_runs_conserve_what_theory_says(recorded):
     assert _figures(recorded, "tumbling-disk")["final |L| change"]["measured"] < 1e-10
     errs = recorded[1]["rk4-vs-verlet"].manifest["final_errors"]
     assert set(errs) == {"verlet", "rk4"}
+    for e in errs.values():  # against the DOP853 reference: its own error measured beside it
+        assert e["error_against"] == "reference" and e["reference_error_final"] > 0.0
+        assert e["error_resolved"] == (e["error_final"] >= 10 * e["reference_error_final"])
 
 
 @pytest.mark.slow

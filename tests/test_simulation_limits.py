@@ -84,9 +84,14 @@ def test_the_reference_is_a_hundred_times_tighter_than_any_run_it_judges():
     sim = Simulation(Hoop(), "dop853", rtol=MIN_COMPARED_TOL, state=s0)
     sim.advance_to(10.0)
     smp = sim.sample()
-    assert smp.reference_kind == "reference" and smp.reference_accuracy == REFERENCE_ACCURACY
+    # the reference's own error, measured beside it: small on this regular motion, not zero
+    assert (
+        smp.reference_kind == "reference" and 0.0 < smp.reference_accuracy[0] < REFERENCE_ACCURACY
+    )
     assert smp.error[0] > 0.0  # not the reference compared with itself
     tight = Simulation(Hoop(), "dop853", rtol=MIN_COMPARED_TOL / 10, state=s0)
     assert tight.reference_kind is None and "reference" in tight.reference_note
     exact = Simulation(Cyclotron(), "dop853", rtol=1e-13)
-    assert exact.sample().reference_kind == "exact" and exact.sample().reference_accuracy == 0.0
+    assert exact.sample().reference_kind == "exact" and np.all(
+        exact.sample().reference_accuracy == 0.0
+    )

@@ -74,6 +74,18 @@ class Method:
     stability: str = ""
     variable_order: bool = False
     counts: str = "right-hand-side evaluations"
+    #: Where the structure differs by system, because a label belongs to a method applied in
+    #: particular variables: ``((system name, structure there, why), ...)``; the other systems
+    #: have ``structure``. Each pair is measured (:mod:`mechviz.dynamics.structure`).
+    structure_by_system: tuple[tuple[str, tuple[Structure, ...], str], ...] = ()
+
+    def structure_on(self, system: Any) -> tuple[Structure, ...]:
+        """The structure this method keeps on ``system`` (an adapter, its class or its name)."""
+        name = system if isinstance(system, str) else system.name
+        for other, structure, _why in self.structure_by_system:
+            if other == name:
+                return structure
+        return self.structure
 
     def applies_to(self, system: Any) -> bool:
         """Whether this method can advance ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its
@@ -129,8 +141,13 @@ class Method:
         return "no truncation error" if self.backend == "exact" else f"order {self.order}"
 
     def describe(self) -> str:
-        kind = "adaptive" if self.adaptive else "fixed step"
+        if self.adaptive:
+            kind = "adaptive"
+        else:
+            kind = "closed-form flow" if self.backend == "exact" else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"
+        for name, structure, why in self.structure_by_system:
+            props += f"; on {name} {', '.join(structure) or 'no geometric structure'} ({why})"
         imp = ", implicit" if self.implicit else ""
         return (
             f"{self.title}: {self.order_text()}, {kind}{imp}, {props}; evaluations: {self.counts}"
@@ -189,6 +206,18 @@ METHODS: dict[str, Method] = {
             kernel="midpoint",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
             counts="right-hand-side evaluations (one per fixed-point iteration)",
+            structure_by_system=(
+                (
+                    "hoop",
+                    ("symmetric",),
+                    "not symplectic: applied to (theta, theta'), not canonical variables",
+                ),
+                (
+                    "free-body",
+                    ("symmetric",),
+                    "not Lie-Poisson: applied to (omega, q); it keeps |L| and E, quadratic in omega",
+                ),
+            ),
         ),
         Method(
             "boris",
@@ -214,7 +243,11 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="symmetric2",
             stability="linear stability w_max h < 2",
-            counts="fixed-point sweeps (each a 2x2 solve and a force)",
+            counts=(
+                "partial evaluations: the fixed-point sweeps of the implicit half kick (each a "
+                "2x2 velocity solve and a force) and of the implicit drift (a 2x2 velocity solve, "
+                "no force), and the explicit closing half kick (a solve and a force)"
+            ),
         ),
         Method(
             "splitting",

@@ -33,6 +33,7 @@ from mechviz.dynamics.params import TINY, SettingError, blamed
 from mechviz.dynamics.simulation import (
     MIN_COMPARED_TOL,
     REFERENCE_TOL,
+    RESOLVED_FACTOR,
     Simulation,
     reference_description,
 )
@@ -310,6 +311,10 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         key = "error_vs_exact" if sim.reference_kind == "exact" else "error_vs_reference"
         out[key] = float(traj.error[-1, 0])
         out["reference"] = reference_description(sim.reference_kind)
+        if sim.reference_kind == "reference" and traj.reference_error is not None:
+            bar = float(traj.reference_error[-1, 0])
+            out["reference_error"] = bar
+            out["error_resolved"] = out[key] >= RESOLVED_FACTOR * bar
     out.update(sysm.report(traj.t[-1]))
     return out
 

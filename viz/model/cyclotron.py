@@ -163,7 +163,10 @@ class CyclotronModel(ExhibitModel):
         :func:`mechviz.dynamics.measure.fit_circle`), and each
         beam member's gyrofrequency."""
         t, x = self.motion.arrays()
-        out: dict = {"gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0])}
+        w_theory = cy.gyrofrequency(self.params)
+        out: dict = {
+            "gyrofrequency": measure.gyrofrequency(t, x[:, 1], xy=x[:, 0], expected=w_theory)
+        }
         # sampled more than half a turn apart, the turn between two samples is ambiguous (the
         # estimate would be an alias): say so instead of showing it
         turn = cy.gyrofrequency(self.params) * (float(np.max(np.diff(t))) if len(t) > 1 else 0.0)
@@ -180,7 +183,7 @@ class CyclotronModel(ExhibitModel):
         if self.beam_motion is not None:
             tb, vb = self.beam_motion.arrays()
             out["beam_gyrofrequencies"] = (
-                aliased if turn > math.pi else measure.gyrofrequency(tb, vb)
+                aliased if turn > math.pi else measure.gyrofrequency(tb, vb, expected=w_theory)
             )
         return out
 
@@ -287,7 +290,7 @@ class CyclotronModel(ExhibitModel):
         pre = t < (kicks[0] if kicks else math.inf)  # before the first kick
         first = {"until": kicks[0]} if kicks else {}  # true of the motion before the first kick
         if S.shape[1] == 1:
-            w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5], xy=S[pre, 0, :2])
+            w_meas = measure.gyrofrequency(t[pre], S[pre, 0, 3:5], xy=S[pre, 0, :2], expected=w)
             keep(figs, "gyrofrequency", w_meas, w, "rad/s", **first)
             circle = measure.fit_circle(S[pre, 0, :2])
             radius = measure.Estimate(circle.value[1]) if circle else circle
@@ -296,7 +299,7 @@ class CyclotronModel(ExhibitModel):
                 pitch = measure.slope(t[pre], S[pre, 0, 2]) * 2 * math.pi / w_meas.value
                 figs.append(figure("helix pitch", pitch, S[0, 0, 5] * cy.period(p), "m", **first))
         else:
-            rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2])
+            rates = measure.gyrofrequency(t, S[:, :, 3:5], xy=S[:, :, :2], expected=w)
             if rates:
                 periods = 2 * math.pi / np.asarray(rates.value)
                 figs.append(
@@ -339,7 +342,7 @@ class CyclotronModel(ExhibitModel):
             keep(
                 figs,
                 "gyrofrequency after the kick",
-                measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2]),
+                measure.gyrofrequency(t[post], S[post, 0, 3:5], xy=S[post, 0, :2], expected=w),
                 w,
                 "rad/s",
                 "unchanged: the period does not depend on the energy",

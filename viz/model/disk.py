@@ -154,8 +154,10 @@ class DiskModel(ExhibitModel):
                 "bearing_force": measure.bearing_force_amplitude(self.params, t, x[:, 0], x[:, 1])
             }
         middle = int(np.argsort(dk.free_kernel_params(self.params))[1])
+        period = self.polhode_period()
+        expected = 2 * math.pi / period if 0.0 < period < math.inf else None
         freq = (
-            measure.crossing_frequency(t, x[:, middle])
+            measure.crossing_frequency(t, x[:, middle], expected=expected)
             if len(t)
             else measure.unresolved("no samples")
         )
@@ -243,7 +245,7 @@ class DiskModel(ExhibitModel):
             keep(
                 figs,
                 "bearing force frequency",
-                measure.crossing_frequency(t, F[:, 0]),
+                measure.crossing_frequency(t, F[:, 0], expected=p.omega),
                 p.omega,
                 "rad/s",
             )

@@ -126,7 +126,11 @@ class HoopModel(ExhibitModel):
         """Both normal-mode frequencies from the sampled angles
         (:func:`mechviz.dynamics.measure.mode_frequencies`)."""
         t, angles = self.motion.arrays()
-        return {"mode_frequencies": measure.mode_frequencies(t, angles, self.shapes)}
+        return {
+            "mode_frequencies": measure.mode_frequencies(
+                t, angles, self.shapes, expected=self.mode_frequencies
+            )
+        }
 
     def modal_history(self, points: int = 600) -> tuple[np.ndarray, ...]:
         """``(t, q1, q2, q1_linear, q2_linear)`` over the samples since the start (at most
@@ -221,7 +225,7 @@ class HoopModel(ExhibitModel):
                 )
             return figs
         amps = measure.modal_coordinates(S[0, 0, :2], shapes)
-        measured = measure.mode_frequencies(t, S[:, 0, :2], shapes)
+        measured = measure.mode_frequencies(t, S[:, 0, :2], shapes, expected=freqs)
         for k in (0, 1):
             keep(
                 figs,

@@ -26,6 +26,8 @@ class Traces:
     ghost: np.ndarray | None  # (K, 1, d) linear theory (hoop)
     event_log: list[dict[str, Any]] = field(default_factory=list)
     measured: dict[str, Any] = field(default_factory=dict)  # the exhibit's readout figures
+    # label -> (K, N) the measured relative error of what ``error`` is against (0: exact)
+    reference_error: dict[str, np.ndarray | None] = field(default_factory=dict)
 
     @property
     def main(self) -> str:

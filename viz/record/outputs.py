@@ -27,6 +27,7 @@ import numpy as np
 
 from mechviz import dynamics
 from mechviz.dynamics import cyclotron, disk, hoop, measure
+from mechviz.dynamics.simulation import RESOLVED_FACTOR
 from mechviz.dynamics.systems import CYCLOTRON, DISK
 
 from ..model import MODELS
@@ -393,12 +394,20 @@ def final_errors(tr: Traces) -> dict[str, dict[str, Any]]:
     for label in tr.states:
         E = tr.energy_error[label]
         e = tr.error[label]
+        bar = tr.reference_error.get(label)
+        bar_final = None if bar is None or e is None else float(np.nanmax(bar[-1]))
         out[label] = {
             "energy_error_final": float(np.max(np.abs(E[-1]))),
             "energy_error_max": float(np.max(np.abs(E))),
             "error_final": None if e is None else float(np.nanmax(e[-1])),
             "error_max": None if e is None else float(np.nanmax(e)),
             "error_against": tr.reference[label],
+            # the reference's own error at the end, as measured, and whether the error is a
+            # figure about the method (well above it) rather than about the reference
+            "reference_error_final": bar_final,
+            "error_resolved": None
+            if bar_final is None
+            else float(np.nanmax(e[-1])) >= RESOLVED_FACTOR * bar_final,
             "steps": tr.steps[label],
             "rhs_evaluations": tr.nfev[label],
         }

@@ -134,6 +134,7 @@ def _run(
     err: dict[str, np.ndarray | None] = {
         lbl: np.full((K, len(s.state)), np.nan) for lbl, s in runs.items()
     }
+    bar = {lbl: np.full((K, len(s.state)), np.nan) for lbl, s in runs.items()}
     ghost = np.empty((K, 1, d)) if getattr(ex.config, "ghost", False) else None
     pending = list(demo.events)
     log: list[dict[str, Any]] = []
@@ -159,6 +160,8 @@ def _run(
             energy[lbl][k], eerr[lbl][k] = s.energy, s.energy_error
             if s.error is not None:
                 err[lbl][k] = s.error
+            if s.reference_accuracy is not None:
+                bar[lbl][k] = s.reference_accuracy
         if ghost is not None:
             ghost[k, 0] = ex.ghost_state()
         if draw is not None:
@@ -168,6 +171,8 @@ def _run(
     for lbl in runs:
         if np.all(np.isnan(err[lbl])):
             err[lbl] = None
+        if np.all(np.isnan(bar[lbl])):
+            bar[lbl] = None
     return Traces(
         t_frames,
         times,
@@ -182,6 +187,7 @@ def _run(
         ghost,
         log,
         ex.measured(),
+        bar,
     )
 
 
@@ -204,7 +210,7 @@ def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
         "title": m.title,
         "order": _order(sim),
         "evaluations": m.counts,
-        "structure": list(m.structure),
+        "structure": list(m.structure_on(sim.system)),
         "step": sim.step_label(),
         "dt": sim.dt,
         "rtol": sim.rtol,

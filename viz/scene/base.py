@@ -19,6 +19,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from mechviz.dynamics.simulation import error_verdict
+
 from ..model.base import (  # noqa: F401  (re-exported for the scenes)
     DIVERGED,
     LOG_FLOOR,
@@ -49,6 +51,15 @@ def against_theory(x, unit: str, theory: float) -> str:
     if shown == "not resolved":
         return f"not resolved (theory {fmt(theory, 4)} {unit})"
     return f"{shown} {unit} (theory {fmt(theory, 4)})"
+
+
+def error_text(smp) -> str:
+    """A sample's error against its reference with the reference's own measured error
+    (:func:`mechviz.dynamics.simulation.error_verdict`); "0.00e+00" where not measured."""
+    if smp.error is None:
+        return f"{0.0:.2e}"
+    bar = None if smp.reference_accuracy is None else float(np.max(smp.reference_accuracy))
+    return error_verdict(float(np.max(smp.error)), bar)
 
 
 class Exhibit(ExhibitModel):

@@ -11,6 +11,7 @@ mode shapes and each modal coordinate is timed between its zero crossings (:mod:
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -20,8 +21,15 @@ from mechviz.dynamics import hoop as hp
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import MAP_SIZE, add_maps
-from .base import Exhibit, against_theory, fmt
+from .base import Exhibit, against_theory, error_text, fmt
 from .panel import number_text
+
+
+@functools.lru_cache(maxsize=64)
+def _floquet(p: hp.HoopParams, amplitude: float) -> float:
+    """Mode 1's largest Floquet multiplier (a run over one period: worked out once per swing)."""
+    return hp.mode1_floquet_multiplier(p, amplitude)
+
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
 # Configuration space, drawn as a square standing left of the stand: theta1 across, theta2 up.
@@ -295,11 +303,16 @@ class HoopExhibit(HoopModel, Exhibit):
             lines.append(
                 f"| 1 at amplitude {abs(c.amplitude):.3g} rad (exact, elliptic) | {fmt(w_nl)} | |"
             )
+            lam = _floquet(p, abs(float(c.amplitude)))
+            verdict = (
+                "stable" if lam < 1 + 1e-4 else f"unstable: a departure grows {lam:.3g}x a period"
+            )
+            lines.append(f"| mode 1's largest Floquet multiplier at this amplitude | {verdict} | |")
         kind = self.sim.reference_kind or "—"
-        err = float(np.max(smp.error)) if smp.error is not None else 0.0
         lines += [
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
-            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 | {err:.2e} |",
+            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 "
+            f"| {error_text(smp)} |",
             "",
             "Grey ghost: linear theory from the same start." if c.ghost else "",
         ]
