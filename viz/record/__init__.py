@@ -6,6 +6,8 @@ recording, a self-contained page, the traces, a chart and a manifest (:mod:`.rec
 :mod:`.outputs`), with measured against predicted figures (:mod:`.figures`).
 """
 
+from mechviz.dynamics.api import Recording, read_recording
+
 from .demo import DEMO_DIR, Demo, demo_names, list_demos, load_demo, parse_demo
 from .figures import figures
 from .recorder import (
@@ -23,6 +25,7 @@ __all__ = [
     "SUFFIXES",
     "Demo",
     "RecordResult",
+    "Recording",
     "RecordingFailed",
     "Traces",
     "demo_names",
@@ -32,6 +35,7 @@ __all__ = [
     "load_demo",
     "measure_record_speed",
     "parse_demo",
+    "read_recording",
     "record",
     "run_demo",
 ]
