@@ -231,7 +231,8 @@ def _ctrl_c_between_chunks():
 
 @contextlib.contextmanager
 def _progress(enabled: bool, total: int, initial: int):
-    """A tqdm bar on stderr counting chunks (silent when not ``enabled``)."""
+    """A tqdm bar on stderr counting chunks (silent when not ``enabled`` and where stderr is
+    not a terminal: a bar's redraws in a log or a pipe are noise)."""
     from tqdm import tqdm
 
     bar = tqdm(
@@ -239,7 +240,7 @@ def _progress(enabled: bool, total: int, initial: int):
         initial=initial,
         unit="chunk",
         desc="mechviz atlas",
-        disable=not enabled,
+        disable=not (enabled and sys.stderr.isatty()),
         file=sys.stderr,
     )
     try:

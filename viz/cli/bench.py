@@ -280,4 +280,7 @@ def add_commands(sub) -> None:
         default=3,
         help=f"browser clients for --endurance, 1 to {MAX_CLIENTS} (default 3)",
     )
+    from ..progress import add_option
+
+    add_option(p)
     p.set_defaults(func=_run)

@@ -137,6 +137,9 @@ def add_commands(sub) -> None:
         help=f"frames per second, up to {video.MAX_FPS} (default: the demo's, else 30)",
     )
     add_look_options(p)
+    from ..progress import add_option
+
+    add_option(p)
     p.set_defaults(func=run_video)
 
 
