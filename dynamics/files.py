@@ -3,7 +3,8 @@ and JSON that is valid whatever numbers it carries.
 
 Used by the benchmark's results and charts and the viewer's endurance results. The switch
 renames each file in turn and rolls back on failure, which a process killed with SIGKILL cannot
-do; the recorder's demo files use :mod:`mechviz.dynamics.fileset` instead, switched by a single rename.
+do; the recorder's demo files use :mod:`mechviz.dynamics.fileset` instead, whose manifest, written
+last, lets every reader tell a whole set from one a killed writer left mixed.
 
 :func:`write_files_atomically` writes every file to a temporary name in the target folder and
 fsyncs it, then switches the set in one step: each old file is kept under a hard link, the new

@@ -141,6 +141,15 @@ def test_a_recording_folder_holds_regular_files_that_a_zip_holds_once(tmp_path):
     man = json.loads((out / "helix.json").read_text())
     assert man["schema_version"] == fileset.SCHEMA_VERSION
     assert sorted(man["files"]) == sorted(f"helix{s}" for s in SUFFIXES if s != ".json")
+    # The CSV's units are in the manifest; its numbers are floats, whatever a reader guesses.
+    header, *rows = [line.split(",") for line in (out / "helix.csv").read_text().splitlines()]
+    assert list(man["csv_columns"]) == header
+    assert man["csv_columns"]["r"] == {"units": "m", "long_name": "distance from the axis r"}
+    assert man["csv_columns"]["t"]["units"] == "s" and man["csv_columns"]["vx"]["units"] == "m/s"
+    r = header.index("r")
+    assert all(any(c in row[r] for c in ".en") for row in rows), [row[r] for row in rows]
+    table = api.read_recording(out / "helix").columns()
+    assert table["r"].dtype.kind == "f" and table["member"].dtype.kind == "i"
 
 
 def test_a_recording_with_a_file_from_an_older_one_is_named_by_every_reader(tmp_path, capsys):

@@ -164,6 +164,7 @@ def run_atlas(
     todo = [c for c in spec.chunks() if not done[c]]
     t0 = time.perf_counter()
     if not todo:
+        _store.finish(path)
         return report
     with contextlib.ExitStack() as stack:
         if client is None:
@@ -171,6 +172,7 @@ def run_atlas(
         report.workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
         bar = stack.enter_context(_progress(progress, len(todo), report.total - len(todo)))
         _run_tasks(client, spec, path, todo, report, bar, on_chunk)
+    _store.finish(path)  # every chunk is done: readers open it in one read
     report.wall_seconds = time.perf_counter() - t0
     return report
 
