@@ -54,7 +54,9 @@ serve a .viser recording (or a folder of them) with viser's client
 
 Serve PATH (a .viser file or a folder of them) on HOST:PORT with the browser client that ships
 in the viser wheel; prints the URLs; Ctrl-C stops. Only regular files inside the folder are
-served (symlinks that lead out of it are not).
+served (symlinks that lead out of it are not). A recording with its manifest beside it
+(NAME.json, as mechviz record writes it) is served only while every file the manifest lists
+matches it: a folder holding files of two recordings is refused, naming the file.
 """
 
 

@@ -9,8 +9,9 @@ two leaves the chunk not done and a resumed run computes it again: a chunk is ne
 with half its cells.
 
 Every variable and axis has ``units`` and ``long_name`` attributes; a finished store's metadata
-is consolidated (:func:`finish`). The attributes hold the run key (:meth:`AtlasSpec.run_key`), the spec as JSON, the versions of
-Python, the project and the libraries, the creation time and, for the lines drawn over the map,
+is consolidated (:func:`finish`). The attributes hold the run key (:meth:`AtlasSpec.run_key`),
+the spec as JSON, the versions of Python, the project and the libraries, the creation time and,
+for the lines drawn over the map,
 what theory says (the linear stability limit per method and amplitude is a variable,
 ``linear_limit_dt``; the hoop's unstable mode-1 amplitudes an attribute).
 """
