@@ -279,3 +279,31 @@ def test_a_set_name_that_is_not_a_plain_name_is_refused(tmp_path, name):
     with pytest.raises(ValueError, match="not a plain set name"):
         fileset.write_set(tmp_path, name, NEW)
     assert list(tmp_path.iterdir()) == []
+
+
+_TRY_WRITER_LOCK = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDONLY | os.O_DIRECTORY)
+try:
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    print("free")
+except BlockingIOError:
+    print("busy")
+"""
+
+
+def test_a_reader_holds_writers_off_while_it_reads(tmp_path):
+    fileset.write_set(tmp_path, "a", OLD)
+
+    def writer_could_lock() -> str:
+        return subprocess.run(
+            [sys.executable, "-c", _TRY_WRITER_LOCK, str(tmp_path)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        ).stdout.strip()
+
+    with fileset.reading(tmp_path):
+        assert fileset.check_set(tmp_path, "a.json")[1]["a.csv"] == OLD["a.csv"]
+        assert writer_could_lock() == "busy"  # a writer's renames wait for the reading
+    assert writer_could_lock() == "free"

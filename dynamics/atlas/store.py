@@ -134,7 +134,9 @@ def finish(path: str | Path) -> None:
     metadata to a temporary name and renames it into place: the store is whole throughout."""
     import zarr
 
-    zarr.consolidate_metadata(str(path))
+    with warnings.catch_warnings():  # consolidated metadata is not yet in the Zarr v3 spec
+        warnings.simplefilter("ignore", UserWarning)
+        zarr.consolidate_metadata(str(path))
 
 
 def _encoding(spec: AtlasSpec, ds: xr.Dataset) -> dict:
