@@ -115,24 +115,26 @@ class _Lock:
 
     def __enter__(self) -> _Lock:
         fcntl = _fcntl()
+        if fcntl is None:  # no flock here (Windows): the folder is written unlocked
+            self.created += _make_dirs(self.folder)
+            return self
         told = False
         while True:
             self.created += _make_dirs(self.folder)
             fd = os.open(self.folder, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
             try:
-                if fcntl is not None:
-                    try:
-                        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                    except BlockingIOError:
-                        if self.on_wait is not None and not told:
-                            self.on_wait(
-                                f"another mechviz process is using {self.folder}; waiting for it"
-                            )
-                            told = True
-                        fcntl.flock(fd, fcntl.LOCK_EX)
-                    except OSError as exc:
-                        if exc.errno not in _NO_LOCKS:
-                            raise
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                except BlockingIOError:
+                    if self.on_wait is not None and not told:
+                        self.on_wait(
+                            f"another mechviz process is using {self.folder}; waiting for it"
+                        )
+                        told = True
+                    fcntl.flock(fd, fcntl.LOCK_EX)
+                except OSError as exc:
+                    if exc.errno not in _NO_LOCKS:
+                        raise
                 # The holder may have removed the folder (a first write that failed): retry.
                 here = os.fstat(fd)
                 try:
