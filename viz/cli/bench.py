@@ -4,7 +4,8 @@ Runs :func:`mechviz.bench.run_bench` (work-precision sweeps of our methods and s
 energy, stability, compiled step costs, exhibit defaults) and adds the viewer's frame cost and
 the recording speed when those measurements exist. Writes ``results.json`` and PNG charts to
 ``--out`` (default a temporary folder, ``TMP/mechviz-bench``; ``make bench-docs`` writes the
-committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install 'mechviz-lab[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
+committed ``docs/bench``). ``--peers`` adds CyRK and heyoka (``pip install
+'mechviz-lab[peers]'``; a peer not installed is skipped with the reason). The speed targets (ours at
 least 50x faster than scipy's fastest and at least as fast as every peer, at each accuracy) are
 checked: the exit status is 1 if one is missed, and each miss is printed with its figure.
 
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -70,7 +72,7 @@ def _endurance(args: argparse.Namespace) -> int:
             args.endurance,
             args.clients,
             out=out,
-            progress=lambda text: print(f"mechviz bench: {text}", flush=True),
+            progress=_say_progress if not args.no_progress else None,
         )
     except EnduranceUnavailable as exc:
         raise CliError(str(exc)) from None
@@ -79,6 +81,11 @@ def _endurance(args: argparse.Namespace) -> int:
     else:
         print(format_summary(result))
     return 0 if result["targets"]["met"] else 1
+
+
+def _say_progress(text: str) -> None:
+    """The endurance run's progress lines, on stderr: stdout holds only the result (--json)."""
+    print(f"mechviz bench: {text}", file=sys.stderr, flush=True)
 
 
 def _video(args: argparse.Namespace) -> int:
@@ -161,7 +168,10 @@ def _run(args: argparse.Namespace) -> int:
     s = summary(result)
     missed = s["targets"]["missed"]
     if args.json:
-        print(json.dumps(s, indent=1, default=str))
+        from mechviz.dynamics.files import json_safe
+
+        # NumPy numbers as JSON numbers (default=str alone would quote them), NaN as null
+        print(json.dumps(json_safe(s), indent=1, default=str, allow_nan=False))
         return 1 if missed else 0
     print(
         f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})"
