@@ -4,6 +4,7 @@ A demo file (:mod:`.demo`) names an exhibit and its settings; :func:`record` run
 own exhibit for it headless (:mod:`.run`), faster than real time, and writes the scene
 recording, a self-contained page, the traces, a chart and a manifest (:mod:`.recorder`,
 :mod:`.outputs`), with measured against predicted figures (:mod:`.figures`).
+:func:`read_recording` reads one back, every file checked against its manifest.
 """
 
 from mechviz.dynamics.api import Recording, read_recording
