@@ -30,13 +30,21 @@ reason there is none): :func:`gyrofrequency`, :func:`fit_circle`, :func:`crossin
 :func:`wobble_growth_rate`. Bad input raises :class:`mechviz.dynamics.params.SettingError` (a
 ``ValueError``) whose ``field`` names the argument; a run that blows up raises
 :class:`mechviz.dynamics.IntegrationError`.
+
+A recording ``mechviz record`` wrote is read back, checked file by file against its manifest,
+with :func:`read_recording`; its traces, with their units, come from
+:meth:`Recording.columns`.
 """
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
 import math
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -56,6 +64,7 @@ SYSTEM_NAMES = tuple(SPECS)
 __all__ = [
     "SYSTEM_NAMES",
     "Estimate",
+    "Recording",
     "Run",
     "analyze",
     "crossing_frequency",
@@ -63,6 +72,7 @@ __all__ = [
     "gyrofrequency",
     "methods",
     "parameters",
+    "read_recording",
     "simulate",
     "stability_limit",
     "wobble_growth_rate",
@@ -106,6 +116,11 @@ class Run:
     quantity_labels: dict[str, str] = field(default_factory=dict)
     report: dict[str, Any] = field(default_factory=dict)  # the system's figures at the end
     reference_error: np.ndarray | None = None  # like ``error``: the reference's own, measured
+    #: The step control as numbers (``step`` in words): ``dt`` [s] of a fixed step, ``rtol`` and
+    #: ``atol`` of an adaptive one; None where the method takes none.
+    dt: float | None = None
+    rtol: float | None = None
+    atol: float | None = None
 
     def column(self, name: str) -> np.ndarray:
         """One state variable or quantity over time, e.g. ``run.column("theta1")``."""
@@ -165,6 +180,9 @@ class Run:
             **({"motion": self.start["motion"]} if "motion" in self.start else {}),
             "method": self.method,
             "step": self.step,
+            "dt": self.dt,
+            "rtol": self.rtol,
+            "atol": self.atol,
             "parameters": dict(self.parameters),
             "t_end": float(self.t[-1]),
             "initial_state": states(self.states[0]),
@@ -174,6 +192,8 @@ class Run:
             "rhs_evaluations": self.rhs_evaluations,
             "rhs_evaluations_count": self.rhs_evaluations_count,
             "steps": self.steps,
+            "samples": len(self.t),
+            "members": 1 if np.ndim(self.states) == 2 else int(self.states.shape[1]),
         }
         if self.error is not None:
             err = float(np.max(self.error[-1]))
@@ -318,6 +338,9 @@ def simulate(
         quantity_labels=dict(setup.system.quantity_labels),
         report=setup.system.report(float(traj.t[-1])),
         reference_error=None if traj.reference_error is None else member(traj.reference_error),
+        dt=sim.dt,
+        rtol=sim.rtol,
+        atol=sim.atol,
     )
 
 
@@ -343,3 +366,63 @@ def _spec(system: str):
     if system not in SPECS:
         raise SettingError("system", f"system must be one of {', '.join(SPECS)}; got {system!r}")
     return SPECS[system]
+
+
+# --------------------------------------------------------------------------- recordings
+#: The files of a recording besides its manifest (``DEMO.json``).
+RECORDING_SUFFIXES = (".viser", ".html", ".csv", ".png", ".svg", ".pdf", ".json")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A recording read back and checked: ``manifest`` (``DEMO.json``) and ``files``, the bytes
+    of every file it lists (``DEMO.viser``, ``DEMO.html``, ``DEMO.csv``, ``DEMO.png``, ...) and of
+    the manifest itself, each file matching the size and SHA-256 the manifest gives."""
+
+    name: str
+    folder: Path
+    manifest: dict[str, Any] = field(repr=False)
+    files: dict[str, bytes] = field(repr=False)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """The unit of each column of ``DEMO.csv`` ("" for a count or a label; empty if the
+        recording predates units in its manifest)."""
+        cols = self.manifest.get("csv_columns") or {}
+        return {k: v.get("units", "") for k, v in cols.items() if isinstance(v, dict)}
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """``DEMO.csv`` by column: ``run`` as strings, ``member`` as int, every other column as
+        float (an empty cell as NaN)."""
+        rows = list(csv.reader(io.StringIO(self.files[f"{self.name}.csv"].decode())))
+        header, body = rows[0], rows[1:]
+        out: dict[str, np.ndarray] = {}
+        for i, col in enumerate(header):
+            cells = [r[i] for r in body]
+            if col == "run":
+                out[col] = np.array(cells, dtype=str)
+            elif col == "member":
+                out[col] = np.array([int(c) for c in cells], dtype=int)
+            else:
+                out[col] = np.array([float(c) if c else math.nan for c in cells], dtype=float)
+        return out
+
+
+def read_recording(path: str | os.PathLike) -> Recording:
+    """The recording at ``path``: its folder and demo name (``out/helix``), or any of its files
+    (``out/helix.json``, ``out/helix.viser``). ``ValueError`` if there is none there;
+    :class:`mechviz.dynamics.fileset.SetMismatch` (a ``ValueError``) names the file that does not
+    belong when the folder holds a mix ("helix.csv is from an older recording than
+    helix.json")."""
+    from . import fileset
+
+    p = Path(path)
+    if p.suffix in RECORDING_SUFFIXES:
+        p = p.with_suffix("")
+    folder, name = p.parent, p.name
+    manifest_name = f"{name}.json"
+    with fileset.reading(folder):  # a recording written meanwhile waits until this is read
+        man, files = fileset.check_set(folder, manifest_name)
+    if man is None:
+        raise ValueError(f"{folder / manifest_name}: no recording manifest there")
+    return Recording(name, folder, man, files)

@@ -3,7 +3,8 @@ and JSON that is valid whatever numbers it carries.
 
 Used by the benchmark's results and charts and the viewer's endurance results. The switch
 renames each file in turn and rolls back on failure, which a process killed with SIGKILL cannot
-do; the recorder's demo files use :mod:`mechviz.dynamics.fileset` instead, switched by a single rename.
+do; the recorder's demo files use :mod:`mechviz.dynamics.fileset` instead, whose manifest, written
+last, lets every reader tell a whole set from one a killed writer left mixed.
 
 :func:`write_files_atomically` writes every file to a temporary name in the target folder and
 fsyncs it, then switches the set in one step: each old file is kept under a hard link, the new
@@ -56,7 +57,12 @@ class _Outcome:
     on_disk: str
 
     def _describe(
-        self, out_dir: Path, new_files: list[str], signum: int | None, committed: bool = False
+        self,
+        out_dir: Path,
+        new_files: list[str],
+        signum: int | None,
+        committed: bool = False,
+        mixed: str = "restoring them failed",
     ) -> str:
         self.out_dir = out_dir
         self.new_files = tuple(new_files)
@@ -70,7 +76,7 @@ class _Outcome:
         else:
             self.on_disk = (
                 f"{out_dir} is MIXED: {', '.join(new_files)} hold the new content, "
-                "the other files the old (restoring them failed)"
+                f"the other files the old ({mixed})"
             )
         return self.on_disk
 
@@ -80,9 +86,15 @@ class WriteFailed(_Outcome, OSError):
     cause is chained. An ``OSError``, so ``except OSError`` still catches it."""
 
     def __init__(
-        self, out_dir: Path, cause: BaseException, new_files: list[str], *, committed: bool = False
+        self,
+        out_dir: Path,
+        cause: BaseException,
+        new_files: list[str],
+        *,
+        committed: bool = False,
+        mixed: str = "restoring them failed",
     ) -> None:
-        where = self._describe(out_dir, new_files, None, committed)
+        where = self._describe(out_dir, new_files, None, committed, mixed)
         self.message = f"writing to {out_dir} failed: {_reason(cause)}; {where}"
         super().__init__(getattr(cause, "errno", None), self.message)
 

@@ -90,6 +90,14 @@ def test_distributed_map_equals_serial_bit_for_bit(client, tmp_path):
     report = run_atlas(spec, tmp_path / "a.zarr", client=client)
     assert report.complete and sorted(report.computed) == spec.chunks()
     assert_same_map(store.load(tmp_path / "a.zarr"), compute_serial(spec), spec)
+    import xarray as xr
+
+    # finished: consolidated metadata (open_zarr refuses consolidated=True without it), and
+    # every variable and axis says its units and what it is
+    with xr.open_zarr(tmp_path / "a.zarr", consolidated=True) as ds:
+        for name in [*ds.data_vars, spec.x.name, spec.y.name]:
+            assert {"units", "long_name"} <= ds[name].attrs.keys(), name
+        assert ds["lyapunov"].attrs["units"] == "1/s" and ds["theta1"].attrs["units"] == "rad"
 
 
 def test_chunk_equals_its_cells_run_one_at_a_time():

@@ -1,6 +1,7 @@
-"""A set of files switched by one rename (:mod:`mechviz.dynamics.fileset`): a writer killed with SIGKILL
-after any of its file-system steps leaves the whole old set or the whole new one, every file
-matching the manifest; the next writer leaves nothing else; a second writer waits for the first."""
+"""A set of plain files with a manifest written last (:mod:`mechviz.dynamics.fileset`): a writer
+killed with SIGKILL after any of its file-system steps leaves every file whole, and a set that
+is either whole (old or new) or refused by the check, which names the file from the other set;
+the next writer leaves nothing else; a second writer waits for the first."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ def make_set(tag: str) -> dict[str, bytes]:
     """Three files, the last a manifest with the size and SHA-256 of the others."""
     files = {"a.viser": f"{tag} viser\n".encode() * 50, "a.csv": f"{tag} csv\n".encode()}
     man = {n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()}
-    files["a.json"] = json.dumps({"tag": tag, "files": man}).encode()
+    files["a.json"] = json.dumps({"schema_version": 2, "tag": tag, "files": man}).encode()
     return files
 
 
@@ -33,19 +34,26 @@ OLD, NEW = make_set("old"), make_set("new")
 
 
 def shown(folder: Path) -> dict[str, bytes]:
-    """What a reader sees under the set's names (a dangling link shows nothing)."""
+    """What a reader sees under the set's names."""
     return {n: (folder / n).read_bytes() for n in NAMES if (folder / n).exists()}
 
 
-def assert_whole_set(folder: Path, allowed) -> None:
-    """The names show exactly one of ``allowed`` (each a whole set, or {} for none), and every
-    file agrees with the manifest shown beside it."""
+def assert_whole_files(folder: Path, before: dict[str, bytes]) -> None:
+    """Every file is whole (its old or its new content), and the set is either one of the
+    two, or the check refuses it naming a file whose content is not the manifest's."""
     seen = shown(folder)
-    assert any(seen == a for a in allowed), sorted(seen)
-    if seen:
-        man = json.loads(seen["a.json"])["files"]
-        for n, meta in man.items():
-            assert hashlib.sha256(seen[n]).hexdigest() == meta["sha256"], n
+    for n, b in seen.items():
+        assert b in (before.get(n), NEW[n]), n
+    if seen in (before, NEW):
+        return
+    if "a.json" not in seen:  # a first write cut short: no manifest, nothing to check against
+        assert not before
+        return
+    with pytest.raises(fileset.SetMismatch) as info:
+        fileset.check_set(folder, "a.json")
+    named = info.value.file
+    assert seen[named] != (NEW if seen["a.json"] == NEW["a.json"] else before)[named]
+    assert named in str(info.value) and "recording than a.json" in str(info.value)
 
 
 def tree(folder: Path) -> list[str]:
@@ -53,27 +61,29 @@ def tree(folder: Path) -> list[str]:
 
 
 def assert_nothing_stray(folder: Path) -> None:
-    """Only the names, the set's home, its ``current`` link and the one set it leads to."""
-    current = fileset.current_set(folder, "a")
-    assert current is not None
-    expected = {
-        *NAMES,
-        ".mechviz",
-        ".mechviz/a",
-        ".mechviz/a/current",
-        f".mechviz/a/{current.name}",
-    }
-    expected |= {f".mechviz/a/{current.name}/{n}" for n in NAMES}
-    assert set(tree(folder)) == expected
+    """The names, regular files, and nothing else."""
+    assert tree(folder) == sorted(NAMES)
+    assert all((folder / n).is_file() and not (folder / n).is_symlink() for n in NAMES)
 
 
-def write_earlier_layout(folder: Path, files: dict[str, bytes]) -> None:
-    """What the earlier writer left: the files themselves, plus temporaries of a killed run."""
+def write_links_layout(folder: Path, files: dict[str, bytes]) -> None:
+    """What the earlier writer left: each name a link into ``.mechviz/a/current/``."""
+    home = folder / fileset.OLD_HOME / "a"
+    (home / "set-1").mkdir(parents=True)
+    for n, b in files.items():
+        (home / "set-1" / n).write_bytes(b)
+        (folder / n).symlink_to(f"{fileset.OLD_HOME}/a/current/{n}")
+    (home / "current").symlink_to("set-1")
+
+
+def write_plain_layout(folder: Path, files: dict[str, bytes]) -> None:
+    """The files themselves, plus temporaries of killed runs of this and older writers."""
     folder.mkdir(exist_ok=True)
     for n, b in files.items():
         (folder / n).write_bytes(b)
     (folder / ".a.viser.4242.partial").write_bytes(b"half")
     (folder / ".a.csv.4242.old").write_bytes(b"older")
+    (folder / ".a.json.20260101T000000-1-abcd.partial").write_bytes(b"half")
 
 
 _CHILD = killed_after_nth_call(
@@ -100,15 +110,20 @@ def run_child(folder: Path, kill_at: int) -> subprocess.CompletedProcess:
     )
 
 
-@pytest.mark.parametrize("start", ["empty", "set", "earlier layout"])
+@pytest.mark.parametrize("start", ["empty", "set", "links layout", "temporaries"])
 @pytest.mark.slow
-def test_sigkill_after_any_step_leaves_a_whole_set_and_the_next_write_cleans_up(tmp_path, start):
+def test_sigkill_after_any_step_leaves_whole_files_and_the_next_write_cleans_up(tmp_path, start):
     def prepare(folder: Path) -> dict[str, bytes]:
+        if start != "empty":
+            folder.mkdir()
         if start == "set":
             fileset.write_set(folder, "a", OLD)
             return OLD
-        if start == "earlier layout":
-            write_earlier_layout(folder, OLD)
+        if start == "links layout":
+            write_links_layout(folder, OLD)
+            return OLD
+        if start == "temporaries":
+            write_plain_layout(folder, OLD)
             return OLD
         return {}
 
@@ -118,24 +133,52 @@ def test_sigkill_after_any_step_leaves_a_whole_set_and_the_next_write_cleans_up(
     assert done.returncode == 0, done.stderr
     steps = int(done.stdout)
     assert shown(probe) == NEW
+    assert_nothing_stray(probe)
     assert steps >= 2
     for k in range(1, steps + 1):
         folder = tmp_path / f"kill{k}"
         before = prepare(folder)
         res = run_child(folder, k)
         assert res.returncode == -signal.SIGKILL, (k, res.stderr)
-        assert_whole_set(folder, [before, NEW])
+        assert_whole_files(folder, before)
         fileset.write_set(folder, "a", make_set(f"next{k}"))
         assert shown(folder) == make_set(f"next{k}")
         assert_nothing_stray(folder)
 
 
-def test_a_set_replaces_the_earlier_layout_and_readers_see_the_names(tmp_path):
-    write_earlier_layout(tmp_path, OLD)
+def test_a_set_replaces_the_links_layout_with_regular_files(tmp_path):
+    write_links_layout(tmp_path, OLD)
+    assert fileset.check_set(tmp_path, "a.json")[1]["a.csv"] == OLD["a.csv"]  # read through links
     fileset.write_set(tmp_path, "a", NEW)
     assert shown(tmp_path) == NEW
     assert_nothing_stray(tmp_path)
-    assert all((tmp_path / n).is_symlink() for n in NAMES)
+
+
+def test_a_file_swapped_from_an_older_set_is_named(tmp_path):
+    fileset.write_set(tmp_path / "old", "a", OLD)
+    fileset.write_set(tmp_path / "new", "a", NEW)
+    old_csv = tmp_path / "old" / "a.csv"
+    os.utime(old_csv, (1e9, 1e9))  # recorded long before the new set
+    os.replace(old_csv, tmp_path / "new" / "a.csv")
+    with pytest.raises(fileset.SetMismatch) as info:
+        fileset.check_set(tmp_path / "new", "a.json")
+    assert info.value.file == "a.csv"
+    assert str(info.value).startswith("a.csv is from an older recording than a.json")
+    (tmp_path / "new" / "a.csv").unlink()
+    with pytest.raises(fileset.SetMismatch, match=r"a.csv is missing \(a.json lists it\)"):
+        fileset.check_set(tmp_path / "new", "a.json")
+
+
+def test_files_the_new_set_has_not_are_removed_with_the_old_set(tmp_path):
+    svg = b"<svg/>"
+    old = {"a.svg": svg, **OLD}
+    man = json.loads(OLD["a.json"])
+    man["files"]["a.svg"] = {"bytes": len(svg), "sha256": hashlib.sha256(svg).hexdigest()}
+    old["a.json"] = json.dumps(man).encode()
+    fileset.write_set(tmp_path, "a", old)
+    assert (tmp_path / "a.svg").read_bytes() == svg
+    fileset.write_set(tmp_path, "a", NEW)
+    assert_nothing_stray(tmp_path)
 
 
 def test_an_io_error_before_the_switch_keeps_the_old_set(tmp_path, monkeypatch):
@@ -161,7 +204,7 @@ def test_ctrl_c_after_the_switch_keeps_the_new_set_and_says_so(tmp_path, monkeyp
 
     def replace_then_interrupt(src, dst):
         real_replace(src, dst)
-        if Path(dst).name == fileset.CURRENT:
+        if Path(dst).name == "a.json":  # the manifest, renamed last
             signal.raise_signal(signal.SIGINT)
 
     monkeypatch.setattr(os, "replace", replace_then_interrupt)
@@ -178,9 +221,7 @@ _HOLDER = """
 import sys
 from pathlib import Path
 from mechviz.dynamics import fileset
-home = Path(sys.argv[1]) / fileset.HOME
-home.mkdir(parents=True, exist_ok=True)
-with fileset._Lock(home, [], None):
+with fileset._Lock(Path(sys.argv[1]), [], None):
     print("locked", flush=True)
     sys.stdin.readline()
 """
@@ -225,8 +266,8 @@ def test_a_link_in_place_of_the_hidden_folder_is_never_followed_by_the_clean_up(
     elsewhere.mkdir()
     (elsewhere / "precious.txt").write_text("keep me")
     out = tmp_path / "out"
-    (out / fileset.HOME).mkdir(parents=True)
-    (out / fileset.HOME / "a").symlink_to(elsewhere)
+    (out / fileset.OLD_HOME).mkdir(parents=True)
+    (out / fileset.OLD_HOME / "a").symlink_to(elsewhere)
     with pytest.raises(OSError, match="not a folder of its own"):
         fileset.write_set(out, "a", NEW)
     assert (elsewhere / "precious.txt").read_text() == "keep me"
@@ -238,3 +279,31 @@ def test_a_set_name_that_is_not_a_plain_name_is_refused(tmp_path, name):
     with pytest.raises(ValueError, match="not a plain set name"):
         fileset.write_set(tmp_path, name, NEW)
     assert list(tmp_path.iterdir()) == []
+
+
+_TRY_WRITER_LOCK = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDONLY | os.O_DIRECTORY)
+try:
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    print("free")
+except BlockingIOError:
+    print("busy")
+"""
+
+
+def test_a_reader_holds_writers_off_while_it_reads(tmp_path):
+    fileset.write_set(tmp_path, "a", OLD)
+
+    def writer_could_lock() -> str:
+        return subprocess.run(
+            [sys.executable, "-c", _TRY_WRITER_LOCK, str(tmp_path)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        ).stdout.strip()
+
+    with fileset.reading(tmp_path):
+        assert fileset.check_set(tmp_path, "a.json")[1]["a.csv"] == OLD["a.csv"]
+        assert writer_could_lock() == "busy"  # a writer's renames wait for the reading
+    assert writer_could_lock() == "free"

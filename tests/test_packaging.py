@@ -44,14 +44,23 @@ def test_the_version_is_the_distributions():
     assert got.returncode == 0 and got.stdout == f"mechviz {version}\n", got.stdout + got.stderr
 
 
-def test_the_product_imports_where_fcntl_does_not_exist():
+def test_the_product_imports_and_writes_sets_where_fcntl_does_not_exist(tmp_path):
     code = (
         "import sys; sys.modules['fcntl'] = None\n"
         "import mechviz.dynamics.api, mechviz.dynamics.fileset, mechviz.viz.record\n"
         "import mechviz.viz.notebook, mechviz.viz.cli, mechviz.viz.play\n"
+        "from mechviz.dynamics import fileset\n"
+        "import hashlib, json, sys\n"
+        "b = b'x' * 10\n"
+        "man = {'files': {'a.csv': {'bytes': 10, 'sha256': hashlib.sha256(b).hexdigest()}}}\n"
+        "fileset.write_set(sys.argv[1], 'a', {'a.csv': b, 'a.json': json.dumps(man).encode()})\n"
+        "with fileset.reading(sys.argv[1]):\n"
+        "    assert fileset.check_set(sys.argv[1], 'a.json')[1]['a.csv'] == b\n"
         "print('imported')\n"
     )
-    got = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    got = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=300
+    )
     assert got.returncode == 0 and got.stdout == "imported\n", got.stderr[-2000:]
 
 

@@ -155,7 +155,7 @@ def test_a_hard_link_to_a_file_outside_the_folder_is_not_served(served):
     assert status == 404 and b"root:" not in body
 
 
-def test_a_recording_made_by_record_is_served_through_its_links(tmp_path):
+def test_a_recording_made_by_record_is_served_anew_after_it_is_written_again(tmp_path):
     from mechviz.dynamics import fileset
 
     fileset.write_set(tmp_path, "demo", {"demo.viser": RECORDING, "demo.json": b"{}"})

@@ -146,7 +146,7 @@ from mechviz.dynamics import files, fileset
 real_replace, real_sync = os.replace, files._fsync_dir
 def replace(src, dst):
     real_replace(src, dst)
-    if Path(dst).name == "current":  # the set is switched: hang up while it is synced
+    if sys.argv[2] == "set" and Path(dst).name == "a.json":  # the set's manifest, renamed last
         signal.raise_signal(signal.SIGHUP)
 def sync(folder):  # write_files_atomically syncs the folder once every file is switched
     signal.raise_signal(signal.SIGHUP)

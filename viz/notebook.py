@@ -3,6 +3,7 @@
 >>> from mechviz.viz import notebook
 >>> notebook.show("radial-kick", dv=0.8)      # the demo recorded headless, played inline
 >>> notebook.live()                           # the viewer with its GUI, inline
+>>> notebook.recorded("out/helix")            # a recording mechviz record wrote, inline
 
 :func:`show` runs a demo headless (the recorder's own run, :func:`mechviz.viz.record.run_demo`: the
 viewer's exhibit for the demo's settings) and returns an :class:`Embed`, which a notebook shows
@@ -15,6 +16,10 @@ GitHub shows no live page: the still shows there. The player carries viser's bro
 (about 0.8 MB) plus the recording; ``save="demos/kick.html"`` writes the page, and the still
 beside it (``kick.png``), to files instead: the notebook then holds only a linked picture and an
 ``<iframe src>`` (under 1 kB). The files must sit under the folder Jupyter serves.
+
+:func:`recorded` shows a recording read back from its folder, every file checked against its
+manifest first (:func:`mechviz.dynamics.api.read_recording`): a folder holding a mix of two
+recordings raises ``ValueError`` naming the file that does not belong.
 
 :func:`live` starts the viewer (:class:`mechviz.viz.app.MechvizApp`) inside the kernel, once, and
 embeds an ``<iframe>`` to its address, 127.0.0.1 and a port of its own: the browser showing the
@@ -37,7 +42,7 @@ from typing import Any
 
 import msgspec
 
-__all__ = ["Embed", "demos", "live", "load", "show", "stop"]
+__all__ = ["Embed", "demos", "live", "load", "recorded", "show", "stop"]
 
 DEFAULT_HEIGHT = 480
 _app = None  # the live viewer started by live()
@@ -240,6 +245,28 @@ def show(
         write_files_atomically(path.parent if str(path.parent) else Path("."), files)
         src = str(save)
     return Embed(d.name, d.title, recorded.html, figs, height, src, png, still_src, at, note)
+
+
+def recorded(path: str | os.PathLike, *, height: int = DEFAULT_HEIGHT) -> Embed:
+    """The recording ``mechviz record`` wrote at ``path`` (``out/helix``, or one of its files),
+    checked against its manifest, for inline display: its player page and figures (no still;
+    its chart is ``DEMO.png`` beside it). ``ValueError`` names the file that does not belong
+    when the folder holds a mix of two recordings."""
+    from mechviz.dynamics.api import read_recording
+
+    rec = read_recording(path)
+    page = rec.files.get(f"{rec.name}.html")
+    if page is None:
+        raise ValueError(f"{rec.folder / rec.name}.json lists no {rec.name}.html")
+    figures = rec.manifest.get("figures")
+    return Embed(
+        rec.name,
+        str(rec.manifest.get("title", rec.name)),
+        page,
+        figures if isinstance(figures, list) else [],
+        height,
+        still_note="a recording read from its folder; its chart is the .png beside it",
+    )
 
 
 class _Live:

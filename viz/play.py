@@ -13,8 +13,11 @@ The server answers five kinds of request and nothing else:
     started that, when requested, still resolves (symlinks followed) to a regular file inside
     that folder with a single name (a hard link may lead anywhere, so a file with more than one
     link is not served); anything else is 404, so a link to ``/etc/passwd`` is never served.
-    The recordings that ``mechviz record`` writes are links into its hidden set folder
-    (:mod:`mechviz.dynamics.fileset`), inside the folder: each request serves the current set.
+    A recording with a manifest beside it (``NAME.json``, as ``mechviz record`` writes it) is
+    checked against it at start and at each request (:func:`mechviz.dynamics.fileset.check_beside`):
+    a folder that holds a mix of two recordings is refused at start, and answered with 409 and
+    the sentence naming the file that does not belong while it is served; a recording written
+    again meanwhile is served anew.
 
 The server (:mod:`mechviz.viz.play_server`) has header and answer timeouts, a normal listen backlog and
 limits on connections per client and in all, so idle connections cannot starve a real request.
@@ -36,6 +39,8 @@ import stat
 import urllib.parse
 from pathlib import Path
 
+from mechviz.dynamics import fileset
+
 from .cli.errors import CliError, command
 from .play_server import GuardedHandler, GuardedServer
 from .printable import printable
@@ -49,7 +54,9 @@ serve a .viser recording (or a folder of them) with viser's client
 
 Serve PATH (a .viser file or a folder of them) on HOST:PORT with the browser client that ships
 in the viser wheel; prints the URLs; Ctrl-C stops. Only regular files inside the folder are
-served (symlinks that lead out of it are not).
+served (symlinks that lead out of it are not). A recording with its manifest beside it
+(NAME.json, as mechviz record writes it) is served only while every file the manifest lists
+matches it: a folder holding files of two recordings is refused, naming the file.
 """
 
 
@@ -161,24 +168,51 @@ def _recordings(path: Path) -> tuple[Path, dict[str, Path]]:
                 raise CliError(f"{shown}: not a .viser recording")
             here = path.absolute()
             if _regular_inside(here, here.parent.resolve()) is not None:
-                # Resolved again at each request: a recording switched to a new set is served.
-                return here.parent.resolve(), {path.name: here}
-            real = path.resolve()
-            if _regular_inside(real, real.parent) is None:
-                raise CliError(f"{shown}: not a regular file with a single link")
-            return real.parent, {path.name: real}
-        folder = path.resolve()
-        found = {}
-        for p in sorted(folder.glob("*.viser")):
-            if _regular_inside(p, folder) is not None:
-                found[p.name] = p
+                # Resolved again at each request: a recording written again is served anew.
+                folder, found = here.parent.resolve(), {path.name: here}
+            else:
+                real = path.resolve()
+                if _regular_inside(real, real.parent) is None:
+                    raise CliError(f"{shown}: not a regular file with a single link")
+                folder, found = real.parent, {path.name: real}
+        else:
+            folder = path.resolve()
+            found = {}
+            for p in sorted(folder.glob("*.viser")):
+                if _regular_inside(p, folder) is not None:
+                    found[p.name] = p
     except OSError as exc:  # a name too long, a folder we may not read
         raise CliError(f"{shown}: {exc.strerror or exc}") from None
     if not found:
         raise CliError(
             f"{shown}: no .viser recordings in this folder (regular files inside it, one link each)"
         )
+    for p in found.values():
+        try:
+            with fileset.reading(p.parent):
+                fileset.check_beside(p)
+        except ValueError as exc:  # a mix of two recordings, or a manifest that is not one
+            raise CliError(f"{printable(str(p))}: {exc}") from None
+        except OSError as exc:
+            raise CliError(f"{printable(str(p))}: {exc.strerror or exc}") from None
     return folder, found
+
+
+def _read_checked(path: Path, folder: Path) -> tuple[bytes | None, str | None]:
+    """``(bytes, None)`` of a recording to serve (:func:`_read_served`) that agrees with the
+    manifest beside it, ``(None, sentence)`` naming the file that does not belong, or
+    ``(None, None)`` when it is not served at all."""
+    with fileset.reading(path.parent):
+        data = _read_served(path, folder)
+        if data is None:
+            return None, None
+        try:
+            fileset.check_beside(path, data)
+        except ValueError as exc:
+            return None, str(exc)
+        except OSError:
+            return None, None
+    return data, None
 
 
 def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PLAY_PORT):
@@ -218,9 +252,13 @@ def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PL
                 return self._send(page.encode(), "text/html; charset=utf-8")
             if route.startswith("/recordings/"):
                 name = urllib.parse.unquote(route.removeprefix("/recordings/"))
-                data = _read_served(recordings[name], folder) if name in recordings else None
+                data, mixed = (
+                    _read_checked(recordings[name], folder) if name in recordings else (None, None)
+                )
                 if data is not None:
                     return self._send(data, "application/octet-stream")
+                if mixed is not None:
+                    return self._send(mixed.encode(), "text/plain; charset=utf-8", 409)
             self.send_error(404)
 
         def do_HEAD(self) -> None:
@@ -232,8 +270,8 @@ def make_play_server(path: Path, host: str = "127.0.0.1", port: int = DEFAULT_PL
             self.send_header("Content-Length", "0")
             self.end_headers()
 
-        def _send(self, body: bytes, ctype: str) -> None:
-            self.send_response(200)
+        def _send(self, body: bytes, ctype: str, status: int = 200) -> None:
+            self.send_response(status)
             self.send_header("Content-Type", ctype)
             self.send_header("Content-Length", str(len(body)))
             self.send_header("Cache-Control", "no-store")

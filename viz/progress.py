@@ -1,5 +1,7 @@
 """Progress on a terminal for long commands: one tqdm bar on stderr, silent when stderr is not a
-terminal (a log, a pipe, a test), so that nothing but results reaches a file."""
+terminal (a log, a pipe, a test), so that nothing but results reaches a file, and silent
+everywhere after :func:`silence` (``--no-progress``, which every command that shows progress
+takes: :func:`add_option`)."""
 
 from __future__ import annotations
 
@@ -7,6 +9,29 @@ import os
 import sys
 
 from tqdm import tqdm
+
+_silenced = False
+
+
+def silence() -> None:
+    """No progress bar from here on, terminal or not (``--no-progress``)."""
+    global _silenced
+    _silenced = True
+
+
+def shown(stream=None) -> bool:
+    """Whether a bar would show on ``stream`` (stderr): a terminal, and not silenced."""
+    stream = stream or sys.stderr
+    return not _silenced and hasattr(stream, "isatty") and stream.isatty()
+
+
+def add_option(p) -> None:
+    """``--no-progress`` on the parser ``p`` of a command that shows progress."""
+    p.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (one shows only on a terminal, on stderr)",
+    )
 
 
 def progress_bar(
@@ -25,7 +50,7 @@ def progress_bar(
         desc=label,
         unit=unit,
         file=stream,
-        disable=not (enabled and stream.isatty()),
+        disable=not (enabled and shown(stream)),
         # a terminal that reports no size (0 x 0) still gets the line: tqdm would draw nothing
         ncols=size.columns or 80,
         nrows=size.lines or 24,

@@ -199,10 +199,15 @@ def clip_from_file(path: Path, *, fps: int | None = None) -> Clip:
     downloaded session). A demo manifest beside it (same name, ``.json``) gives the duration,
     fps, title, caption, figures and framing; a live session's page carries its title and the
     viewer's camera; otherwise the whole recording is filmed, titled with the file's name.
-    ``ValueError`` names the problem."""
+    ``ValueError`` names the problem, and the file that does not belong when the manifest lists
+    a set that the folder holds only in part (:func:`mechviz.dynamics.fileset.check_beside`)."""
+    from mechviz.dynamics import fileset
+
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
-    data = path.read_bytes()
+    with fileset.reading(path.parent):  # a recording written meanwhile waits for the check
+        data = path.read_bytes()
+        checked = fileset.check_beside(path, data)
     if path.suffix == ".viser":
         viser_bytes, page = data, page_for_recording(data)
     elif path.suffix in (".html", ".htm"):
@@ -210,7 +215,7 @@ def clip_from_file(path: Path, *, fps: int | None = None) -> Clip:
     else:
         raise ValueError(f"{path}: not a .viser recording or a recorded .html page")
     duration = recording_duration(viser_bytes)
-    manifest = _manifest_beside(path)
+    manifest = checked if _is_demo_manifest(checked) else _manifest_beside(path)
     if manifest is not None:
         clip = clip_from_manifest(page, manifest)
         if fps is not None:
@@ -235,11 +240,15 @@ def clip_from_file(path: Path, *, fps: int | None = None) -> Clip:
     return clip
 
 
+def _is_demo_manifest(data: Any) -> bool:
+    return isinstance(data, dict) and {"fps", "duration", "title"} <= data.keys()
+
+
 def _manifest_beside(path: Path) -> dict[str, Any] | None:
     m = path.with_suffix(".json")
     with contextlib.suppress(OSError, ValueError):
         data = json.loads(m.read_text())
-        if isinstance(data, dict) and {"fps", "duration", "title"} <= data.keys():
+        if _is_demo_manifest(data):
             return data
     return None
 

@@ -164,6 +164,7 @@ def run_atlas(
     todo = [c for c in spec.chunks() if not done[c]]
     t0 = time.perf_counter()
     if not todo:
+        _store.finish(path)
         return report
     with contextlib.ExitStack() as stack:
         if client is None:
@@ -171,6 +172,7 @@ def run_atlas(
         report.workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
         bar = stack.enter_context(_progress(progress, len(todo), report.total - len(todo)))
         _run_tasks(client, spec, path, todo, report, bar, on_chunk)
+    _store.finish(path)  # every chunk is done: readers open it in one read
     report.wall_seconds = time.perf_counter() - t0
     return report
 
@@ -231,7 +233,8 @@ def _ctrl_c_between_chunks():
 
 @contextlib.contextmanager
 def _progress(enabled: bool, total: int, initial: int):
-    """A tqdm bar on stderr counting chunks (silent when not ``enabled``)."""
+    """A tqdm bar on stderr counting chunks (silent when not ``enabled`` and where stderr is
+    not a terminal: a bar's redraws in a log or a pipe are noise)."""
     from tqdm import tqdm
 
     bar = tqdm(
@@ -239,7 +242,7 @@ def _progress(enabled: bool, total: int, initial: int):
         initial=initial,
         unit="chunk",
         desc="mechviz atlas",
-        disable=not enabled,
+        disable=not (enabled and sys.stderr.isatty()),
         file=sys.stderr,
     )
     try:

@@ -8,8 +8,10 @@ computed it). A chunk's cells are written before its ``chunk_done``, so a run ki
 two leaves the chunk not done and a resumed run computes it again: a chunk is never taken as done
 with half its cells.
 
-The attributes hold the run key (:meth:`AtlasSpec.run_key`), the spec as JSON, the versions of
-Python, the project and the libraries, the creation time and, for the lines drawn over the map,
+Every variable and axis has ``units`` and ``long_name`` attributes; a finished store's metadata
+is consolidated (:func:`finish`). The attributes hold the run key (:meth:`AtlasSpec.run_key`),
+the spec as JSON, the versions of Python, the project and the libraries, the creation time and,
+for the lines drawn over the map,
 what theory says (the linear stability limit per method and amplitude is a variable,
 ``linear_limit_dt``; the hoop's unstable mode-1 amplitudes an attribute).
 """
@@ -40,6 +42,30 @@ DESCRIPTIONS = {
     "bounded": "1 if the energy error stayed below the threshold, 0 if not, -1 not computed",
     "lyapunov": "largest Lyapunov exponent [1/s], renormalised twin runs",
     "error": "relative state error at the end against the exact solution or a tight DOP853 run",
+}
+
+
+#: Each variable's ``units`` (UDUNITS: "1" for a ratio, a flag or a count) and ``long_name``, as
+#: the CF conventions name them: what a reader of the store (xarray, Panoply) labels axes with.
+VARIABLE_UNITS = {
+    "energy_error": ("1", "relative energy error"),
+    "escape_time": ("s", "time the energy error first exceeded the threshold"),
+    "bounded": ("1", "energy error stayed below the threshold (1), did not (0), not computed (-1)"),
+    "lyapunov": ("1/s", "largest Lyapunov exponent"),
+    "error": ("1", "relative state error at the end"),
+    "chunk_done": ("1", "chunk written (1) or not (0)"),
+    "chunk_seconds": ("s", "time the chunk's task took"),
+    "chunk_session": ("1", "id of the run that computed the chunk"),
+    "linear_limit_dt": ("s", "largest linearly stable step"),
+}
+AXIS_NAMES = {
+    "dt": "step size",
+    "rtol": "relative tolerance",
+    "amplitude": "amplitude of the start",
+    "theta1": "hoop angle at the start",
+    "theta2": "bead angle at the start",
+    "omega1": "hoop rate at the start",
+    "omega2": "bead rate at the start",
 }
 
 
@@ -94,7 +120,23 @@ def template(spec: AtlasSpec) -> xr.Dataset:
     for name in (y, x):
         unit = UNITS.get(name) or amplitude_unit(spec.system)
         ds[name].attrs["units"] = unit
+        ds[name].attrs["long_name"] = AXIS_NAMES.get(name, name)
+    ds["method"].attrs["long_name"] = "integration method"
+    for name, (unit, long_name) in VARIABLE_UNITS.items():
+        if name in ds:
+            ds[name].attrs.update(units=unit, long_name=long_name)
     return ds
+
+
+def finish(path: str | Path) -> None:
+    """Consolidate the metadata of the finished store at ``path`` (every chunk done), so that a
+    reader opens it with one read (``xr.open_zarr(path)``). Zarr writes the consolidated
+    metadata to a temporary name and renames it into place: the store is whole throughout."""
+    import zarr
+
+    with warnings.catch_warnings():  # consolidated metadata is not yet in the Zarr v3 spec
+        warnings.simplefilter("ignore", UserWarning)
+        zarr.consolidate_metadata(str(path))
 
 
 def _encoding(spec: AtlasSpec, ds: xr.Dataset) -> dict:

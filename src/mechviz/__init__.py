@@ -12,11 +12,21 @@ The ``mechviz`` command is :func:`mechviz.viz.cli.main`.
 
 from __future__ import annotations
 
-from importlib import metadata as _metadata
-
-try:
-    __version__: str = _metadata.version("mechviz-lab")
-except _metadata.PackageNotFoundError:  # imported from a source tree that was never installed
-    __version__ = "0+unknown"
+__version__: str  # from the package metadata, read when first asked for (below)
 
 __all__ = ["__version__"]
+
+
+def __getattr__(name: str) -> str:
+    # importlib.metadata costs tens of milliseconds (it imports the email package): read at
+    # the first use, not by every command before it holds Ctrl-C (mechviz.viz.interrupts).
+    if name != "__version__":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from importlib import metadata
+
+    try:
+        version = metadata.version("mechviz-lab")
+    except metadata.PackageNotFoundError:  # imported from a source tree never installed
+        version = "0+unknown"
+    globals()["__version__"] = version
+    return version

@@ -68,6 +68,10 @@ def main(argv: list[str] | None = None) -> int:
                     importlib.import_module("trimesh")  # viser's and the exhibits' meshes
             finally:
                 release_sigint(held)
+            if getattr(args, "no_progress", False):
+                from ..progress import silence
+
+                silence()
             try:
                 return int(args.func(args) or 0)
             except CliError as exc:

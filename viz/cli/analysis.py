@@ -42,6 +42,7 @@ from mechviz.dynamics.steps import Fixed
 from mechviz.dynamics.systems import SPECS, SYSTEMS
 from mechviz.viz.interrupts import ctrl_c_within_a_second
 
+from ..progress import add_option as add_progress_option
 from ..progress import progress_bar
 from .errors import CliError, number
 
@@ -297,6 +298,7 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         **({"motion": setup.start["motion"]} if "motion" in setup.start else {}),
         "method": method.name,
         "step": sim.step_label(),
+        **step_numbers(sim.step),
         "parameters": dataclasses.asdict(setup.params),
         "t_end": float(traj.t[-1]),
         "initial_state": dict(zip(sysm.state_names, map(float, traj.states[0, 0]), strict=True)),
@@ -306,6 +308,8 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         "rhs_evaluations": int(traj.nfev),
         "rhs_evaluations_count": method.counts,
         "steps": int(traj.steps),
+        "samples": int(len(traj.t)),
+        "members": int(traj.states.shape[1]),
     }
     if traj.error is not None:
         key = "error_vs_exact" if sim.reference_kind == "exact" else "error_vs_reference"
@@ -338,6 +342,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="list the integration methods with their properties",
     )
+    si.add_argument("--json", action="store_true", help="with --list-methods: print JSON")
     si.set_defaults(func=_run_simulate, system=None)
     si_sub = si.add_subparsers(dest="system", metavar=names)
     for spec in SPECS.values():
@@ -382,6 +387,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
             f"run included (default {DEFAULT_MAX_STEPS:g})",
         )
         p.add_argument("--json", action="store_true", help="print JSON")
+        add_progress_option(p)
         p.set_defaults(func=_run_simulate)
 
 
@@ -404,6 +410,36 @@ def _emit(result: dict[str, Any], as_json: bool) -> None:
         os.dup2(devnull.fileno(), sys.stdout.fileno())
 
 
+def step_numbers(step) -> dict[str, Any]:
+    """The step control as numbers, beside its words (``step``): ``dt`` [s] of a fixed step,
+    ``rtol`` and ``atol`` of an adaptive one, each ``null`` where the method takes none."""
+    return {
+        "dt": getattr(step, "dt", None),
+        "rtol": getattr(step, "rtol", None),
+        "atol": getattr(step, "atol", None),
+    }
+
+
+def method_list() -> list[dict[str, Any]]:
+    """Every integration method as ``simulate --list-methods --json`` gives it."""
+    return [
+        {
+            "name": m.name,
+            "title": m.title,
+            "description": m.describe(),
+            "order": m.order,
+            "variable_order": m.variable_order,
+            "adaptive": m.adaptive,
+            "implicit": m.implicit,
+            "structure": [str(getattr(x, "value", x)) for x in m.structure],
+            "backend": m.backend,
+            "counts": m.counts,
+            "applies_to": sorted(n for n, cls in SYSTEMS.items() if m.applies_to(cls)),
+        }
+        for m in METHODS.values()
+    ]
+
+
 def _run_analyze(args: argparse.Namespace) -> int:
     _emit(analyze(args.system, args), args.json)
     return 0
@@ -413,6 +449,9 @@ def _run_simulate(args: argparse.Namespace) -> int:
     if args.list_methods or args.system is None:
         if not args.list_methods:
             raise CliError(f"simulate: choose a system ({', '.join(SPECS)}) or --list-methods")
+        if args.json:
+            _emit({"methods": method_list()}, True)
+            return 0
         for m in METHODS.values():
             systems = ", ".join(sorted(n for n, cls in SYSTEMS.items() if m.applies_to(cls)))
             print(f"{m.name:13s} {m.describe()}; applies to {systems}")

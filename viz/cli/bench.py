@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -71,7 +72,7 @@ def _endurance(args: argparse.Namespace) -> int:
             args.endurance,
             args.clients,
             out=out,
-            progress=lambda text: print(f"mechviz bench: {text}", flush=True),
+            progress=_say_progress if not args.no_progress else None,
         )
     except EnduranceUnavailable as exc:
         raise CliError(str(exc)) from None
@@ -80,6 +81,11 @@ def _endurance(args: argparse.Namespace) -> int:
     else:
         print(format_summary(result))
     return 0 if result["targets"]["met"] else 1
+
+
+def _say_progress(text: str) -> None:
+    """The endurance run's progress lines, on stderr: stdout holds only the result (--json)."""
+    print(f"mechviz bench: {text}", file=sys.stderr, flush=True)
 
 
 def _video(args: argparse.Namespace) -> int:
@@ -162,7 +168,10 @@ def _run(args: argparse.Namespace) -> int:
     s = summary(result)
     missed = s["targets"]["missed"]
     if args.json:
-        print(json.dumps(s, indent=1, default=str))
+        from mechviz.dynamics.files import json_safe
+
+        # NumPy numbers as JSON numbers (default=str alone would quote them), NaN as null
+        print(json.dumps(json_safe(s), indent=1, default=str, allow_nan=False))
         return 1 if missed else 0
     print(
         f"mechviz bench ({s['mode']}, {s['date']}, {s['duration_s']} s, load {s['load_average']})"
@@ -281,4 +290,7 @@ def add_commands(sub) -> None:
         default=3,
         help=f"browser clients for --endurance, 1 to {MAX_CLIENTS} (default 3)",
     )
+    from ..progress import add_option
+
+    add_option(p)
     p.set_defaults(func=_run)

@@ -7,6 +7,7 @@ when a command runs.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 from pathlib import Path
@@ -15,6 +16,7 @@ from ..interrupts import ctrl_c_within_a_second, exit_status
 from ..play import add_command as _add_play
 from ..printable import printable
 from ..progress import ProgressBar
+from ..progress import add_option as add_progress_option
 from .errors import CliError, command, number
 
 ABOUT = """\
@@ -30,6 +32,7 @@ def add_commands(sub) -> None:
     p = command(sub, "record", ABOUT)
     p.add_argument("demo", nargs="?", help="demo name (see --list) or path of a demo .toml file")
     p.add_argument("--list", action="store_true", help="list the built-in demos and exit")
+    p.add_argument("--json", action="store_true", help="with --list: print the demos as JSON")
     p.add_argument("--all", action="store_true", help="record every built-in demo")
     p.add_argument("--out", metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--duration", type=number, metavar="S", help="seconds of playback")
@@ -53,6 +56,7 @@ def add_commands(sub) -> None:
     from .video import add_record_options
 
     add_record_options(p)  # --video, --size, --camera, --title, --caption, --no-overlay, ...
+    add_progress_option(p)
     p.set_defaults(func=run_record)
 
     _add_play(sub)
@@ -74,8 +78,13 @@ def run_record(args: argparse.Namespace) -> int:
         from .. import record as rec
         from ..record import charts
 
+    if args.json and not args.list:
+        raise CliError("--json: only with --list (a recording's figures are in DEMO.json)")
     if args.list:
         demos = rec.list_demos()
+        if args.json:
+            print(json.dumps({"demos": [_demo_entry(d) for d in demos]}, indent=2))
+            return 0
         width = max(len(d.name) for d in demos)
         for d in demos:
             print(f"{d.name:<{width}}  {d.description}")
@@ -139,6 +148,24 @@ def run_record(args: argparse.Namespace) -> int:
         if args.video and (status := film_record(res, args)):
             return status
     return 0
+
+
+def _demo_entry(d) -> dict:
+    """One demo as ``record --list --json`` gives it: numbers as numbers."""
+    return {
+        "name": d.name,
+        "title": d.title,
+        "description": d.description,
+        "exhibit": d.exhibit,
+        "motion": d.motion,
+        "method": d.method,
+        "dt": d.dt,
+        "rtol": d.rtol,
+        "duration": d.duration,
+        "fps": d.fps,
+        "frames": d.frames,
+        "speed": d.speed,
+    }
 
 
 def _check_writable(out: Path) -> None:

@@ -110,7 +110,9 @@ Draw every frame of a recording in headless Chromium (viser's own player) and en
 MP4 (yuv420p: browsers, PowerPoint, Keynote) or GIF, framed on the exhibit, with the title,
 caption and the measured-against-predicted figures true at each moment drawn in. A demo manifest
 beside the file (FILE.json, as mechviz record writes it) gives the duration, fps, words and
-framing; a live session's page its title and the viewer's camera. The video is written
+framing, once every file it lists is checked against it (a folder holding files of two
+recordings is refused, naming the file); a live session's page its title and the viewer's
+camera. The video is written
 atomically. Needs Chromium and pip install 'mechviz-lab[video]'.
 """
 
@@ -137,6 +139,9 @@ def add_commands(sub) -> None:
         help=f"frames per second, up to {video.MAX_FPS} (default: the demo's, else 30)",
     )
     add_look_options(p)
+    from ..progress import add_option
+
+    add_option(p)
     p.set_defaults(func=run_video)
 
 

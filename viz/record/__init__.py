@@ -4,7 +4,10 @@ A demo file (:mod:`.demo`) names an exhibit and its settings; :func:`record` run
 own exhibit for it headless (:mod:`.run`), faster than real time, and writes the scene
 recording, a self-contained page, the traces, a chart and a manifest (:mod:`.recorder`,
 :mod:`.outputs`), with measured against predicted figures (:mod:`.figures`).
+:func:`read_recording` reads one back, every file checked against its manifest.
 """
+
+from mechviz.dynamics.api import Recording, read_recording
 
 from .demo import DEMO_DIR, Demo, demo_names, list_demos, load_demo, parse_demo
 from .figures import figures
@@ -23,6 +26,7 @@ __all__ = [
     "SUFFIXES",
     "Demo",
     "RecordResult",
+    "Recording",
     "RecordingFailed",
     "Traces",
     "demo_names",
@@ -32,6 +36,7 @@ __all__ = [
     "load_demo",
     "measure_record_speed",
     "parse_demo",
+    "read_recording",
     "record",
     "run_demo",
 ]

@@ -8,7 +8,10 @@ charge's ``r``, ``p_r``, ``p_phi``, ``V_eff``; the hoop's modal coordinates ``q1
 disk's ``L``). ``DEMO.png`` charts the motion with the predictions marked, the energy error and
 the error, and below them the exhibit's pictures (:meth:`~mechviz.viz.model.base.ExhibitModel.pictures`:
 the well, configuration space, the phase portrait, the polhode) with their exact curves, drawn
-by the viewer's own :func:`mechviz.viz.model.plot.draw_xy`. ``DEMO.json`` is the manifest.
+by the viewer's own :func:`mechviz.viz.model.plot.draw_xy`. ``DEMO.json`` is the manifest; its
+``csv_columns`` gives each CSV column's ``units`` and ``long_name`` (:func:`csv_columns`). Every
+number in the CSV is written as a float (``1.0``, never ``1``), so a reader that guesses types
+reads each measured column as floating point.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import dataclasses
 import io
 import math
 import platform
+import re
 import time
 from importlib import metadata
 from typing import Any
@@ -70,14 +74,49 @@ def derived_variables(d: Demo) -> dict:
     return {n: v for n, v in variables.items() if n not in names}
 
 
+_LABEL_UNIT = re.compile(r"^(.*?)\s*\[([^\]]*)\]$")
+
+
+def _split_label(label: str) -> tuple[str, str]:
+    """``"x [m]"`` -> ``("x", "m")``; a label without a unit has ``""``."""
+    m = _LABEL_UNIT.match(label)
+    return (m.group(1), m.group(2)) if m else (label, "")
+
+
+def csv_columns(d: Demo) -> dict[str, dict[str, str]]:
+    """Each column of ``DEMO.csv`` in order: its ``units`` (SI; ``""`` for a label, a count or
+    a ratio) and ``long_name``."""
+    system = dynamics.SYSTEMS[_system_name(d)]
+    cols = {
+        "run": ("the run: its method, or linear-theory", ""),
+        "member": ("member of the run's ensemble (0 for a single start)", ""),
+        "t": ("simulated time", "s"),
+    }
+    for n in system.state_names:
+        cols[n] = _split_label(system.state_labels.get(n, n))
+    cols["energy"] = ("total energy", "J")
+    cols["energy_error"] = ("relative energy error (E - E0) / |E0|", "")
+    cols["error"] = ("relative error against the exact solution or the tight reference", "")
+    for n, v in derived_variables(d).items():
+        cols[n] = _split_label(v.label)
+    return {n: {"units": u, "long_name": name} for n, (name, u) in cols.items()}
+
+
+def _number(x: float) -> str:
+    """``x`` in 10 significant digits, always as a float: ``1.0``, ``2.5e-08``, ``nan``."""
+    s = f"{x:.10g}"
+    return s if any(c in s for c in ".eEn") else f"{s}.0"  # "n": nan and inf
+
+
 def traces_csv(d: Demo, tr: Traces) -> bytes:
-    """The traces as CSV (long format, one row per run, member and frame)."""
+    """The traces as CSV (long format, one row per run, member and frame); the columns are
+    :func:`csv_columns`."""
     names = list(dynamics.SYSTEMS[_system_name(d)].state_names)
     extra = derived_variables(d)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["run", "member", "t", *names, "energy", "energy_error", "error", *extra])
-    fmt = "{:.10g}".format
+    fmt = _number
 
     def columns(smp: Samples) -> np.ndarray:
         if not extra:
@@ -380,6 +419,7 @@ def manifest(d: Demo, tr: Traces, figs: list[dict[str, Any]], *, wall: float) ->
         "speed": d.speed,
         "simulated_time": float(tr.t[-1]),
         "camera": msgspec.to_builtins(d.camera),
+        "csv_columns": csv_columns(d),
         "figures": figs,
         "final_errors": final_errors(tr),
         "versions": package_versions(),

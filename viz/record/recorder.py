@@ -3,10 +3,12 @@
 ``DEMO.viser`` (viser's scene recording, played by ``mechviz play`` with a time slider),
 ``DEMO.html`` (the same in viser's self-contained page; plays from file://), ``DEMO.csv``,
 ``DEMO.png`` and ``DEMO.json`` (:mod:`mechviz.viz.record.outputs`). All five are built in memory, then
-written as one set by :func:`mechviz.dynamics.fileset.write_set` (the names in the folder are links into
-a hidden set folder, switched by a single rename): a recording that fails, is interrupted or is
-killed leaves the folder with the whole old set or the whole new one, a second recording into
-the same folder waits for the first, and :class:`RecordingFailed` says what the folder holds.
+written as one set by :func:`mechviz.dynamics.fileset.write_set`: regular files, each replaced
+atomically, the manifest last with the size and SHA-256 of each other file. A recording that
+fails or is interrupted leaves the old set; one killed while it renames leaves every file whole
+and a set that every reader (:func:`read_recording`, ``play``, ``video``, ``still``) refuses,
+naming the file from the other recording; a second recording into the same folder waits for
+the first; :class:`RecordingFailed` says what the folder holds.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from typing import Any
 
 from mechviz import dynamics
 from mechviz.dynamics.files import WriteFailed, WriteInterrupted, json_safe
-from mechviz.dynamics.fileset import WaitFn, check_room, write_set
+from mechviz.dynamics.fileset import SCHEMA_VERSION, WaitFn, check_room, write_set
 
 from . import charts
 from .demo import Demo, load_demo
@@ -105,7 +107,8 @@ def record(
                 f"{d.name}.csv": traces_csv(d, tr),
                 **{f"{d.name}{s}": b for s, b in drawn.items()},
             }
-            man = manifest(d, tr, figs, wall=time.perf_counter() - t_start)
+            man = {"schema_version": SCHEMA_VERSION}
+            man |= manifest(d, tr, figs, wall=time.perf_counter() - t_start)
             man["scene"] = rec.scene  # the exhibit's bounds and camera: videos frame it
         man["files"] = {
             n: {"bytes": len(b), "sha256": hashlib.sha256(b).hexdigest()} for n, b in files.items()
@@ -137,19 +140,8 @@ def record(
             isinstance(exc, ValueError) or getattr(exc, "errno", 0) == errno.ENAMETOOLONG
         )
         raise err from exc
-    _forget_vector_charts(out, d.name, vector)
     wall = time.perf_counter() - t_start
     return RecordResult(d, {s: out / f"{d.name}{s}" for s in suffixes}, man, wall, d.frames)
-
-
-def _forget_vector_charts(out: Path, name: str, kept: tuple[str, ...]) -> None:
-    """Remove the names of an earlier recording's SVG or PDF chart that this one did not
-    write: they are links into the set just replaced, and lead nowhere now."""
-    for s in charts.VECTOR_FORMATS:
-        link = out / f"{name}.{s}"
-        if f".{s}" not in kept and link.is_symlink() and not link.exists():
-            with contextlib.suppress(OSError):
-                link.unlink()
 
 
 def measure_record_speed(demo: str = "helix", duration: float = 30.0, fps: int = 30) -> dict:
