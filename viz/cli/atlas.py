@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from dataclasses import fields
 from pathlib import Path
@@ -207,38 +208,56 @@ def _run(args: argparse.Namespace) -> int:
 
 def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
     from mechviz.dynamics.atlas import store
-    from mechviz.dynamics.atlas.driver import AtlasInterrupted, run_atlas
+    from mechviz.dynamics.atlas.driver import AtlasInterrupted, prepare, run_atlas
     from mechviz.dynamics.atlas.maps import save_maps
 
     from .errors import CliError
 
     path = out / "atlas.zarr"
-    if not args.resume and out.exists() and not out.is_dir():
+    if out.exists() and not out.is_dir():
         raise CliError(f"--out: {out} is not a folder")
-    try:  # before anything is printed or written: a store this run may not use is one line
-        if args.resume:
-            store.open_for_resume(path, spec)
-        elif path.exists():
-            store.create(path, spec)  # raises: it exists
-    except store.StoreError as exc:
-        raise CliError(str(exc)) from None
-    cells = math.prod(spec.shape)
-    print(
-        f"mechviz atlas: {spec.kind} of the {spec.system}, {cells} cells in "
-        f"{len(spec.chunks())} chunks of {spec.chunk[0]}x{spec.chunk[1]}; run key "
-        f"{spec.run_key()}",
-        file=sys.stderr,
-    )
+    if args.resume and not path.exists() and not store.has_partial(path):
+        raise CliError(f"--resume: no atlas at {path}")
+    if not args.resume and not args.fresh and path.exists():
+        raise CliError(
+            f"--out: {path} exists; pass --resume to continue it, --fresh to start it again, "
+            "or another --out"
+        )
     try:
         out.mkdir(parents=True, exist_ok=True)
-        report = run_atlas(
-            spec,
-            path,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            resume=args.resume,
-            progress=not args.no_progress,
-        )
+        with store.locked(out):
+            # before anything is printed: a store this run may not use is one line
+            prepared = prepare(spec, path, resume=args.resume, fresh=args.fresh)
+            cells = math.prod(spec.shape)
+            print(
+                f"mechviz atlas: {spec.kind} of the {spec.system}, {cells} cells in "
+                f"{len(spec.chunks())} chunks of {spec.chunk[0]}x{spec.chunk[1]}; run key "
+                f"{spec.run_key()}",
+                file=sys.stderr,
+            )
+            if prepared.restarted:
+                print(
+                    f"mechviz atlas: {path} was never completed (a run ended while creating it); "
+                    "started afresh",
+                    file=sys.stderr,
+                )
+            if prepared.damaged:
+                found = store.Resumed(prepared.done, prepared.damaged).describe_damage()
+                print(
+                    f"mechviz atlas: {len(prepared.damaged)} damaged chunks (method/row/column) "
+                    f"computed again: {found}",
+                    file=sys.stderr,
+                )
+            report = run_atlas(
+                spec,
+                path,
+                scheduler=args.scheduler,
+                workers=args.workers,
+                progress=not args.no_progress,
+                prepared=prepared,
+            )
+            ds = store.load(path)
+            maps = save_maps(ds, out, spec.kind)
     except store.StoreError as exc:
         raise CliError(str(exc)) from None
     except AtlasInterrupted as exc:
@@ -249,16 +268,17 @@ def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
             "continue with the same flags and --resume",
             file=sys.stderr,
         )
-        return 130
-    except KeyboardInterrupt:  # before the first chunk was asked for, or while shutting down
-        print(
-            f"mechviz atlas: interrupted; the finished chunks are kept in {path}; "
-            "continue with the same flags and --resume",
-            file=sys.stderr,
-        )
-        return 130
-    ds = store.load(path)
-    maps = save_maps(ds, out, spec.kind)
+        if getattr(args, "whole_process", False):
+            # Everything is written and closed, the workers and their folder gone: the
+            # interpreter's teardown of its modules (numba, Dask, xarray) would add a second or
+            # more on a busy machine before the process ends.
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(128 + exc.signum)
+        return 128 + exc.signum
+    except OSError as exc:  # a full disk, a folder that cannot be made
+        where = exc.filename or out
+        raise CliError(f"--out {out}: {exc.strerror or exc} ({where})") from None
     print(
         f"mechviz atlas: {len(report.computed)} chunks computed ({len(report.skipped)} kept "
         f"from before) in {report.wall_seconds:.1f} s on {report.workers} workers; "
@@ -286,8 +306,17 @@ def add_commands(sub) -> None:
         "hoop's start plane by Lyapunov exponent), accuracy (error over step x amplitude)",
     )
     p.add_argument("--out", help="folder for atlas.zarr and the maps (KIND.png, KIND.svg)")
-    p.add_argument(
-        "--resume", action="store_true", help="continue the interrupted run in --out (same flags)"
+    again = p.add_mutually_exclusive_group()
+    again.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run in --out (same flags): every chunk kept is verified, damaged "
+        "ones are computed again",
+    )
+    again.add_argument(
+        "--fresh",
+        action="store_true",
+        help="replace the atlas in --out by a new run (as after a damaged store)",
     )
     p.add_argument(
         "--scheduler",
