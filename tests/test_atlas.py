@@ -375,3 +375,72 @@ def test_a_store_whose_creation_was_cut_short_is_resumed_from_the_start(client, 
     assert "never completed" in capsys.readouterr().err
     assert not partial.exists()
     assert_same_map(store.load(out / "atlas.zarr"), compute_serial(spec), spec)
+
+
+@pytest.mark.parametrize(
+    "kind, flags, named",
+    [
+        # endless or huge: refused from the estimate, before any work
+        ("chaos", ["--duration", "1e12"], "--max-steps"),
+        ("chaos", ["--step", "1e-12"], "--max-steps"),
+        ("accuracy", ["--duration", "1e9"], "--max-steps"),
+        ("accuracy", ["--methods", "dop853", "--rtol", "1e-300:1e-3:3:log"], "--max-steps"),
+        ("stability", ["--periods", "1e15"], "--max-steps"),
+        ("chaos", ["--theta1=-1:1:100000", "--theta2=-1:1:100000"], "--theta1"),
+        # values that cannot be used
+        ("chaos", ["--theta1=-1e308:1e308:4"], "--theta1"),
+        ("chaos", ["--param", "radius=1e308"], "--param radius"),
+        ("stability", ["--param", "radius=1e308"], "--param radius"),
+        ("chaos", ["--scheduler", "garbage://x"], "--scheduler"),
+        ("chaos", ["--scheduler", ""], "--scheduler"),
+        ("chaos", ["--scheduler", "tcp://127.0.0.1:1"], "--scheduler"),
+        ("stability", ["--methods", ""], "--methods"),
+        ("chaos", ["--duration", "0"], "--duration"),
+        ("chaos", ["--separation", "1e10"], "--separation"),
+        ("chaos", ["--duration", "1_0"], "--duration"),
+        ("chaos", ["--duration", "\uff11"], "--duration"),
+        ("chaos", ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers"),
+        # flags the map does not take
+        ("chaos", ["--rtol", "1e-6:1e-3:3:log"], "--rtol"),
+        ("chaos", ["--periods", "5"], "--periods"),
+        ("chaos", ["--system", "cyclotron"], "--system"),
+        ("stability", ["--duration", "5"], "--duration"),
+        ("stability", ["--step", "0.1"], "--step"),
+        ("accuracy", ["--threshold", "2"], "--threshold"),
+    ],
+)
+def test_every_bad_flag_is_one_line_naming_it_before_any_work(tmp_path, capsys, kind, flags, named):
+    import time
+
+    t0 = time.monotonic()
+    assert run_cli(["atlas", kind, "--out", str(tmp_path / "a"), "--no-progress", *flags]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and named in err[0], err
+    assert "Traceback" not in err[0]
+    assert not (tmp_path / "a").exists()
+    assert time.monotonic() - t0 < scaled(30)  # no time limit of a client waited out
+
+
+@pytest.mark.parametrize("out", ["/proc/mechviz-atlas", "a" * 300])
+def test_an_out_that_cannot_be_made_is_one_line(tmp_path, capsys, monkeypatch, out):
+    monkeypatch.chdir(tmp_path)
+    args = ["atlas", "chaos", "--theta1=-1:1:2", "--theta2=-1:1:2", "--duration", "1"]
+    assert run_cli([*args, "--out", out, "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mechviz: error: --out"), err
+
+
+@pytest.mark.parametrize("where", ["create", "write_chunk"])
+def test_a_full_disk_is_one_line(client, tmp_path, capsys, monkeypatch, where):
+    import errno
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "atlas"))
+
+    monkeypatch.setattr(store, where, full)
+    spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
+    args = [*_cli_args(spec, tmp_path / "atlas"), "--scheduler", client.scheduler.address]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "No space left on device" in err[-1] and err[-1].startswith("mechviz: error: --out")
+    assert not any("Traceback" in line for line in err)

@@ -61,6 +61,10 @@ class RunReport:
         return len(self.computed) + len(self.skipped) == self.total
 
 
+class ClusterError(RuntimeError):
+    """The Dask cluster could not be reached or started (one line saying why)."""
+
+
 class AtlasInterrupted(KeyboardInterrupt):
     """Ctrl-C during :func:`run_atlas`: the cluster's work was cancelled; ``report`` says what
     was kept."""
@@ -93,7 +97,10 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
     from distributed import Client, LocalCluster
 
     if scheduler:
-        client = Client(scheduler, timeout="10s")
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ClusterError(f"--scheduler {scheduler}: {exc}") from None
         try:
             yield client
         finally:
