@@ -36,7 +36,7 @@ import stat
 import urllib.parse
 from pathlib import Path
 
-from .cli.errors import CliError, command
+from .cli.errors import CliError, command, whole
 from .play_server import GuardedHandler, GuardedServer
 from .printable import printable
 
@@ -65,7 +65,7 @@ def add_command(sub) -> None:
     )
     q.add_argument(
         "--port",
-        type=int,
+        type=whole,
         default=DEFAULT_PLAY_PORT,
         help=f"first port to try, 0 to 65535 (default {DEFAULT_PLAY_PORT}; 0: any free one)",
     )

@@ -15,7 +15,7 @@ from ..interrupts import ctrl_c_within_a_second, exit_status
 from ..play import add_command as _add_play
 from ..printable import printable
 from ..progress import ProgressBar
-from .errors import CliError, command, number
+from .errors import CliError, command, number, whole
 
 ABOUT = """\
 record a built-in demo headless: .viser, .html, .csv, .png, .json
@@ -33,7 +33,7 @@ def add_commands(sub) -> None:
     p.add_argument("--all", action="store_true", help="record every built-in demo")
     p.add_argument("--out", metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--duration", type=number, metavar="S", help="seconds of playback")
-    p.add_argument("--fps", type=int, metavar="N", help="frames per second of playback")
+    p.add_argument("--fps", type=whole, metavar="N", help="frames per second of playback")
     p.add_argument(
         "--method", metavar="NAME", help="integration method (mechviz simulate --list-methods)"
     )
