@@ -187,7 +187,9 @@ class AtlasSpec:
         for name in ("periods", "threshold", "duration", "step", "renormalise", "separation"):
             _v.positive(name, getattr(self, name))
         if self.kind == "chaos" and self.renormalise < self.step:
-            raise ValueError("renormalise: must be at least one step")
+            raise ValueError(
+                f"renormalise: must be at least one --step ({self.step:g} s), got {self.renormalise:g}"
+            )
         if not MIN_SEPARATION <= self.separation <= MAX_SEPARATION:
             # a twin offset by more is no neighbour, and by less it is lost in the rounding of
             # the state (angles of a few radians, resolved to about 1e-15)

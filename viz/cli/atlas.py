@@ -3,9 +3,12 @@
 ``mechviz atlas stability|chaos|accuracy`` computes the map chunk by chunk on a Dask cluster (by
 default a ``distributed.LocalCluster`` on this machine's cores; ``--scheduler ADDRESS`` for an
 existing one), writing each chunk into ``OUT/atlas.zarr`` (an xarray Dataset) as it finishes,
-and when complete draws ``OUT/KIND.png`` and ``OUT/KIND.svg``. Ctrl-C cancels the cluster's work
-and keeps the chunks already written; ``--resume`` continues the same run (the same flags: the
-store's run key must match). ``--bench OUT`` measures the atlas's costs instead and writes
+and when complete draws ``OUT/KIND.png`` and ``OUT/KIND.svg``. Ctrl-C (SIGTERM, SIGHUP) cancels
+the cluster's work and keeps the chunks already written; ``--resume`` continues the same run (the
+same flags: the store's run key must match), verifying every chunk it keeps; ``--fresh`` starts
+it again. Everything is checked before any work, each refusal one line naming the flag: the cost
+(``--max-steps``), the memory the grid needs, the scheduler's address, and flags the map does not
+take. ``--bench OUT`` measures the atlas's costs instead and writes
 ``OUT/atlas-bench.json``. Needs the ``atlas`` extra (``pip install 'mechviz-lab[atlas]'``).
 """
 
@@ -25,10 +28,10 @@ from mechviz.dynamics.systems import SYSTEMS
 
 from .errors import command, number
 
-#: Default of ``--max-steps``: the most compiled member-steps an atlas may take, about 50 times
-#: the default chaos map (128 x 128 starts and their twins, 60 s at 0.01 s): some 20 core-minutes
-#: of RK4.
-DEFAULT_MAX_STEPS = 1e10
+#: Default of ``--max-steps``: the most compiled member-steps an atlas may take, some 500 times
+#: the default chaos map (128 x 128 starts and their twins, 60 s at 0.01 s) and above the
+#: 1024 x 1024 one a cluster draws (1.3e10): about 3 core-hours of RK4.
+DEFAULT_MAX_STEPS = 1e11
 #: The largest end an axis may have: far beyond any motion these systems make sense of, and far
 #: from the largest double, so the spacing and the states stay representable.
 MAX_AXIS_END = 1e6
@@ -376,7 +379,8 @@ def default_workers(requested: int | None) -> tuple[int, str]:
     if want <= cap:
         return want, ""
     why = f"{cores} cores" if cores <= by_memory else f"memory for {by_memory}"
-    return cap, f"--workers {want} capped at {cap} (the {why})"
+    shown = f"{want}" if want < 10**6 else f"{float(want):.3g}"
+    return cap, f"--workers {shown} capped at {cap} (the {why})"
 
 
 def check_scheduler(address: str) -> None:
@@ -447,14 +451,13 @@ def _run(args: argparse.Namespace) -> int:
         check_theory(spec)
     except ValueError as exc:
         raise CliError(_as_flag(str(exc))) from None
+    note = ""
     if args.scheduler is None:
         args.workers, note = default_workers(args.workers)
-        if note:
-            print(f"mechviz atlas: {note}", file=sys.stderr)
-    return run_and_draw(spec, Path(args.out), args)
+    return run_and_draw(spec, Path(args.out), args, note)
 
 
-def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
+def run_and_draw(spec, out: Path, args: argparse.Namespace, note: str = "") -> int:
     from mechviz.dynamics.atlas import store
     from mechviz.dynamics.atlas.driver import AtlasInterrupted, ClusterError, prepare, run_atlas
     from mechviz.dynamics.atlas.maps import save_maps
@@ -483,6 +486,8 @@ def run_and_draw(spec, out: Path, args: argparse.Namespace) -> int:
                 f"{spec.run_key()}",
                 file=sys.stderr,
             )
+            if note:
+                print(f"mechviz atlas: {note}", file=sys.stderr)
             if prepared.restarted:
                 print(
                     f"mechviz atlas: {path} was never completed (a run ended while creating it); "
