@@ -7,8 +7,12 @@ store from this process, in the order the chunks finish. A task is a pure functi
 and the chunk index (:func:`.kernels.compute_chunk`), so a task lost with its worker is simply run
 again by the scheduler, and a resumed run computes exactly the chunks not yet marked done.
 
-Ctrl-C (``KeyboardInterrupt``) cancels every task still queued or running on the cluster, shuts
-down a cluster this function started, and raises :class:`AtlasInterrupted` with what was kept.
+Ctrl-C, SIGTERM and SIGHUP are seen within :data:`POLL_SECONDS` whatever the length of a chunk:
+every task still queued or running on the cluster is cancelled, a cluster this function started
+has its workers killed (a worker inside a compiled slice would answer a polite close only when
+the slice ends) and its temporary folder removed, and :class:`AtlasInterrupted` says what was
+kept. Only one run works on a store's folder at a time (:func:`.store.locked`); a resumed run
+keeps only the chunks it verifies (:func:`.store.open_for_resume`).
 
 :func:`compute_serial` computes the same atlas in this process, chunk by chunk, without Dask: the
 reference the distributed result is compared with bit for bit.
