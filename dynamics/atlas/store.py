@@ -283,15 +283,19 @@ def open_for_resume(path: str | Path, spec: AtlasSpec, *, repair: bool = True) -
     done = np.zeros(spec.chunk_grid, dtype=bool)
     damaged: dict[tuple[int, int, int], str] = {}
     names = list(VARIABLES[spec.kind])
+    # each array read whole when it can be (a store of many chunks is checked in seconds, not
+    # one read per chunk); one with a damaged chunk is read chunk by chunk
+    arrays = {n: group[n] for n in (*names, *BOOKKEEPING)}  # each opened once
+    whole = {n: _read_whole(arrays[n]) for n in (*names, "chunk_done", "chunk_checksum")}
     for c in spec.chunks():
-        why = _check_chunk(path, group, spec, c, names)
+        why = _check_chunk(path, arrays, spec, c, names, whole)
         if why is None:
             done[c] = True
         elif why:
             damaged[c] = why
     if repair:
         for c in damaged:
-            _remove_chunk(path, group, c, names)
+            _remove_chunk(path, arrays, c, names)
     return Resumed(done, damaged)
 
 
@@ -299,15 +303,33 @@ def _chunk_file(path: Path, arr, name: str, index) -> Path:
     return path / name / arr.metadata.encode_chunk_key(tuple(index))
 
 
-def _check_chunk(path: Path, group, spec: AtlasSpec, c, names) -> str | None:
+def _read_whole(arr) -> np.ndarray | None:
+    try:
+        return arr[...]
+    except Exception:  # a chunk that does not decode: read chunk by chunk instead
+        return None
+
+
+def _block(group, name: str, c, spec: AtlasSpec, whole: dict) -> np.ndarray:
+    """Chunk ``c`` of variable ``name``: from the array read whole, or read alone."""
+    a = whole.get(name)
+    if a is None:
+        return group[name].get_block_selection(c)
+    if name in BOOKKEEPING:
+        return a[c[0] : c[0] + 1, c[1] : c[1] + 1, c[2] : c[2] + 1]
+    k, rows, cols = spec.cells(c)
+    return a[k : k + 1, rows, cols]
+
+
+def _check_chunk(path: Path, group: dict, spec: AtlasSpec, c, names, whole: dict) -> str | None:
     """None if chunk ``c`` is done and verified; "" if it was never written; else what is
     wrong with it."""
     try:
-        flag = int(group["chunk_done"].get_block_selection(c).ravel()[0])
+        flag = int(_block(group, "chunk_done", c, spec, whole).ravel()[0])
     except Exception:
         return "done flag unreadable"
     try:
-        recorded = int(group["chunk_checksum"].get_block_selection(c).ravel()[0])
+        recorded = int(_block(group, "chunk_checksum", c, spec, whole).ravel()[0])
     except Exception:
         return "checksum unreadable"
     if flag != 1:
@@ -324,7 +346,7 @@ def _check_chunk(path: Path, group, spec: AtlasSpec, c, names) -> str | None:
         if not _chunk_file(path, group[n], n, c).exists():
             return f"{n} missing"
         try:
-            cells[n] = group[n].get_block_selection(c)[0]
+            cells[n] = _block(group, n, c, spec, whole)[0]
         except Exception:
             return f"{n} unreadable"
     if checksum(spec, cells) != recorded:
