@@ -162,3 +162,24 @@ def _cpu(pid: int) -> float:
         return cpu_seconds(pid)
     except OSError:  # gone meanwhile
         return 0.0
+
+
+def test_a_finished_atlas_leaves_no_process_and_nothing_in_its_temporary_folder(tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    args = ["atlas", "chaos", "--theta1=-3:3:4", "--theta2=-3:3:4", "--duration", "1"]
+    args += ["--chunk", "2x4", "--workers", "2", "--no-progress", "--out", str(out)]
+    tmp = tmp_path / "tmp"
+    proc = start(args, tmp)
+    seen: dict[int, str] = {}
+
+    def finished() -> bool:
+        seen.update(descendants(proc.pid))
+        return proc.poll() is not None
+
+    wait_until(finished, 180, "the atlas to finish")
+    _, err = proc.communicate()
+    assert proc.returncode == 0, err[-2000:]
+    assert (out / "chaos.png").is_file()
+    wait_until(lambda: not alive(seen), 10, f"the command's processes to end: {seen}")
+    assert [p.name for p in tmp.iterdir()] == []
