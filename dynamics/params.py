@@ -11,6 +11,7 @@ beside its message. Each front end maps the field to its own label (a flag ``--m
 from __future__ import annotations
 
 import math
+import re
 import sys
 from collections.abc import Callable, Iterable
 from dataclasses import fields
@@ -20,6 +21,14 @@ import numpy as np
 
 #: The smallest normal double (2.2e-308): a typed value closer to 0 has lost precision.
 TINY = sys.float_info.min
+
+
+#: A decimal number in ASCII (and the words float() knows for infinity and not-a-number, refused
+#: afterwards with a message of their own).
+_NUMBER = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)",
+    re.IGNORECASE | re.ASCII,
+)
 
 
 class SettingError(ValueError):
@@ -36,7 +45,9 @@ def parse_number(field: str, text: Any) -> float:
     """What a person typed as a number, read by the one rule every front end uses.
 
     The text is read as Python reads a float (``0.025``, ``2.5e-2``, ``2.5E-2``; a typographic
-    minus ``−`` counts as ``-``); surrounding blanks are ignored. Refused with a
+    minus ``−`` counts as ``-``) but in ASCII digits only and without underscores (``1_0`` and
+    a full-width ``１`` are refused: neither is a number as a person writes it down);
+    surrounding blanks are ignored. Refused with a
     :class:`SettingError` naming ``field``: anything else, ``nan`` and ``inf``, and a value so
     close to 0 that it is below the smallest normal double (a subnormal has lost its digits).
     A number (``int`` or ``float``) passes through the same checks."""
@@ -47,6 +58,8 @@ def parse_number(field: str, text: Any) -> float:
     else:
         raw = str(text).strip().replace("\u2212", "-")
         try:
+            if not _NUMBER.fullmatch(raw):  # float() alone takes 1_0 and non-ASCII digits
+                raise ValueError(raw)
             x = float(raw)
         except ValueError:
             raise SettingError(

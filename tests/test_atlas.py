@@ -292,3 +292,169 @@ def test_bad_input_is_one_line_naming_the_flag(tmp_path, capsys, flags, field):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and field in err[0], err
     assert not (tmp_path / "a").exists()
+
+
+def _damage(path: Path, var: str, chunk: str, how: str) -> None:
+    f = path / var / "c" / Path(*chunk.split("/"))
+    assert f.is_file(), f
+    if how == "delete":
+        f.unlink()
+    elif how == "truncate":
+        with open(f, "r+b") as fh:
+            fh.truncate(3)
+    else:
+        f.write_bytes(np.random.default_rng(1).bytes(40))
+
+
+def test_resume_verifies_every_chunk_and_recomputes_the_damaged_ones_bit_for_bit(
+    client, tmp_path, capsys
+):
+    spec = chaos_spec(n=8, chunk=(2, 4), duration=2.0)
+    out = tmp_path / "atlas"
+    path = out / "atlas.zarr"
+    args = [*_cli_args(spec, out), "--scheduler", client.scheduler.address]
+    assert main(args) == 0
+    before = store.load(path)
+    damage = {
+        ("lyapunov", "0/0/0", "delete"): "0/0/0",
+        ("energy_error", "0/1/1", "truncate"): "0/1/1",
+        ("lyapunov", "0/2/0", "random"): "0/2/0",
+        ("chunk_done", "0/3/1", "random"): "0/3/1",
+        ("chunk_done", "0/3/0", "delete"): "0/3/0",
+        ("chunk_checksum", "0/0/1", "truncate"): "0/0/1",
+    }
+    for var, chunk, how in damage:
+        _damage(path, var, chunk, how)
+    capsys.readouterr()
+    assert main([*args, "--resume"]) == 0
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "damaged" in line]
+    assert len(lines) == 1, err
+    named = {c for c in damage.values() if f"{c} (" in lines[0]}
+    assert named == set(damage.values()), lines[0]
+    assert f"{len(damage)} damaged chunks" in lines[0]
+    after = store.load(path)
+    assert_same_map(after, compute_serial(spec), spec)
+    redone = {tuple(int(v) for v in c.split("/")) for c in damage.values()}
+    for c in spec.chunks():  # the sound chunks were kept, not computed again
+        same = after["chunk_session"].values[c] == before["chunk_session"].values[c]
+        assert same == (c not in redone), c
+    # and a resume of the repaired store keeps every chunk
+    assert main([*args, "--resume"]) == 0
+    assert "8 kept from before" in capsys.readouterr().out
+
+
+def test_damaged_metadata_is_refused_in_one_line_and_fresh_starts_again(client, tmp_path, capsys):
+    spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
+    out = tmp_path / "atlas"
+    args = [*_cli_args(spec, out), "--scheduler", client.scheduler.address]
+    assert main(args) == 0
+    (out / "atlas.zarr" / "lyapunov" / "zarr.json").unlink()
+    capsys.readouterr()
+    assert main([*args, "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "lyapunov/zarr.json" in err[0], err
+    assert "--fresh" in err[0] and "another --out" in err[0]
+    assert main([*args, "--fresh"]) == 0
+    assert_same_map(store.load(out / "atlas.zarr"), compute_serial(spec), spec)
+
+
+def test_a_second_run_in_the_same_folder_is_refused_while_the_first_works(tmp_path, capsys):
+    spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
+    out = tmp_path / "atlas"
+    out.mkdir()
+    store.create(out / "atlas.zarr", spec)
+    with store.locked(out):  # as a run in another process holds it
+        assert main([*_cli_args(spec, out), "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "another mechviz atlas is working" in err[0], err
+    assert not store.done_chunks(out / "atlas.zarr").any()
+
+
+def test_a_store_whose_creation_was_cut_short_is_resumed_from_the_start(client, tmp_path, capsys):
+    """A run killed while it created the store leaves only the copy beside it, half written."""
+    spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
+    out = tmp_path / "atlas"
+    partial = out / "atlas.zarr.partial"
+    (partial / "lyapunov").mkdir(parents=True)
+    (partial / "zarr.json").write_text('{"zarr_format": 3, "node_ty')
+    args = [*_cli_args(spec, out), "--scheduler", client.scheduler.address, "--resume"]
+    assert main(args) == 0
+    assert "never completed" in capsys.readouterr().err
+    assert not partial.exists()
+    assert_same_map(store.load(out / "atlas.zarr"), compute_serial(spec), spec)
+
+
+@pytest.mark.parametrize(
+    "kind, flags, named",
+    [
+        # endless or huge: refused from the estimate, before any work
+        ("chaos", ["--duration", "1e12"], "--max-steps"),
+        ("chaos", ["--step", "1e-12"], "--max-steps"),
+        ("accuracy", ["--duration", "1e9"], "--max-steps"),
+        ("accuracy", ["--methods", "dop853", "--rtol", "1e-300:1e-3:3:log"], "--rtol"),
+        ("accuracy", ["--methods", "taylor", "--rtol", "1e-300:1e-3:3:log"], "--rtol"),
+        (
+            "accuracy",
+            ["--methods", "dop853", "--rtol", "1e-6:1e-3:3:log", "--max-steps", "10"],
+            "--max-steps",
+        ),
+        ("stability", ["--periods", "1e15"], "--max-steps"),
+        ("chaos", ["--theta1=-1:1:100000", "--theta2=-1:1:100000"], "--theta1"),
+        # values that cannot be used
+        ("chaos", ["--theta1=-1e308:1e308:4"], "--theta1"),
+        ("chaos", ["--param", "radius=1e308"], "--param radius"),
+        ("stability", ["--param", "radius=1e308"], "--param radius"),
+        ("chaos", ["--scheduler", "garbage://x"], "--scheduler"),
+        ("chaos", ["--scheduler", ""], "--scheduler"),
+        ("chaos", ["--scheduler", "tcp://127.0.0.1:1"], "--scheduler"),
+        ("stability", ["--methods", ""], "--methods"),
+        ("chaos", ["--duration", "0"], "--duration"),
+        ("chaos", ["--separation", "1e10"], "--separation"),
+        ("chaos", ["--duration", "1_0"], "--duration"),
+        ("chaos", ["--duration", "\uff11"], "--duration"),
+        ("chaos", ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers"),
+        # flags the map does not take
+        ("chaos", ["--rtol", "1e-6:1e-3:3:log"], "--rtol"),
+        ("chaos", ["--periods", "5"], "--periods"),
+        ("chaos", ["--system", "cyclotron"], "--system"),
+        ("stability", ["--duration", "5"], "--duration"),
+        ("stability", ["--step", "0.1"], "--step"),
+        ("accuracy", ["--threshold", "2"], "--threshold"),
+    ],
+)
+def test_every_bad_flag_is_one_line_naming_it_before_any_work(tmp_path, capsys, kind, flags, named):
+    import time
+
+    t0 = time.monotonic()
+    assert run_cli(["atlas", kind, "--out", str(tmp_path / "a"), "--no-progress", *flags]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and named in err[0], err
+    assert "Traceback" not in err[0]
+    assert not (tmp_path / "a").exists()
+    assert time.monotonic() - t0 < scaled(30)  # no time limit of a client waited out
+
+
+@pytest.mark.parametrize("out", ["/proc/mechviz-atlas", "a" * 300])
+def test_an_out_that_cannot_be_made_is_one_line(tmp_path, capsys, monkeypatch, out):
+    monkeypatch.chdir(tmp_path)
+    args = ["atlas", "chaos", "--theta1=-1:1:2", "--theta2=-1:1:2", "--duration", "1"]
+    assert run_cli([*args, "--out", out, "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mechviz: error: --out"), err
+
+
+@pytest.mark.parametrize("where", ["create", "write_chunk"])
+def test_a_full_disk_is_one_line(client, tmp_path, capsys, monkeypatch, where):
+    import errno
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "atlas"))
+
+    monkeypatch.setattr(store, where, full)
+    spec = chaos_spec(n=4, chunk=(4, 4), duration=1.0)
+    args = [*_cli_args(spec, tmp_path / "atlas"), "--scheduler", client.scheduler.address]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "No space left on device" in err[-1] and err[-1].startswith("mechviz: error: --out")
+    assert not any("Traceback" in line for line in err)

@@ -126,6 +126,11 @@ GATED = {
     ("video",): (["{missing}.viser"], "missing"),
     ("bench",): (["--endurance", "5"], None),
     ("view",): (["--host", "999.999.999.999"], "--host"),
+    # a file as --out: refused once every other flag has been checked, before any work
+    ("atlas",): (
+        ["chaos", "--out", "{file}", "--theta1=-1:1:2", "--theta2=-1:1:2", "--duration", "1"],
+        "is not a folder",
+    ),
 }
 
 
@@ -351,3 +356,53 @@ def test_view_answers_a_bad_host_at_once_as_a_process(host):
     )
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "--host" in out.stderr
     assert "compiling" not in out.stdout  # refused before anything compiles
+
+
+def _viser(seconds: float) -> bytes:
+    """A minimal recording in viser's format (as :mod:`recordings` reads it)."""
+    import msgspec
+    import zstandard
+
+    payload = msgspec.msgpack.encode({"durationSeconds": seconds, "messages": []})
+    inner = len(payload).to_bytes(8, "little") + payload
+    return len(inner).to_bytes(8, "little") + zstandard.ZstdCompressor().compress(inner)
+
+
+@pytest.mark.parametrize(
+    "manifest, named",
+    [
+        ("{not json", "not JSON"),
+        ('{"fps": 30, "duration": NaN, "title": "t"}', "NaN"),
+        ('{"fps": 1000000000, "duration": 1, "title": "t"}', "frame rate"),
+        ('{"fps": 30, "duration": 1}', "lacks title"),
+        ('{"fps": 30, "duration": 1, "title": "a\\u0000b\\u001b[31m"}', "control character"),
+        ("[1]", "not a JSON object"),
+    ],
+)
+def test_video_refuses_a_broken_manifest_beside_the_recording_in_one_line(
+    tmp_path, manifest, named
+):
+    (tmp_path / "r.viser").write_bytes(_viser(2.0))
+    (tmp_path / "r.json").write_text(manifest)
+    code, lines = run_main(["video", str(tmp_path / "r.viser"), "--out", str(tmp_path / "r.mp4")])
+    assert code == 2 and len(lines) == 1, lines
+    assert named in lines[0] and "\x1b" not in lines[0], lines
+    assert not (tmp_path / "r.mp4").exists()
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        {"title": "a\u0000b\u001b[31m"},
+        {"description": "bell\u0007"},
+        {"method": "rk4\u001b[2J"},
+    ],
+)
+def test_every_text_of_a_demo_with_a_control_character_is_refused_naming_its_key(table):
+    from mechviz.viz.record.demo import parse_demo
+
+    with pytest.raises(ValueError) as err:
+        parse_demo({"exhibit": "cyclotron", "duration": 1.0, **table}, name="bad")
+    (key,) = table
+    assert f"{key} holds a control character" in str(err.value)
+    assert "\x1b" not in str(err.value) and "\x00" not in str(err.value)

@@ -118,7 +118,7 @@ CRAFTED = [
     (
         {"durationSeconds": 1.0, "messages": []},
         {"fps": [1], "duration": 1, "title": "x"},
-        "not a playback",
+        "fps must be a whole number",
     ),
     (
         {"durationSeconds": 1.0, "messages": []},

@@ -166,7 +166,7 @@ def test_a_typed_number_is_read_by_one_rule_everywhere():
     for text, value in [("2.5e-2", 0.025), ("1E-2", 0.01), ("\u22121", -1.0), (" 3 ", 3.0)]:
         assert dynamics.parse_number("x", text) == value
         assert panel_number("x", text) == value
-    for text in ["abc", "nan", "inf", "1e-320", "2.5e", ""]:
+    for text in ["abc", "nan", "inf", "1e-320", "2.5e", "", "1_0", "\uff11", "0x10"]:
         with pytest.raises(dynamics.SettingError) as err:
             dynamics.parse_number("Step dt [s]", text)
         assert err.value.field == "Step dt [s]" and str(err.value).startswith("Step dt [s]")
@@ -186,3 +186,16 @@ def test_the_step_control_is_one_value_checked_once():
         with pytest.raises(dynamics.SettingError) as err:
             dynamics.step_control(method, **kw)
         assert err.value.field == field
+
+
+@pytest.mark.parametrize(
+    "flag, text", [("--mass", "1_0"), ("--mass", "\uff11"), ("--samples", "1_0")]
+)
+def test_the_command_line_refuses_underscores_and_digits_beyond_ascii(capsys, flag, text):
+    from mechviz.viz.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "cyclotron", flag, text])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and flag in err[0], err

@@ -115,3 +115,71 @@ def test_sigterm_ends_still_while_chromium_draws(tmp_path):
     proc = start_drawing(args, tmp, 180)
     terminate_and_check(proc, tmp)
     assert not still.exists()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_inside_a_long_atlas_chunk_ends_it_within_two_seconds(tmp_path, signum):
+    """One chunk of about ten minutes (32 x 32 starts and their twins, 30000 s at 0.01 s): the
+    run ends within two seconds of the signal (scaled by the load), its Dask workers gone and
+    nothing left in its temporary folder (no dask-scratch-space)."""
+    pytest.importorskip("distributed")
+    import time
+
+    out = tmp_path / "out"
+    args = ["atlas", "chaos", "--theta1=-3:3:32", "--theta2=-3:3:32", "--duration", "30000"]
+    args += ["--chunk", "32x32", "--workers", "1", "--no-progress", "--out", str(out)]
+    tmp = tmp_path / "tmp"
+    proc = start(args, tmp)
+    try:
+        # at work: a worker process (not the command itself) has spent CPU beyond its start-up
+        wait_until(
+            lambda: any(_cpu(p) > 3.0 for p in descendants(proc.pid)),
+            180,
+            "a worker computing the chunk",
+        )
+        children = descendants(proc.pid)
+        t0 = time.monotonic()
+        if signum == signal.SIGINT:
+            os.killpg(proc.pid, signum)  # as a terminal's Ctrl-C: the whole group
+        else:
+            proc.send_signal(signum)
+        _, err = proc.communicate(timeout=scaled(60))
+        took = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 128 + signum, err[-2000:]
+    assert took < scaled(2.0), f"{took:.2f} s"
+    assert "Traceback" not in err and "--resume" in err, err[-2000:]
+    wait_until(lambda: not alive(children), 10, f"the command's processes to end: {children}")
+    assert [p.name for p in tmp.iterdir()] == []
+    assert not (out / "atlas.zarr").with_name("atlas.zarr.partial").exists()
+
+
+def _cpu(pid: int) -> float:
+    try:
+        return cpu_seconds(pid)
+    except OSError:  # gone meanwhile
+        return 0.0
+
+
+def test_a_finished_atlas_leaves_no_process_and_nothing_in_its_temporary_folder(tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    args = ["atlas", "chaos", "--theta1=-3:3:4", "--theta2=-3:3:4", "--duration", "1"]
+    args += ["--chunk", "2x4", "--workers", "2", "--no-progress", "--out", str(out)]
+    tmp = tmp_path / "tmp"
+    proc = start(args, tmp)
+    seen: dict[int, str] = {}
+
+    def finished() -> bool:
+        seen.update(descendants(proc.pid))
+        return proc.poll() is not None
+
+    wait_until(finished, 180, "the atlas to finish")
+    _, err = proc.communicate()
+    assert proc.returncode == 0, err[-2000:]
+    assert (out / "chaos.png").is_file()
+    wait_until(lambda: not alive(seen), 10, f"the command's processes to end: {seen}")
+    assert [p.name for p in tmp.iterdir()] == []

@@ -41,7 +41,7 @@ from pathlib import Path
 
 from mechviz.dynamics import fileset
 
-from .cli.errors import CliError, command
+from .cli.errors import CliError, command, whole
 from .play_server import GuardedHandler, GuardedServer
 from .printable import printable
 
@@ -72,7 +72,7 @@ def add_command(sub) -> None:
     )
     q.add_argument(
         "--port",
-        type=int,
+        type=whole,
         default=DEFAULT_PLAY_PORT,
         help=f"first port to try, 0 to 65535 (default {DEFAULT_PLAY_PORT}; 0: any free one)",
     )

@@ -38,6 +38,7 @@ from .chromium import find_chromium
 from .encoders import GifWriter, Mp4Writer, gif_delays_ms
 from .overlay import Overlay
 from .player import Player, PlayerError, decode
+from .printable import has_control_characters
 from .recording_edit import page_for_video, recording_of_page
 
 FORMATS = ("mp4", "gif")
@@ -245,12 +246,44 @@ def _is_demo_manifest(data: Any) -> bool:
 
 
 def _manifest_beside(path: Path) -> dict[str, Any] | None:
+    """The demo manifest beside ``path`` (same name, ``.json``), checked; None if there is none.
+    One that is there but broken is refused (``ValueError`` naming it and what is wrong), not
+    passed over: filming the recording without the duration, frame rate and title it was
+    recorded with would be a different video, made without a word."""
     m = path.with_suffix(".json")
-    with contextlib.suppress(OSError, ValueError):
-        data = json.loads(m.read_text())
-        if _is_demo_manifest(data):
-            return data
-    return None
+    if not m.is_file():
+        return None
+    where = f"the manifest beside it ({m.name})"
+
+    def no_constant(word: str):
+        raise ValueError(f"{where} holds {word}, not a number")
+
+    try:
+        data = json.loads(m.read_text(encoding="utf-8"), parse_constant=no_constant)
+    except UnicodeDecodeError:
+        raise ValueError(f"{where} is not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{where} is not JSON ({exc.msg}, line {exc.lineno})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{where} is not a JSON object")
+    missing = [k for k in ("fps", "duration", "title") if k not in data]
+    if missing:
+        raise ValueError(f"{where} lacks {', '.join(missing)}")
+    fps, duration = data["fps"], data["duration"]
+    if not (isinstance(fps, int) and not isinstance(fps, bool)):
+        raise ValueError(f"{where}: fps must be a whole number, got {str(fps)[:40]}")
+    if not (
+        isinstance(duration, int | float)
+        and not isinstance(duration, bool)
+        and math.isfinite(duration)
+        and duration > 0
+    ):
+        raise ValueError(f"{where}: duration must be a positive number, got {str(duration)[:40]}")
+    for key in ("title", "description"):
+        text = data.get(key, "")
+        if not isinstance(text, str) or has_control_characters(text):
+            raise ValueError(f"{where}: {key} must be text without control characters")
+    return data
 
 
 def window(clip: Clip, start: float | None, end: float | None) -> Clip:

@@ -76,15 +76,32 @@ def _quiet_start():
     """While workers start: Ctrl-C, SIGTERM and SIGHUP held, here and in each worker (a mask
     is kept across exec) until the worker's set-up: a signal that comes then neither leaves
     workers half started nor makes one still importing print a traceback, and none is lost:
-    a held signal is handled as this ends (and in a worker as its set-up ends)."""
+    a held signal is handled as this ends (and in a worker as its set-up ends).
+
+    Here the mask alone does not hold them: it is this thread's, and the kernel hands a signal
+    sent to the process to any thread that does not block it (numpy's BLAS threads, started
+    before), whose handler then raises in this thread all the same, in the middle of a worker's
+    start (a worker whose parent stopped writing its start-up data fails reading it, with a
+    traceback). So the handlers are also replaced by ones that only note the signal; the first
+    noted is raised again once the previous handlers are back."""
     if not hasattr(signal, "pthread_sigmask"):  # Windows: no masks, nothing held
         yield
         return
+    noted: list[int] = []
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        previous = {
+            s: signal.signal(s, lambda signum, frame: noted.append(signum)) for s in _HELD_SIGNALS
+        }
     held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        for s, handler in previous.items():
+            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
+        if noted:
+            signal.raise_signal(noted[0])
 
 
 def _end_with_parent(parent: int) -> None:

@@ -90,22 +90,11 @@ def per_cell_cost(n: int, duration: float) -> dict:
 
 
 def distributed_run(spec: AtlasSpec, workers: int) -> dict:
-    """The atlas on a fresh LocalCluster of ``workers`` processes; warmed, then timed."""
-    import logging
+    """The atlas on a fresh LocalCluster of ``workers`` processes (TCP, as the command starts
+    it: its scratch folder its own, its workers gone at the end); warmed, then timed."""
+    from .driver import dask_client, run_atlas
 
-    from distributed import Client, LocalCluster
-
-    from .driver import run_atlas
-
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        protocol="tcp",
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
-    with cluster, Client(cluster) as client, tempfile.TemporaryDirectory() as tmp:
+    with dask_client(workers=workers) as client, tempfile.TemporaryDirectory() as tmp:
         client.wait_for_workers(workers)
         client.run(_warm, spec)
         report = run_atlas(spec, Path(tmp) / "a.zarr", client=client)

@@ -51,6 +51,10 @@ SYSTEM_NAMES = tuple(
     sorted((n for n, s in SYSTEMS.items() if s.sys_id is not None), key=lambda n: n != Hoop.name)
 )
 
+#: The tightest tolerance an accuracy map takes (``simulate``'s ``MIN_COMPARED_TOL``).
+MIN_RTOL = 1e-12
+#: The chaos map's twin offsets allowed (``separation``).
+MIN_SEPARATION, MAX_SEPARATION = 1e-12, 1e-3
 #: Target wall time [s] of one chunk (one task) on one core.
 CHUNK_SECONDS = 1.0
 #: Rough cost [ns] of one compiled step of one member on one core, used only to size chunks
@@ -171,8 +175,11 @@ class AtlasSpec:
             if self.y.name != want:
                 raise ValueError(f"y axis: {self.methods[0]} takes {want}, not {self.y.name}")
             ends = (self.y.start, self.y.stop)
-            if want == "rtol" and not (0 < min(ends) and max(ends) < 1):
-                raise ValueError("rtol: must lie between 0 and 1")
+            if want == "rtol" and not (MIN_RTOL <= min(ends) and max(ends) < 1):
+                # tighter, the error would be measured against a reference run (DOP853 at
+                # 3e-15) no tighter than the run itself, and an adaptive step cannot meet the
+                # tolerance at all below the doubles' resolution
+                raise ValueError(f"rtol: must lie from {MIN_RTOL:g} to below 1, got {min(ends):g}")
         expected = {
             "stability": ("dt", "amplitude"),
             "chaos": CHAOS_SECTIONS.get(self.section, ("theta2", "theta1")),
@@ -185,7 +192,16 @@ class AtlasSpec:
         for name in ("periods", "threshold", "duration", "step", "renormalise", "separation"):
             _v.positive(name, getattr(self, name))
         if self.kind == "chaos" and self.renormalise < self.step:
-            raise ValueError("renormalise: must be at least one step")
+            raise ValueError(
+                f"renormalise: must be at least one --step ({self.step:g} s), got {self.renormalise:g}"
+            )
+        if not MIN_SEPARATION <= self.separation <= MAX_SEPARATION:
+            # a twin offset by more is no neighbour, and by less it is lost in the rounding of
+            # the state (angles of a few radians, resolved to about 1e-15)
+            raise ValueError(
+                f"separation: must lie from {MIN_SEPARATION:g} to {MAX_SEPARATION:g}, "
+                f"got {self.separation:g}"
+            )
         if self.chunk == (0, 0):
             object.__setattr__(self, "chunk", chunk_shape_for(self))
         rows, cols = (int(c) for c in self.chunk)
@@ -273,6 +289,57 @@ def steps_per_cell(spec: AtlasSpec, method: str) -> float:
     # adaptive: about 2 rtol^(-1/8) steps per fastest period, and a reference run beside it
     rtol = min(spec.y.start, spec.y.stop)
     return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / 8.0)
+
+
+def estimated_steps(spec: AtlasSpec) -> float:
+    """The compiled member-steps the whole atlas takes (a float: it may be huge or infinite),
+    reckoned as ``mechviz simulate`` reckons a run (``Simulation.estimated_steps``): a fixed step
+    takes ``span / dt`` steps per cell and row (stability: ``periods`` of the motion's shortest
+    period at the largest amplitude; chaos: ``duration`` for the start and its twin); an adaptive
+    method ``2 rtol^(-1/order)`` steps per shortest period; a map measured against a tight DOP853
+    run (accuracy, where the system has no exact solution) adds that run, once per chunk."""
+    from ..integrators import get_method
+    from ..simulation import REFERENCE_TOL, _steps_per_period
+
+    cells = spec.y.n * spec.x.n
+    if spec.kind == "chaos":
+        return float(len(spec.methods) * cells * 2.0 * (spec.duration / spec.step))
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        period = fastest_period_of(spec)
+        ys = spec.y.values()
+        total = 0.0
+        for name in spec.methods:
+            m = get_method(name)
+            if spec.kind == "stability":
+                total += float(np.sum(spec.periods * period / ys)) * spec.x.n
+            elif m.adaptive:
+                per = sum(_steps_per_period(m, float(r)) for r in ys)
+                total += spec.duration / period * per * spec.x.n
+            else:
+                total += float(np.sum(spec.duration / ys)) * spec.x.n
+        if spec.kind == "accuracy":
+            system = spec.make_system()
+            from .theory import start_states
+
+            amps = np.array([max(abs(spec.x.start), abs(spec.x.stop))])
+            if not system.has_exact(start_states(system, amps)):
+                ref = (
+                    spec.duration / period * _steps_per_period(get_method("dop853"), REFERENCE_TOL)
+                )
+                # each chunk runs it for its own columns: every column once per row of chunks
+                total += ref * spec.x.n * spec.chunk_grid[0] * spec.chunk_grid[1]
+    return float(total) if math.isfinite(total) else math.inf
+
+
+def fastest_period_of(spec: AtlasSpec) -> float:
+    """:func:`.theory.fastest_period`, or NaN where the parameters leave it unrepresentable."""
+    from .theory import fastest_period
+
+    try:
+        with np.errstate(all="ignore"):
+            return float(fastest_period(spec))
+    except (ArithmeticError, ValueError):
+        return math.nan
 
 
 def chunk_shape_for(spec: AtlasSpec) -> tuple[int, int]:

@@ -3,10 +3,16 @@
 Layout: each map variable has dims ``(method, y, x)`` (names from :mod:`.grid`) and Zarr chunks
 equal to the atlas's chunks, so writing one chunk touches only its own files. Beside them, per
 chunk (dims ``(method, chunk_row, chunk_col)``): ``chunk_done`` (1 once its cells are written),
-``chunk_seconds`` (the time its task took) and ``chunk_session`` (a random id of the run that
-computed it). A chunk's cells are written before its ``chunk_done``, so a run killed between the
-two leaves the chunk not done and a resumed run computes it again: a chunk is never taken as done
-with half its cells.
+``chunk_seconds`` (the time its task took), ``chunk_session`` (a random id of the run that
+computed it) and ``chunk_checksum`` (a hash of its cells as written, :func:`checksum`). A chunk's
+cells are written before its flags, so a run killed between the two leaves the chunk not done.
+
+A resumed run trusts no flag alone (:func:`open_for_resume`): a chunk is kept only if it is
+marked done, its cells read back and their hash is the one recorded when they were written. Any
+other chunk with a trace on disk (a file deleted, cut short or overwritten, of its cells or of its
+flags) is named, its files removed and computed again; damaged metadata (a variable's
+``zarr.json``, the coordinates, the run key) is refused as a whole (:class:`DamagedStore`).
+Only one run works on a folder at a time (:func:`locked`).
 
 Every variable and axis has ``units`` and ``long_name`` attributes; a finished store's metadata
 is consolidated (:func:`finish`). The attributes hold the run key (:meth:`AtlasSpec.run_key`),
@@ -18,8 +24,13 @@ what theory says (the linear stability limit per method and amplitude is a varia
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import datetime as _dt
+import errno
+import hashlib
 import json
+import os
 import platform
 import shutil
 import warnings
@@ -33,7 +44,7 @@ from .grid import AtlasSpec
 from .kernels import VARIABLES
 from .theory import linear_limit_dt, mode1_unstable_intervals
 
-BOOKKEEPING = ("chunk_done", "chunk_seconds", "chunk_session")
+BOOKKEEPING = ("chunk_done", "chunk_seconds", "chunk_session", "chunk_checksum")
 UNITS = {"dt": "s", "rtol": "1", "amplitude": None, "theta1": "rad", "theta2": "rad"}
 UNITS |= {"omega1": "rad/s", "omega2": "rad/s"}
 DESCRIPTIONS = {
@@ -56,6 +67,7 @@ VARIABLE_UNITS = {
     "chunk_done": ("1", "chunk written (1) or not (0)"),
     "chunk_seconds": ("s", "time the chunk's task took"),
     "chunk_session": ("1", "id of the run that computed the chunk"),
+    "chunk_checksum": ("1", "hash of the chunk's cells as written (0: none recorded)"),
     "linear_limit_dt": ("s", "largest linearly stable step"),
 }
 AXIS_NAMES = {
@@ -71,6 +83,14 @@ AXIS_NAMES = {
 
 class StoreError(ValueError):
     """The store cannot be used for this run (exists, belongs to another run, unreadable)."""
+
+
+class DamagedStore(StoreError):
+    """The store's metadata is damaged: no chunk of it can be trusted."""
+
+
+class StoreBusy(StoreError):
+    """Another run holds the folder's lock."""
 
 
 def versions() -> dict[str, str]:
@@ -102,6 +122,7 @@ def template(spec: AtlasSpec) -> xr.Dataset:
     data["chunk_done"] = (dims, np.zeros(grid, dtype="i1"))
     data["chunk_seconds"] = (dims, np.full(grid, np.nan))
     data["chunk_session"] = (dims, np.zeros(grid, dtype="i8"))
+    data["chunk_checksum"] = (dims, np.zeros(grid, dtype="i8"))
     system = spec.make_system()
     attrs = {
         "title": f"mechviz atlas: {spec.kind} of the {spec.system}",
@@ -148,14 +169,21 @@ def _encoding(spec: AtlasSpec, ds: xr.Dataset) -> dict:
     return enc
 
 
+def _partial(path: Path) -> Path:
+    return path.with_name(path.name + ".partial")
+
+
 def create(path: str | Path, spec: AtlasSpec) -> None:
     """Write the empty dataset of ``spec`` to a new store at ``path``: written beside it and
     renamed into place, so a store at ``path`` is always whole."""
     path = Path(path)
     if path.exists():
-        raise StoreError(f"--out: {path} exists; pass --resume to continue it, or another --out")
+        raise StoreError(
+            f"--out: {path} exists; pass --resume to continue it, --fresh to start it again, "
+            "or another --out"
+        )
     ds = template(spec)
-    partial = path.with_name(path.name + ".partial")
+    partial = _partial(path)
     shutil.rmtree(partial, ignore_errors=True)
     try:
         with warnings.catch_warnings():  # strings are not yet in the Zarr v3 specification
@@ -167,24 +195,215 @@ def create(path: str | Path, spec: AtlasSpec) -> None:
         raise
 
 
-def open_for_resume(path: str | Path, spec: AtlasSpec) -> np.ndarray:
-    """Check that the store at ``path`` is the same run as ``spec``; returns its ``chunk_done``."""
+def has_partial(path: str | Path) -> bool:
+    """A store at ``path`` was being created when its run ended (only the copy beside it)."""
+    return _partial(Path(path)).exists()
+
+
+def remove(path: str | Path) -> None:
+    """Remove the store at ``path`` (and a copy left half-made beside it)."""
     path = Path(path)
-    if not path.exists():
-        raise StoreError(f"--resume: no atlas at {path}")
+    for p in (path, _partial(path)):
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p)
+        elif p.exists() or p.is_symlink():
+            p.unlink()
+
+
+@contextlib.contextmanager
+def locked(folder: str | Path):
+    """Hold the lock of ``folder`` (the one an atlas store lives in) while inside; raises
+    :class:`StoreBusy` at once if another run holds it (waiting could be for hours). The lock is
+    ``flock`` on the folder itself: it leaves no file behind and goes with the process, however
+    that ends."""
+    import fcntl
+
+    folder = Path(folder)
+    fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
     try:
-        ds = xr.open_zarr(path, consolidated=False)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise
+            raise StoreBusy(
+                f"--out: another mechviz atlas is working in {folder}; wait for it to end, "
+                "or use another --out"
+            ) from None
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def checksum(spec: AtlasSpec, cells: dict) -> int:
+    """A 63-bit hash of a chunk's cells as they are stored (dtype, shape and bytes of each
+    variable): what the chunk's data must read back as for a resumed run to keep it."""
+    h = hashlib.blake2b(digest_size=8)
+    for name, (dtype, _fill) in VARIABLES[spec.kind].items():
+        a = np.ascontiguousarray(np.asarray(cells[name], dtype=dtype))
+        h.update(f"{name}:{a.dtype.str}:{a.shape}:".encode())
+        h.update(a.tobytes())
+    return int.from_bytes(h.digest(), "little") >> 1 or 1  # 0 means "none recorded"
+
+
+@dataclasses.dataclass
+class Resumed:
+    """What :func:`open_for_resume` found: the chunks kept (verified) and those that were
+    damaged, each with what was wrong."""
+
+    done: np.ndarray
+    damaged: dict[tuple[int, int, int], str]
+    restarted: bool = False  # the store was never completed: started afresh
+
+    def describe_damage(self, limit: int = 8) -> str:
+        items = [f"{'/'.join(map(str, c))} ({why})" for c, why in sorted(self.damaged.items())]
+        more = f" and {len(items) - limit} more" if len(items) > limit else ""
+        return ", ".join(items[:limit]) + more
+
+
+def _damaged(path: Path, what: str) -> DamagedStore:
+    return DamagedStore(
+        f"--resume: {path} is damaged ({what}); start it again with --fresh, or use another --out"
+    )
+
+
+def _open_checked(path: Path, spec: AtlasSpec):
+    """The store's Zarr group, its metadata checked against ``spec``'s (:class:`DamagedStore`
+    or :class:`StoreError` naming what is wrong)."""
+    import zarr
+
+    try:
+        # each array's own metadata, not the consolidated copy a finished store also holds: a
+        # deleted or damaged array file must be found here, not when xarray opens the store
+        group = zarr.open_group(path, mode="r", use_consolidated=False)
+        attrs = dict(group.attrs)
     except Exception as exc:
-        raise StoreError(
-            f"--resume: {path} is not an atlas store ({exc.__class__.__name__})"
-        ) from None
-    key = ds.attrs.get("run_key")
+        raise _damaged(path, f"its zarr.json cannot be read: {exc.__class__.__name__}") from None
+    key = attrs.get("run_key")
     if key != spec.run_key():
         raise StoreError(
             f"--resume: {path} holds another run (key {key}, this one {spec.run_key()}); "
             "same flags and code, or another --out"
         )
-    return ds["chunk_done"].values.astype(bool)
+    ds = template(spec)
+    enc = _encoding(spec, ds)
+    for name, var in ds.variables.items():
+        try:
+            arr = group[name]
+            meta = (arr.shape, arr.dtype == var.dtype or var.dtype == object)
+        except Exception as exc:
+            raise _damaged(path, f"{name}/zarr.json: {exc.__class__.__name__}") from None
+        if meta != (var.shape, True):
+            raise _damaged(path, f"{name}: shape or type is not this run's")
+        want = enc.get(name, {}).get("chunks")
+        if want is not None and tuple(arr.chunks) != tuple(want):
+            raise _damaged(path, f"{name}: chunks are not this run's")
+        if name in ds.coords or name == "linear_limit_dt":
+            try:
+                values = arr[...]
+            except Exception as exc:
+                raise _damaged(path, f"{name}: {exc.__class__.__name__}") from None
+            same = (
+                list(map(str, values)) == list(map(str, var.values))
+                if var.dtype == object
+                else np.array_equal(values, var.values, equal_nan=True)
+            )
+            if not same:
+                raise _damaged(path, f"{name}: values are not this run's")
+    return group
+
+
+def open_for_resume(path: str | Path, spec: AtlasSpec, *, repair: bool = True) -> Resumed:
+    """Check that the store at ``path`` is the same run as ``spec`` and verify every chunk it
+    marks done (module docstring); with ``repair``, remove the files of the damaged chunks so
+    they are computed again from scratch. A store that was never completed (a run killed while
+    it created the store left only the copy beside it) is created afresh."""
+    path = Path(path)
+    if not path.exists():
+        if repair and _partial(path).exists():
+            create(path, spec)
+            return Resumed(np.zeros(spec.chunk_grid, dtype=bool), {}, restarted=True)
+        raise StoreError(f"--resume: no atlas at {path}")
+    group = _open_checked(path, spec)
+    done = np.zeros(spec.chunk_grid, dtype=bool)
+    damaged: dict[tuple[int, int, int], str] = {}
+    names = list(VARIABLES[spec.kind])
+    # each array read whole when it can be (a store of many chunks is checked in seconds, not
+    # one read per chunk); one with a damaged chunk is read chunk by chunk
+    arrays = {n: group[n] for n in (*names, *BOOKKEEPING)}  # each opened once
+    whole = {n: _read_whole(arrays[n]) for n in (*names, "chunk_done", "chunk_checksum")}
+    for c in spec.chunks():
+        why = _check_chunk(path, arrays, spec, c, names, whole)
+        if why is None:
+            done[c] = True
+        elif why:
+            damaged[c] = why
+    if repair:
+        for c in damaged:
+            _remove_chunk(path, arrays, c, names)
+    return Resumed(done, damaged)
+
+
+def _chunk_file(path: Path, arr, name: str, index) -> Path:
+    return path / name / arr.metadata.encode_chunk_key(tuple(index))
+
+
+def _read_whole(arr) -> np.ndarray | None:
+    try:
+        return arr[...]
+    except Exception:  # a chunk that does not decode: read chunk by chunk instead
+        return None
+
+
+def _block(group, name: str, c, spec: AtlasSpec, whole: dict) -> np.ndarray:
+    """Chunk ``c`` of variable ``name``: from the array read whole, or read alone."""
+    a = whole.get(name)
+    if a is None:
+        return group[name].get_block_selection(c)
+    if name in BOOKKEEPING:
+        return a[c[0] : c[0] + 1, c[1] : c[1] + 1, c[2] : c[2] + 1]
+    k, rows, cols = spec.cells(c)
+    return a[k : k + 1, rows, cols]
+
+
+def _check_chunk(path: Path, group: dict, spec: AtlasSpec, c, names, whole: dict) -> str | None:
+    """None if chunk ``c`` is done and verified; "" if it was never written; else what is
+    wrong with it."""
+    try:
+        flag = int(_block(group, "chunk_done", c, spec, whole).ravel()[0])
+    except Exception:
+        return "done flag unreadable"
+    try:
+        recorded = int(_block(group, "chunk_checksum", c, spec, whole).ravel()[0])
+    except Exception:
+        return "checksum unreadable"
+    if flag != 1:
+        traces = [n for n in names if _chunk_file(path, group[n], n, c).exists()]
+        if flag != 0:
+            return "done flag damaged"
+        if recorded != 0:
+            return "done flag missing"
+        return f"{traces[0]} written but not marked done" if traces else ""
+    if recorded == 0:
+        return "no checksum recorded"
+    cells = {}
+    for n in names:
+        if not _chunk_file(path, group[n], n, c).exists():
+            return f"{n} missing"
+        try:
+            cells[n] = _block(group, n, c, spec, whole)[0]
+        except Exception:
+            return f"{n} unreadable"
+    if checksum(spec, cells) != recorded:
+        return "checksum differs"
+    return None
+
+
+def _remove_chunk(path: Path, group, c, names) -> None:
+    for n in (*names, *BOOKKEEPING):
+        f = _chunk_file(path, group[n], n, c)
+        if f.is_file() or f.is_symlink():
+            f.unlink()
 
 
 def done_chunks(path: str | Path) -> np.ndarray:
@@ -194,12 +413,13 @@ def done_chunks(path: str | Path) -> np.ndarray:
 
 
 def write_chunk(path: str | Path, spec: AtlasSpec, index, cells: dict, session: int) -> None:
-    """Write chunk ``index``'s cells, then mark it done (module docstring)."""
+    """Write chunk ``index``'s cells, then its flags and checksum (module docstring)."""
     k, rows, cols = spec.cells(index)
     y, x = spec.y.name, spec.x.name
     region = {"method": slice(k, k + 1), y: rows, x: cols}
     data = {
-        name: (("method", y, x), np.asarray(cells[name])[None]) for name in VARIABLES[spec.kind]
+        name: (("method", y, x), np.asarray(cells[name], dtype=dtype)[None])
+        for name, (dtype, _fill) in VARIABLES[spec.kind].items()
     }
     xr.Dataset(data).to_zarr(path, region=region, consolidated=False)
     m, by, bx = index
@@ -207,6 +427,7 @@ def write_chunk(path: str | Path, spec: AtlasSpec, index, cells: dict, session: 
         "chunk_done": np.ones((1, 1, 1), dtype="i1"),
         "chunk_seconds": np.full((1, 1, 1), float(cells["seconds"])),
         "chunk_session": np.full((1, 1, 1), session, dtype="i8"),
+        "chunk_checksum": np.full((1, 1, 1), checksum(spec, cells), dtype="i8"),
     }
     dims = ("method", "chunk_row", "chunk_col")
     region = {

@@ -64,6 +64,9 @@ def main(argv: list[str] | None = None) -> int:
 
                 parser = build_parser()
                 args = parser.parse_args(argv)
+                # a command line of its own (not a caller's list): a command may end the
+                # process itself once its work is cleaned up
+                args.whole_process = argv is None
                 if args.command not in _LIGHT_COMMANDS:
                     importlib.import_module("trimesh")  # viser's and the exhibits' meshes
             finally:

@@ -44,7 +44,7 @@ from mechviz.viz.interrupts import ctrl_c_within_a_second
 
 from ..progress import add_option as add_progress_option
 from ..progress import progress_bar
-from .errors import CliError, number
+from .errors import CliError, number, whole
 
 #: The most samples ``simulate --samples`` keeps.
 MAX_SAMPLES = 100_000
@@ -375,7 +375,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         )
         p.add_argument(
             "--samples",
-            type=int,
+            type=whole,
             default=201,
             help=f"samples along the run for the energy error (2 to {MAX_SAMPLES}; default 201)",
         )

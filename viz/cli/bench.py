@@ -28,6 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from .errors import whole
+
 MAX_ENDURANCE_S = 86_400.0
 MAX_CLIENTS = 16  # each is a headless Chromium: a few hundred MB and a share of the cores
 
@@ -286,7 +288,7 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--clients",
-        type=int,
+        type=whole,
         default=3,
         help=f"browser clients for --endurance, 1 to {MAX_CLIENTS} (default 3)",
     )

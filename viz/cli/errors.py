@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 from mechviz.dynamics.params import SettingError, parse_number
 
@@ -26,3 +27,12 @@ def number(text: str) -> float:
         return parse_number("value", text)
     except SettingError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("value ")) from None
+
+
+def whole(text: str) -> int:
+    """argparse type: a whole number by the same rule (ASCII digits, an optional sign, no
+    underscores: ``int()`` alone takes ``1_0`` and full-width digits)."""
+    t = str(text).strip()
+    if not re.fullmatch(r"[+-]?[0-9]+", t, flags=re.ASCII):
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}")
+    return int(t)

@@ -17,7 +17,7 @@ from ..play import add_command as _add_play
 from ..printable import printable
 from ..progress import ProgressBar
 from ..progress import add_option as add_progress_option
-from .errors import CliError, command, number
+from .errors import CliError, command, number, whole
 
 ABOUT = """\
 record a built-in demo headless: .viser, .html, .csv, .png, .json
@@ -36,7 +36,7 @@ def add_commands(sub) -> None:
     p.add_argument("--all", action="store_true", help="record every built-in demo")
     p.add_argument("--out", metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--duration", type=number, metavar="S", help="seconds of playback")
-    p.add_argument("--fps", type=int, metavar="N", help="frames per second of playback")
+    p.add_argument("--fps", type=whole, metavar="N", help="frames per second of playback")
     p.add_argument(
         "--method", metavar="NAME", help="integration method (mechviz simulate --list-methods)"
     )

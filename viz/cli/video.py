@@ -23,7 +23,7 @@ from .. import framing, video
 from ..interrupts import exit_status
 from ..printable import printable
 from ..video_input import read_clip
-from .errors import CliError, command, number
+from .errors import CliError, command, number, whole
 
 # ValueError prefixes from mechviz.viz.video and mechviz.viz.framing -> the flag that set the value
 FLAGS = {
@@ -134,7 +134,7 @@ def add_commands(sub) -> None:
     )
     p.add_argument(
         "--fps",
-        type=int,
+        type=whole,
         metavar="N",
         help=f"frames per second, up to {video.MAX_FPS} (default: the demo's, else 30)",
     )

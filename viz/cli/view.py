@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .errors import command
+from .errors import command, whole
 
 ABOUT = """\
 serve the live 3-D viewer of the three systems
@@ -22,7 +22,7 @@ def add_commands(sub) -> None:
         "interface, exposed to the network)",
     )
     p.add_argument(
-        "--port", type=int, default=8080, help="port (default 8080; the next free one if busy)"
+        "--port", type=whole, default=8080, help="port (default 8080; the next free one if busy)"
     )
     p.add_argument(
         "--warm",

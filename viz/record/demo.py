@@ -30,7 +30,7 @@ from mechviz.dynamics import hoop
 from mechviz.dynamics.assets import asset
 
 from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
-from ..printable import printable
+from ..printable import has_control_characters, printable
 from .scales import CONFIG_KEYS, check_scales, in_demo_terms
 
 DEMO_DIR = asset("demos")
@@ -239,6 +239,7 @@ def parse_demo(raw: dict[str, Any], *, name: str, source: str | None = None) -> 
     where = f"{name}.toml" if source is None else Path(source).name
     if "name" in raw or "source" in raw:
         raise ValueError(f"{where}: unknown key {'name' if 'name' in raw else 'source'!r}")
+    _check_texts(raw, where)
     params = raw.get("parameters")
     for key, value in params.items() if isinstance(params, dict) else ():
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -259,6 +260,24 @@ def parse_demo(raw: dict[str, Any], *, name: str, source: str | None = None) -> 
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
     return msgspec.structs.replace(demo, events=tuple(sorted(demo.events, key=lambda e: e.t)))
+
+
+def _check_texts(value: Any, where: str, at: str = "") -> None:
+    """Refuse (``ValueError`` naming the key) any text of the demo, keys included, that holds a
+    control character (line breaks and tabs aside): titles, captions and event texts reach the
+    terminal, the page and the video's frames, where an escape sequence or a NUL does harm."""
+    if isinstance(value, str):
+        if has_control_characters(value):
+            raise ValueError(f"{where}: {at or 'a text'} holds a control character")
+    elif isinstance(value, dict):
+        for key, item in value.items():
+            name = f"{at}.{key}" if at else str(key)
+            if has_control_characters(str(key)):
+                raise ValueError(f"{where}: a key holds a control character ({key!r})")
+            _check_texts(item, where, name)
+    elif isinstance(value, list | tuple):
+        for i, item in enumerate(value):
+            _check_texts(item, where, f"{at}[{i}]")
 
 
 def _schema_message(text: str) -> str:
