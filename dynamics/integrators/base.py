@@ -6,8 +6,10 @@ Implementers add a :class:`Method` to :data:`METHODS`:
 - ``backend="numba"``, ``adaptive=False``: ``kernel`` names the step in
   :mod:`mechviz.dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
   ``run_fixed`` with it.
-- ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``), or with
-  ``kernel="taylor"`` Taylor's method (:mod:`mechviz.dynamics.integrators.taylor`).
+- ``backend="numba"``, ``adaptive=True``: with ``pair`` naming an embedded Runge-Kutta pair (a
+  module of this package defining its tableau, listed in :data:`.rk.PAIRS`), the one compiled
+  runner :func:`.rk.run_rk`; with ``kernel="taylor"`` Taylor's method
+  (:mod:`mechviz.dynamics.integrators.taylor`).
 - ``backend="scipy"``: ``scipy_name`` is a ``solve_ivp`` method or ``"odeint"``; the driver calls
   :func:`mechviz.dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
 - ``backend="exact"``: the system's closed-form flow.
@@ -74,6 +76,8 @@ class Method:
     stability: str = ""
     variable_order: bool = False
     counts: str = "right-hand-side evaluations"
+    #: The embedded Runge-Kutta pair this method runs (:mod:`.rk`), by its module's name.
+    pair: str | None = None
 
     def applies_to(self, system: Any) -> bool:
         """Whether this method can advance ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its
@@ -253,6 +257,7 @@ METHODS: dict[str, Method] = {
             "numba",
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
+            pair="dop853",
         ),
         Method(
             "taylor",
