@@ -130,8 +130,29 @@ class Pair:
         )
 
 
+#: Digits carried while exact coefficients are combined and rounded to float64.
+EXACT_DIGITS = 60
+
+
+def exact(v):
+    """An exact coefficient as an ``mpmath.mpf`` of :data:`EXACT_DIGITS` digits: ``"p/q"`` (or an
+    integer or a decimal string), or a pair ``(r, s)`` of those meaning ``r + s sqrt(6)``."""
+    import mpmath  # deferred: only the exact tables need it
+
+    def one(x: str):
+        num, _, den = str(x).partition("/")
+        return mpmath.mpf(num) / (mpmath.mpf(den) if den else 1)
+
+    with mpmath.workdps(EXACT_DIGITS):
+        if isinstance(v, tuple):
+            r, s = v
+            return one(r) + one(s) * mpmath.sqrt(6)
+        return one(v)
+
+
 def pair_from_exact(
     name: str,
+    *,
     order: int,
     error_order: int,
     dense_order: int,
@@ -140,32 +161,38 @@ def pair_from_exact(
     b: dict,
     b_hat: dict,
     interpolant: dict,
-    n_all: int,
-    value=float,
     source: str = "",
 ) -> Pair:
-    """A :class:`Pair` from exact coefficients keyed by 0-based stage (``a[(i, j)]``, ``b[j]``,
-    ``b_hat[j]``, ``interpolant[j]`` the coefficients of ``x^1, x^2, ...`` in ``b_j(x)``),
-    each turned into the nearest float64 by ``value``. ``E = b - b_hat`` is formed exactly
-    before rounding; ``c`` is the row sums of ``A``, exactly too."""
-    A = np.zeros((n_all, n_all))
-    rows: dict[int, list] = {}
-    for (i, j), v in a.items():
-        A[i, j] = value(v)
-        rows.setdefault(i, []).append(v)
-    c = np.array([value(sum(rows[i][1:], rows[i][0])) if i in rows else 0.0 for i in range(n_all)])
-    bb = np.array([value(b[j]) if j in b else 0.0 for j in range(n_stages)])
-    E = np.zeros((1, n_stages + 1))
-    for j in set(b) | set(b_hat):
-        if j in b and j in b_hat:
-            E[0, j] = value(b[j] - b_hat[j])
-        else:
-            E[0, j] = value(b[j]) if j in b else -value(b_hat[j])
-    power = max(len(v) for v in interpolant.values())
-    P = np.zeros((power, n_all))
-    for j, coefs in interpolant.items():
-        for k, v in enumerate(coefs):
-            P[k, j] = value(v)
+    """A :class:`Pair` from exact coefficients keyed by 0-based stage: ``a[(i, j)]`` for every
+    stage but the step's end (whose row is ``b``), ``b[j]``, ``b_hat[j]`` (the embedded
+    solution's weights, which may use the step's end, stage ``n_stages``) and
+    ``interpolant[j]`` the coefficients of ``x^1, x^2, ...`` in ``b_j(x)``; absent entries are 0.
+    Values as :func:`exact` reads them. ``E = b - b_hat`` and ``c`` (the row sums of ``A``) are
+    formed exactly; every number is then rounded once to float64."""
+    import mpmath
+
+    with mpmath.workdps(EXACT_DIGITS):
+        ex_a = {k: exact(v) for k, v in a.items()}
+        ex_b = {j: exact(v) for j, v in b.items()}
+        for j, v in ex_b.items():
+            ex_a[(n_stages, j)] = v
+        n_all = 1 + max(max(i for i, _ in ex_a), max(interpolant))
+        A = np.zeros((n_all, n_all))
+        c = np.zeros(n_all)
+        sums = [mpmath.mpf(0)] * n_all
+        for (i, j), v in ex_a.items():
+            A[i, j] = float(v)
+            sums[i] += v
+        c[:] = [float(x) for x in sums]
+        E = np.zeros((1, n_stages + 1))
+        for j in set(b) | set(b_hat):
+            E[0, j] = float(ex_b.get(j, 0) - (exact(b_hat[j]) if j in b_hat else 0))
+        power = max(len(v) for v in interpolant.values())
+        P = np.zeros((power, n_all))
+        for j, coefs in interpolant.items():
+            for k, v in enumerate(coefs):
+                P[k, j] = float(exact(v))
+    bb = A[n_stages, :n_stages].copy()
     return Pair(
         name, order, error_order, dense_order, n_stages, A, bb, c, E, P, "power", source=source
     )
