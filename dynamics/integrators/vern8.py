@@ -11,7 +11,8 @@ float64 once, here (:func:`.rk.pair_from_exact`). Checked by the order condition
 
 The source gives the interpolant's extra stages and coefficients of this pair as 40-digit
 decimals, not as fractions: they are kept here as those decimals (fractions of powers of ten),
-so its dense output meets its order conditions to about 1e-40, not exactly.
+so its dense output meets its order conditions to round-off in double precision (about
+1e-12 at worst), not exactly.
 
 The derivative at the step's end, which the next step starts from, is evaluated as stage 13 here
 (Verner's first interpolation stage), so a step costs 13 evaluations; a step that a requested

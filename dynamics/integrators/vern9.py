@@ -11,7 +11,7 @@ the exact-arithmetic constructors ``Vern9Tableau``, ``Vern9ExtraStages`` and
 Some coefficients of this pair involve sqrt(6): they are written ``(r, s)`` for
 ``r + s sqrt(6)`` and rounded from 60 digits. The source gives the interpolant's extra
 stages and coefficients as 40-digit decimals: they are kept as those decimals, so the dense
-output meets its order conditions to about 1e-40, not exactly.
+output meets its order conditions to round-off in double precision, not exactly.
 
 The derivative at the step's end, which the next step starts from, is evaluated as stage 16 here
 (Verner's first interpolation stage), so a step costs 16 evaluations; a step that a requested
