@@ -53,19 +53,6 @@ SYSTEM_NAMES = tuple(
 
 #: Target wall time [s] of one chunk (one task) on one core.
 CHUNK_SECONDS = 1.0
-#: Rough cost [ns] of one compiled step of one member on one core, used only to size chunks
-#: (the atlas benchmark measures the real figures). Unknown methods count as the costliest.
-STEP_COST_NS = {
-    "euler": 50.0,
-    "boris": 50.0,
-    "verlet": 80.0,
-    "rk4": 100.0,
-    "splitting": 150.0,
-    "midpoint": 300.0,
-    "yoshida4": 400.0,
-    "dop853": 2000.0,
-    "taylor": 2000.0,
-}
 
 
 @dataclass(frozen=True)
@@ -270,17 +257,18 @@ def steps_per_cell(spec: AtlasSpec, method: str) -> float:
         finest = min(spec.y.start, spec.y.stop)
         span = spec.periods * fastest_period(spec) if spec.kind == "stability" else spec.duration
         return span / finest
-    # adaptive: about 2 rtol^(-1/8) steps per fastest period, and a reference run beside it
+    # adaptive: about 2 rtol^(-1/p) steps per fastest period (p the method's order, at most 8:
+    # Taylor's rule picks higher orders only where they pay), and a reference run beside it
     rtol = min(spec.y.start, spec.y.stop)
-    return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / 8.0)
+    order = min(get_method(method).order, 8)
+    return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / order)
 
 
 def chunk_shape_for(spec: AtlasSpec) -> tuple[int, int]:
     """(rows, columns) worth about :data:`CHUNK_SECONDS` on one core: whole rows of the grid when
     they fit (a chunk of a stability or accuracy map shares one step size per row), else part of
     one row."""
-    costliest = max(STEP_COST_NS.values())
-    worst = max(STEP_COST_NS.get(m, costliest) * steps_per_cell(spec, m) for m in spec.methods)
+    worst = max(get_method(m).step_cost_ns * steps_per_cell(spec, m) for m in spec.methods)
     cells = max(1, int(CHUNK_SECONDS * 1e9 / max(worst, 1.0)))
     if cells >= spec.x.n:
         return (max(1, min(spec.y.n, cells // spec.x.n)), spec.x.n)

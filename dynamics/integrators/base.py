@@ -21,10 +21,12 @@ step size and the time) when a state turns non-finite or an implicit step fails 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from . import kernels as _k
+from . import limits as _lim
 
 Structure = Literal["symplectic", "symmetric", "volume-preserving", "norm-preserving"]
 
@@ -78,6 +80,22 @@ class Method:
     counts: str = "right-hand-side evaluations"
     #: The embedded Runge-Kutta pair this method runs (:mod:`.rk`), by its module's name.
     pair: str | None = None
+    #: On the test oscillation (:mod:`mechviz.dynamics.stability`): the amplification factor of
+    #: one step as a function of ``x = omega h``, the largest stable ``x`` (``None``: any step;
+    #: 0.0: none) and why, in words. A method without ``limit_reason`` (an adaptive one, whose
+    #: step control sets ``h``) has no fixed-step limit.
+    amplification: Callable[[float], float] | None = None
+    limit_omega_dt: float | None = None
+    limit_reason: str = ""
+    #: Rough cost [ns] of one compiled step of one member on one core: sizes the atlas's chunks
+    #: (its benchmark measures the real figures).
+    step_cost_ns: float = 2000.0
+    #: The benchmark's lists this method is in: ``"sweep"`` (our adaptive methods in the
+    #: work-precision sweeps), ``"scipy"`` (the scipy side of the speed ratios), ``"fastest"``
+    #: (ours against the peers in their fastest forms).
+    bench: tuple[str, ...] = ()
+    #: Its colour in the benchmark's charts (a matplotlib colour).
+    chart_color: str | None = None
 
     def applies_to(self, system: Any) -> bool:
         """Whether this method can advance ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its
@@ -156,6 +174,10 @@ METHODS: dict[str, Method] = {
             kernel="exact",
             stability="exact for any step",
             counts="nothing (the closed form costs no evaluation)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="the exact flow: stable at any step",
+            chart_color="tab:gray",
         ),
         Method(
             "euler",
@@ -168,6 +190,11 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="euler",
             stability="on an oscillation |R(i w h)|^2 = 1 + (w h)^2 > 1: unstable at every step",
+            amplification=_lim.euler,
+            limit_omega_dt=0.0,
+            limit_reason="explicit Euler amplifies every oscillation by sqrt(1 + (omega dt)^2) per step",
+            step_cost_ns=50.0,
+            chart_color="tab:brown",
         ),
         Method(
             "rk4",
@@ -180,6 +207,11 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="rk4",
             stability="oscillation bounded (slowly damped) for w h < 2 sqrt(2)",
+            amplification=_lim.rk4,
+            limit_omega_dt=_lim.SQRT8,
+            limit_reason="RK4 is stable on an oscillation for omega dt <= 2 sqrt 2",
+            step_cost_ns=100.0,
+            chart_color="tab:blue",
         ),
         Method(
             "midpoint",
@@ -193,6 +225,14 @@ METHODS: dict[str, Method] = {
             kernel="midpoint",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
             counts="right-hand-side evaluations (one per fixed-point iteration)",
+            amplification=_lim.unit,
+            limit_omega_dt=_lim.MIDPOINT_SOLVE_LIMIT,
+            limit_reason=(
+                "the implicit midpoint rule's fixed-point solve reaches 1e-14 in 100 sweeps only "
+                "for omega dt < 1.449"
+            ),
+            step_cost_ns=300.0,
+            chart_color="tab:purple",
         ),
         Method(
             "boris",
@@ -206,6 +246,11 @@ METHODS: dict[str, Method] = {
             kernel="symmetric2",
             stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
             counts="force evaluations (one per step)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="Boris rotates the velocity exactly: stable at any step",
+            step_cost_ns=50.0,
+            chart_color="tab:green",
         ),
         Method(
             "verlet",
@@ -219,6 +264,11 @@ METHODS: dict[str, Method] = {
             kernel="symmetric2",
             stability="linear stability w_max h < 2",
             counts="fixed-point sweeps (each a 2x2 solve and a force)",
+            amplification=_lim.verlet,
+            limit_omega_dt=2.0,
+            limit_reason="Stormer-Verlet is stable for omega_max dt < 2",
+            step_cost_ns=80.0,
+            chart_color="tab:green",
         ),
         Method(
             "splitting",
@@ -232,6 +282,11 @@ METHODS: dict[str, Method] = {
             kernel="symmetric2",
             stability="keeps |L| to round-off at any step",
             counts="exact rotations (five per step)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="exact rotations keep |L|: stable at any step",
+            step_cost_ns=150.0,
+            chart_color="tab:green",
         ),
         Method(
             "yoshida4",
@@ -245,6 +300,11 @@ METHODS: dict[str, Method] = {
             kernel="yoshida4",
             stability="composition of Boris / Stormer-Verlet / splitting",
             counts="its base steps' units (forces, fixed-point sweeps or rotations)",
+            amplification=_lim.yoshida4,
+            limit_omega_dt=_lim.YOSHIDA4_LIMIT,
+            limit_reason="the Yoshida composition of Verlet steps is stable for omega dt < 1.5734",
+            step_cost_ns=400.0,
+            chart_color="tab:olive",
         ),
         Method(
             "dop853",
@@ -258,6 +318,9 @@ METHODS: dict[str, Method] = {
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
             pair="dop853",
+            step_cost_ns=2000.0,
+            bench=("sweep", "fastest"),
+            chart_color="tab:orange",
         ),
         Method(
             "vern6",
@@ -271,6 +334,9 @@ METHODS: dict[str, Method] = {
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
             pair="vern6",
+            step_cost_ns=1500.0,
+            bench=("sweep",),
+            chart_color="goldenrod",
         ),
         Method(
             "vern7",
@@ -284,6 +350,9 @@ METHODS: dict[str, Method] = {
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
             pair="vern7",
+            step_cost_ns=1700.0,
+            bench=("sweep",),
+            chart_color="sienna",
         ),
         Method(
             "vern8",
@@ -297,6 +366,9 @@ METHODS: dict[str, Method] = {
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
             pair="vern8",
+            step_cost_ns=2200.0,
+            bench=("sweep", "fastest"),
+            chart_color="chocolate",
         ),
         Method(
             "vern9",
@@ -310,6 +382,9 @@ METHODS: dict[str, Method] = {
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
             pair="vern9",
+            step_cost_ns=2700.0,
+            bench=("sweep",),
+            chart_color="peru",
         ),
         Method(
             "taylor",
@@ -324,6 +399,9 @@ METHODS: dict[str, Method] = {
             stability="step from the series' radius of convergence (Jorba and Zou)",
             variable_order=True,
             counts="series expansions (one per step)",
+            step_cost_ns=2000.0,
+            bench=("sweep", "fastest"),
+            chart_color="magenta",
         ),
         Method(
             "scipy-rk45",
@@ -336,6 +414,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="RK45",
             counts="right-hand-side evaluations (scipy's nfev)",
+            bench=("scipy",),
+            chart_color="tab:pink",
         ),
         Method(
             "scipy-dop853",
@@ -348,6 +428,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="DOP853",
             counts="right-hand-side evaluations (scipy's nfev)",
+            bench=("scipy",),
+            chart_color="tab:red",
         ),
         Method(
             "scipy-radau",
@@ -360,6 +442,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="Radau",
             counts="right-hand-side evaluations (scipy's nfev: Jacobians' not included)",
+            bench=("scipy",),
+            chart_color="black",
         ),
         Method(
             "scipy-lsoda",
@@ -373,6 +457,8 @@ METHODS: dict[str, Method] = {
             scipy_name="LSODA",
             variable_order=True,
             counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
+            bench=("scipy",),
+            chart_color="tab:cyan",
         ),
         Method(
             "odeint",
@@ -386,6 +472,8 @@ METHODS: dict[str, Method] = {
             scipy_name="odeint",
             variable_order=True,
             counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
+            bench=("scipy",),
+            chart_color="darkgoldenrod",
         ),
     ]
 }
