@@ -108,8 +108,8 @@ def _tableau_cost(args: argparse.Namespace) -> int:
     print(f"DOP853 per step: generic runner / its own loop (goal <= {GOAL}), side by side:")
     for name, r in result.items():
         print(
-            f"  {name:7s} {r['ns_per_step_generic']:8.1f} / {r['ns_per_step_before']:8.1f} ns "
-            f"= {r['ratio']:.3f} (median of round ratios {r['median_round_ratio']:.3f}; "
+            f"  {name:7s} {r['ns_per_step_generic']:8.1f} / {r['ns_per_step_before']:8.1f} ns, "
+            f"median of round ratios {r['ratio']:.3f} (of medians {r['ratio_of_medians']:.3f}; "
             f"{r['steps']} steps, same counts {r['same_counts']}, largest state difference "
             f"{r['max_state_difference']:.1e})"
         )
