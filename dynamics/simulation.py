@@ -49,7 +49,7 @@ from .integrators.base import (
 )
 from .integrators.rk import RKCarry, load_pair, run_rk
 from .integrators.scipy_ivp import advance_scipy
-from .integrators.taylor import TaylorCarry, order_for, run_taylor
+from .integrators.taylor import TaylorCarry, run_taylor
 from .params import SettingError
 from .spec import checked_state
 from .steps import DEFAULT_RTOL, Fixed, Step, Tolerance, step_control
@@ -388,7 +388,7 @@ class Simulation:
         while self.t < t_target:
             h = float(np.mean(self._H)) if np.all(self._H > 0) else 0.0
             if h <= 0.0:  # no step yet: guess one from the system's time scale
-                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+                h = self.system.time_scale(self.state) / self.method.steps_per_period(self.rtol)
             span = self._chunk_steps * h
             t_next = t_target if not span < t_target - self.t else self.t + span
             land = final and t_next == t_target
@@ -423,7 +423,7 @@ class Simulation:
         while self.t < t_target:
             h = self._taylor_h
             if h is None:
-                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+                h = self.system.time_scale(self.state) / self.method.steps_per_period(self.rtol)
             span = self._chunk_steps * h
             t1 = t_target if not span < t_target - self.t else self.t + span
             start = time.perf_counter()
@@ -466,7 +466,7 @@ class Simulation:
                 own = 0.0
             else:
                 periods = span / self.system.time_scale(self.state)
-                own = max(1.0, periods * _steps_per_period(m, self.rtol))
+                own = max(1.0, periods * m.steps_per_period(self.rtol))
         ref = 0.0 if self._reference is None else self._reference.estimated_steps(t_end)
         return float(own) * members + ref
 
@@ -575,10 +575,3 @@ def reference_run(system: System, state: np.ndarray) -> Simulation:
     return Simulation(
         system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL, state=state, reference=None
     )
-
-
-def _steps_per_period(method: Method, rtol: float) -> float:
-    """Roughly the steps an adaptive method of order p takes per period: ``2 rtol^(-1/p)``
-    (Taylor's method: p the order it chooses for ``rtol``)."""
-    order = order_for(rtol, rtol)[0] if method.kernel == "taylor" else method.order
-    return 2.0 * rtol ** (-1.0 / max(order, 1))

@@ -150,6 +150,24 @@ class Method:
             return f"variable order (at most {self.order})"
         return "no truncation error" if self.backend == "exact" else f"order {self.order}"
 
+    def order_at(self, rtol: float, atol: float, sys_id: int | None = None) -> int | None:
+        """The order a run at these tolerances uses: Taylor's from its rule (for the system
+        ``sys_id``, or over all), ``None`` for a variable order (LSODA's), else ``order``."""
+        if self.kernel == "taylor":
+            from .taylor import order_for  # deferred: the compiled series are not needed
+
+            return (
+                order_for(rtol, atol, sys_id)[0] if sys_id is not None else order_for(rtol, atol)[0]
+            )
+        return None if self.variable_order else self.order
+
+    def steps_per_period(self, rtol: float) -> float:
+        """Roughly the steps an adaptive method of order p takes per period of the fastest
+        motion: ``2 rtol^(-1/p)`` (Taylor's method: p the order it chooses for ``rtol``; a
+        variable order: its highest)."""
+        order = self.order_at(rtol, rtol) or self.order
+        return 2.0 * rtol ** (-1.0 / max(order, 1))
+
     def describe(self) -> str:
         kind = "adaptive" if self.adaptive else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"
