@@ -110,14 +110,9 @@ class Pair:
         return self.P.shape[0] + (3 if self.interpolant == "hairer" else 0)
 
     @property
-    def evaluations_per_step(self) -> int:
-        """Right-hand sides per accepted step (its end's derivative included, which the next
-        step starts from)."""
-        return self.n_stages
-
-    @property
     def dense_evaluations(self) -> int:
-        """Extra right-hand sides for a step that a requested time falls inside."""
+        """Extra right-hand sides for a step that a requested time falls inside (a step costs
+        ``n_stages``: its end's derivative, which the next step starts from, included)."""
         return self.n_all - self.n_stages - 1
 
     def arrays(self) -> tuple:
