@@ -9,7 +9,7 @@ import pytest
 
 from mechviz.bench import dop853_before as before
 from mechviz.dynamics import Cyclotron, Hoop, ReleasedDisk, hoop
-from mechviz.dynamics.integrators import rk
+from mechviz.dynamics.integrators import exact, rk
 
 SYSTEMS = {
     "charge": (Cyclotron(), np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1])),
@@ -108,8 +108,8 @@ def _exact_tableau(name):
     mod = importlib.import_module(f"mechviz.dynamics.integrators.{name}")
     n = mod.PAIR.n_stages
     n_all = mod.PAIR.n_all
-    ex = rk.exact
-    with mpmath.workdps(rk.EXACT_DIGITS):
+    ex = exact.exact
+    with mpmath.workdps(exact.EXACT_DIGITS):
         A = mpmath.zeros(n_all, n_all)
         for (i, j), v in mod.A.items():
             A[i, j] = ex(v)
@@ -129,7 +129,7 @@ def _residuals(A, weights, n_all, max_order, x=1):
     over its trees (``weights`` a list, or a function of the stage giving b_i(x))."""
     import mpmath
 
-    with mpmath.workdps(rk.EXACT_DIGITS):
+    with mpmath.workdps(exact.EXACT_DIGITS):
         g = {}  # tree -> A Phi(tree)
         worst = {}
         for order in range(1, max_order + 1):
@@ -177,7 +177,7 @@ def test_verner_interpolants_meet_the_order_conditions_inside_the_step(name):
     A, b, _, interp, n_all = _exact_tableau(name)
     bound = 1e-45 if name == "vern6" else 1e-11
     for x in (mpmath.mpf(3) / 10, mpmath.mpf(8) / 10):
-        with mpmath.workdps(rk.EXACT_DIGITS):
+        with mpmath.workdps(exact.EXACT_DIGITS):
             w = [
                 mpmath.fsum(c * x ** (k + 1) for k, c in enumerate(interp.get(j, [])))
                 for j in range(n_all)
@@ -187,7 +187,7 @@ def test_verner_interpolants_meet_the_order_conditions_inside_the_step(name):
             assert worst[order] < bound, (float(x), order, worst[order])
         if q + 1 <= 9:
             assert worst[q + 1] > 1e-9
-    with mpmath.workdps(rk.EXACT_DIGITS):
+    with mpmath.workdps(exact.EXACT_DIGITS):
         at_end = [mpmath.fsum(interp.get(j, [0])) for j in range(n_all)]
     assert max(abs(e - bb) for e, bb in zip(at_end, b, strict=True)) < 1e-30
 
@@ -251,19 +251,19 @@ def test_verner_pairs_converge_at_their_order_on_keplers_orbit(name):
     n_s, p = mod.PAIR.n_stages, mod.PAIR.order
     L = np.longdouble
     A, b = np.zeros((n_s, n_s), dtype=L), np.zeros(n_s, dtype=L)
-    with mpmath.workdps(rk.EXACT_DIGITS):
+    with mpmath.workdps(exact.EXACT_DIGITS):
         for (i, j), v in mod.A.items():
             if i < n_s:
-                A[i, j] = L(mpmath.nstr(rk.exact(v), 30))
+                A[i, j] = L(mpmath.nstr(exact.exact(v), 30))
         for j, v in mod.B.items():
-            b[j] = L(mpmath.nstr(rk.exact(v), 30))
+            b[j] = L(mpmath.nstr(exact.exact(v), 30))
 
     def f(y):
         r3 = (y[0] ** 2 + y[1] ** 2) ** L(1.5)
         return np.array([y[2], y[3], -y[0] / r3, -y[1] / r3])
 
     T, y0 = 3, _kepler_exact(0, 0.2)
-    exact = _kepler_exact(T, 0.2)
+    y_exact = _kepler_exact(T, 0.2)
     hs, errs = [], []
     for n in KEPLER_STEPS[name]:
         y, h = y0.copy(), L(T) / n
@@ -273,7 +273,7 @@ def test_verner_pairs_converge_at_their_order_on_keplers_orbit(name):
                 K[s] = f(y + h * (A[s, :s] @ K[:s]))
             y = y + h * (b @ K)
         hs.append(float(h))
-        errs.append(float(np.linalg.norm((y - exact).astype(float))))
+        errs.append(float(np.linalg.norm((y - y_exact).astype(float))))
     assert min(errs) > 1e-17, errs  # above the long double's round-off
     slope = _slope(hs, errs)
     assert p - 0.4 < slope < p + 1.0, (slope, errs)

@@ -6,7 +6,7 @@ J. H. Verner, "Numerically optimal Runge-Kutta pairs with interpolants", Numer. 
 OrdinaryDiffEq.jl (``lib/OrdinaryDiffEqVerner/src/verner_tableaus.jl``, commit b211787f7b18),
 the exact-arithmetic constructors ``Vern7Tableau``, ``Vern7ExtraStages`` and
 ``Vern7InterpolationCoefficients``; they are rounded to
-float64 once, here (:func:`.rk.pair_from_exact`). Checked by the order conditions in
+float64 once, here (:func:`.exact.pair_from_exact`). Checked by the order conditions in
 ``tests/test_rk.py``.
 
 The source gives the interpolant's extra stages and coefficients of this pair as 40-digit
@@ -25,7 +25,7 @@ Stages are numbered from 0 (Verner's stage ``i`` is ``i - 1`` here); the step's 
 10, has the row ``B``.
 """
 
-from .rk import pair_from_exact
+from .exact import pair_from_exact
 
 # fmt: off
 A = {

@@ -5,7 +5,7 @@ J. H. Verner, "Numerically optimal Runge-Kutta pairs with interpolants", Numer. 
 (2010) 383-396, and the coefficient tables on his web page. Transcribed from SciML's
 OrdinaryDiffEq.jl (``lib/OrdinaryDiffEqVerner/src/verner_tableaus.jl``, commit b211787f7b18),
 the exact-arithmetic constructors ``Vern9Tableau``, ``Vern9ExtraStages`` and
-``Vern9InterpolationCoefficients``; they are rounded to float64 once, here (:func:`.rk.pair_from_exact`). Checked by the order conditions in
+``Vern9InterpolationCoefficients``; they are rounded to float64 once, here (:func:`.exact.pair_from_exact`). Checked by the order conditions in
 ``tests/test_rk.py``.
 
 Some coefficients of this pair involve sqrt(6): they are written ``(r, s)`` for
@@ -20,7 +20,7 @@ Stages are numbered from 0 (Verner's stage ``i`` is ``i - 1`` here); the step's 
 16, has the row ``B``.
 """
 
-from .rk import pair_from_exact
+from .exact import pair_from_exact
 
 # fmt: off
 A = {
