@@ -4,32 +4,32 @@ from __future__ import annotations
 
 import io
 
+from mechviz.dynamics.integrators import METHODS
+
 from .sweeps import TARGETS
 
 OURS_STYLE = {"linestyle": "-", "marker": "o"}
-# One colour per method across every chart (11 methods: more than one default cycle).
-COLORS = {
-    "rk4": "tab:blue",
-    "dop853": "tab:orange",
-    "boris": "tab:green",
-    "verlet": "tab:green",
-    "splitting": "tab:green",
-    "yoshida4": "tab:olive",
-    "midpoint": "tab:purple",
-    "euler": "tab:brown",
-    "exact": "tab:gray",
-    "scipy-rk45": "tab:pink",
-    "scipy-dop853": "tab:red",
-    "scipy-radau": "black",
-    "scipy-lsoda": "tab:cyan",
-    "odeint": "darkgoldenrod",
-    "taylor": "magenta",
+# A method's colour is on its description (Method.chart_color); the peers' are here.
+PEER_COLORS = {
     "heyoka": "black",
     "cyrk-dop853": "0.45",
     "cyrk-vern8": "0.6",
     "cyrk-vern7": "0.7",
     "cyrk-py-dop853": "0.8",
 }
+
+
+def color(name: str) -> str | None:
+    """The colour of method or peer ``name`` across every chart; ``KeyError`` for a name that
+    is neither (a result from another version of the benchmark)."""
+    method = METHODS.get(name)
+    if method is not None:
+        return method.chart_color
+    if name not in PEER_COLORS:
+        raise KeyError(f"no chart colour for {name!r}: neither a method nor a peer")
+    return PEER_COLORS[name]
+
+
 SCIPY_STYLE = {"linestyle": "--", "marker": "s"}
 PEER_STYLE = {"linestyle": ":", "marker": "D", "linewidth": 1.6}
 ERROR_CEILING = 1.0  # a relative error above 1 is a failed run: the error axis stops there
@@ -84,7 +84,7 @@ def work_precision(result: dict) -> dict[str, bytes]:
             pts = sorted(pts, key=lambda p: (p["tol"] or 0, -(p["dt"] or 0)), reverse=True)
             err = [max(p["error"], 1e-16) for p in pts]
             n_above = f", {above[m]} above 1 not shown" if m in above else ""
-            kw = dict(label=m + n_above, markersize=3.5, color=COLORS.get(m), **_style(m))
+            kw = dict(label=m + n_above, markersize=3.5, color=color(m), **_style(m))
             axes[0].loglog([p["seconds"] for p in pts], err, **kw)
             if not m.startswith(("heyoka", "cyrk")) and m != "taylor":
                 axes[1].loglog([max(p["nfev"], 1) for p in pts], err, **kw)
@@ -93,7 +93,7 @@ def work_precision(result: dict) -> dict[str, bytes]:
                 [p["seconds"] for p in pts],
                 [p["error"] for p in pts],
                 "x",
-                color=COLORS.get(m),
+                color=color(m),
                 markersize=7,
                 label=f"{m}: timing outlier (flagged, not in the curve)",
             )

@@ -160,7 +160,7 @@ def stability_points(progress=None) -> dict:
             "theory": theory,
             "limit": limit,
             "points": pts,
-            "reason": stability.REASONS[m],
+            "reason": stability.reason(m),
         }
         if progress:
             progress()

@@ -39,12 +39,12 @@ from mechviz.dynamics.simulation import Simulation
 
 from . import fast_peers as fp
 from .peer_equations import heyoka_pars
-from .problems import PROBLEMS, Problem, reference_state
+from .problems import PROBLEMS, Problem, listed, reference_state
 from .untuned import Reference, draw, reference
 
 TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
 GRID = tuple(10.0 ** (-k / 2) for k in range(4, 31))  # 1e-2 ... 1e-15 in half-decades
-OURS = ("taylor", "dop853")
+OURS = listed("fastest")
 FAMILIES = ("ours-kept", "ours-fresh", "heyoka", "cyrk", "odeint")
 PEERS = ("heyoka", "cyrk", "odeint")
 CAP_S = 2.0  # a contender's sweep stops after a solve slower than this

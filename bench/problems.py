@@ -40,6 +40,7 @@ from mechviz.dynamics.cyclotron import CyclotronParams
 from mechviz.dynamics.disk import DiskParams
 from mechviz.dynamics.files import write_json_atomically
 from mechviz.dynamics.hoop import HoopParams
+from mechviz.dynamics.integrators import METHODS
 from mechviz.dynamics.simulation import Simulation
 from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
 
@@ -73,8 +74,14 @@ class Problem:
         return float(np.asarray(self.system.error(np.atleast_2d(y), np.atleast_2d(ref)))[0])
 
 
-ADAPTIVE_OURS = ("dop853", "taylor")
-ADAPTIVE_SCIPY = ("scipy-rk45", "scipy-dop853", "scipy-radau", "scipy-lsoda", "odeint")
+def listed(role: str) -> tuple[str, ...]:
+    """The methods whose description puts them in the benchmark's list ``role``
+    (:attr:`mechviz.dynamics.integrators.Method.bench`), in the registry's order."""
+    return tuple(m.name for m in METHODS.values() if role in m.bench)
+
+
+ADAPTIVE_OURS = listed("sweep")
+ADAPTIVE_SCIPY = listed("scipy")
 
 PROBLEMS: dict[str, Problem] = {
     "charge": Problem(

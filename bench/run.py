@@ -45,6 +45,9 @@ from .sweeps import (
     sweep_adaptive,
     sweep_fixed,
 )
+from .tableau_cost import GOAL as TABLEAU_GOAL
+from .tableau_cost import missed as tableau_missed
+from .tableau_cost import tableau_cost
 
 
 class Phases:
@@ -191,6 +194,7 @@ def run_bench(
                 {},
                 result["first_answer"],
                 result["fastest_peers"],
+                tableau=result.get("tableau_cost"),
             )
     from mechviz.dynamics.files import write_files_atomically
 
@@ -288,7 +292,7 @@ def _measure(
         peer_ratios = peer_table(points, ratios, peer_names, every, settings)
     progress()
 
-    long_run = stab = per_step = exhibit = ensembles = None
+    long_run = stab = per_step = exhibit = ensembles = tableau = None
     if extra:
         progress.set("long runs (10^4 periods)")
         with timer("long runs"):
@@ -299,6 +303,9 @@ def _measure(
         progress.set("per-step cost (numba and C)")
         with timer("per-step cost"):
             per_step = experiments.per_step_costs(quick, progress)
+        progress.set("generic Runge-Kutta runner against DOP853's own loop")
+        with timer("generic runner cost"):
+            tableau = tableau_cost(quick=quick)
         progress.set("ensembles (serial and parallel)")
         with timer("ensembles"):
             ensembles = experiments.ensemble_costs(quick, progress)
@@ -386,10 +393,11 @@ def _measure(
         "peer_head_to_head": peer_ratios,
         "construction_us": construction,
         "first_answer": first_answer,
-        "targets": _targets(ratios, per_step, peer_ratios, first_answer),
+        "targets": _targets(ratios, per_step, peer_ratios, first_answer, tableau=tableau),
         "long_run": long_run,
         "stability": stab,
         "per_step": per_step,
+        "tableau_cost": tableau,
         "ensembles": ensembles,
         "exhibits": exhibit,
     }
@@ -435,6 +443,7 @@ def _targets(
     peer_ratios: dict,
     first_answer: dict | None = None,
     fastest: dict | None = None,
+    tableau: dict | None = None,
 ) -> dict:
     """Each speed target, met (True), missed (False) or not measurable (None), and the lists of
     what was missed with the figure that missed. With ``fastest`` (:mod:`.fastest`'s results)
@@ -480,6 +489,11 @@ def _targets(
             missed.append(
                 f"first answer: ours / odeint = {ours} s / {theirs} s = {ours / theirs:.2f} > 1"
             )
+    generic = None
+    if tableau is not None:
+        lost = tableau_missed(tableau)
+        generic = not lost
+        missed += lost
     cost = (
         {}
         if per_step is None
@@ -492,6 +506,7 @@ def _targets(
         "all_peers": all(v is True for v in peers.values()) if peers else None,
         "step_within_2x_of_c": cost,
         "first_answer_at_least_as_fast_as_odeint": first,
+        f"generic_runner_within_{round(100 * (TABLEAU_GOAL - 1))}pct_of_dop853_loop": generic,
         "missed": missed,
     }
 

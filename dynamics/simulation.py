@@ -53,9 +53,9 @@ from .integrators.base import (
     methods_for,
     step_functions,
 )
-from .integrators.dop853 import Dop853Carry, run_dop853
+from .integrators.rk import RKCarry, load_pair, run_rk
 from .integrators.scipy_ivp import advance_scipy
-from .integrators.taylor import TaylorCarry, order_for, run_taylor
+from .integrators.taylor import TaylorCarry, run_taylor
 from .params import SettingError
 from .spec import checked_state
 from .steps import DEFAULT_RTOL, Fixed, Step, Tolerance, step_control
@@ -230,7 +230,7 @@ class Simulation:
         self._status = np.zeros(3, dtype=np.int64)
         self._exact_known: bool | None = None  # see _has_exact
         # the compiled adaptive method's kept steps (made on its first call)
-        self._carry: TaylorCarry | Dop853Carry | None = None
+        self._carry: TaylorCarry | RKCarry | None = None
         self._taylor_h: float | None = None  # mean Taylor step of the last chunk [s]
         self._reference: Simulation | None = None
         #: Why the error is not measured although a reference was asked for ("" otherwise).
@@ -373,10 +373,12 @@ class Simulation:
                 self.steps += steps
                 if failure:
                     raise IntegrationError(m.name, self.step_label(), t_target, failure)
+            elif m.pair is not None:
+                self._run_rk(t_target, final)
             elif m.kernel == "taylor":
                 self._run_taylor(t_target)
             else:
-                self._run_dop853(t_target, final)
+                raise ValueError(f"no compiled adaptive runner for method {m.name!r}")
             self.t = t_target
         if self._reference is not None:
             self._reference.advance_to(self.t, final=final)
@@ -416,21 +418,20 @@ class Simulation:
             self.state[:], self.steps, self.t = start
             raise
 
-    def _run_dop853(self, t_target: float, final: bool = False) -> None:
-        """The compiled DOP853 to ``t_target`` in chunks of about ``_chunk_steps`` steps (the
-        length of a chunk from the last step size; Ctrl-C is seen between chunks). A chunk's end
-        is one more time asked for: the step across it is kept, not cut, so the chunks take the
-        steps of one call (three more evaluations per chunk, for the state at its end)."""
+    def _run_rk(self, t_target: float, final: bool = False) -> None:
+        """The method's compiled Runge-Kutta pair to ``t_target`` in chunks of about
+        ``_chunk_steps`` steps (the length of a chunk from the last step size; Ctrl-C is seen
+        between chunks). A chunk's end is one more time asked for: the step across it is kept,
+        not cut, so the chunks take the steps of one call (the dense output's extra evaluations
+        per chunk, for the state at its end)."""
         while self.t < t_target:
             h = float(np.mean(self._H)) if np.all(self._H > 0) else 0.0
             if h <= 0.0:  # no step yet: guess one from the system's time scale
-                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+                h = self.system.time_scale(self.state) / self.method.steps_per_period(self.rtol)
             span = self._chunk_steps * h
             t_next = t_target if not span < t_target - self.t else self.t + span
             land = final and t_next == t_target
-            self._timed_chunk(
-                lambda _k, t1=t_next, c=land: self._dop853_to(t1, c), self._chunk_steps
-            )
+            self._timed_chunk(lambda _k, t1=t_next, c=land: self._rk_to(t1, c), self._chunk_steps)
             self.t = t_next
 
     def _leg(self, t1: float) -> tuple:
@@ -438,12 +439,13 @@ class Simulation:
         kernel parameters, from ``t`` to ``t1`` [s], at ``rtol`` and ``atol``."""
         return self.system.sys_id, self.state, self.p, self.t, t1, self.rtol, self.atol
 
-    def _dop853_to(self, t1: float, land: bool = False) -> None:
-        """One chunk of the compiled DOP853, with its kept step, from ``t`` to ``t1`` (``land``:
+    def _rk_to(self, t1: float, land: bool = False) -> None:
+        """One chunk of the compiled pair, with its kept step, from ``t`` to ``t1`` (``land``:
         the last step cut to end at ``t1``)."""
         if self._carry is None:
-            self._carry = Dop853Carry(*self.state.shape)
-        run_dop853(*self._leg(t1), self._H, self._F, self._stats, self._status, self._carry, land)
+            self._carry = RKCarry(*self.state.shape, load_pair(self.method.pair))
+        pair = self._carry.pair
+        run_rk(pair, *self._leg(t1), self._H, self._F, self._stats, self._status, self._carry, land)
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
         if self._status[0] != kernels.OK:
             raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
@@ -460,7 +462,7 @@ class Simulation:
         while self.t < t_target:
             h = self._taylor_h
             if h is None:
-                h = self.system.time_scale(self.state) / _steps_per_period(self.method, self.rtol)
+                h = self.system.time_scale(self.state) / self.method.steps_per_period(self.rtol)
             span = self._chunk_steps * h
             t1 = t_target if not span < t_target - self.t else self.t + span
             start = time.perf_counter()
@@ -503,7 +505,7 @@ class Simulation:
                 own = 0.0
             else:
                 periods = span / self.system.time_scale(self.state)
-                own = max(1.0, periods * _steps_per_period(m, self.rtol))
+                own = max(1.0, periods * m.steps_per_period(self.rtol))
         ref = 0.0 if self._reference is None else self._reference.estimated_steps(t_end)
         return float(own) * members + ref
 
@@ -636,10 +638,3 @@ def reference_run(system: System, state: np.ndarray) -> Simulation:
         system, "dop853", rtol=CHECK_TOL, atol=CHECK_ATOL, state=state, reference=None
     )
     return ref
-
-
-def _steps_per_period(method: Method, rtol: float) -> float:
-    """Roughly the steps an adaptive method of order p takes per period: ``2 rtol^(-1/p)``
-    (Taylor's method: p the order it chooses for ``rtol``)."""
-    order = order_for(rtol, rtol)[0] if method.kernel == "taylor" else method.order
-    return 2.0 * rtol ** (-1.0 / max(order, 1))

@@ -33,92 +33,35 @@ and VI.3; Hairer & Wanner, *Solving ODEs II*, section IV.2 (stability functions)
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .integrators.kernels import MIDPOINT_MAX_ITER, MIDPOINT_TOL, YOSHIDA_W0, YOSHIDA_W1
-
-SQRT8 = 2.0 * math.sqrt(2.0)
-
-
-def _verlet_matrix(x: float) -> np.ndarray:
-    """Kick-drift-kick Stormer-Verlet on ``q'' = -q`` in the variables ``(q, p / omega)``."""
-    return np.array([[1.0 - 0.5 * x * x, x], [-x * (1.0 - 0.25 * x * x), 1.0 - 0.5 * x * x]])
+from .integrators.base import METHODS, Method, get_method
+from .integrators.limits import MIDPOINT_SOLVE_LIMIT, SQRT8, YOSHIDA4_LIMIT  # noqa: F401
 
 
-def _spectral_radius(m: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(m))))
+def _method(method: str | Method) -> Method:
+    return method if isinstance(method, Method) else get_method(method)
 
 
-def amplification(method: str, x: float) -> float:
-    """Spectral radius of one step of ``method`` on the oscillation at ``x = omega h``."""
-    x = abs(float(x))
-    if method == "euler":
-        return math.sqrt(1.0 + x * x)
-    if method == "rk4":
-        return math.sqrt(max(0.0, 1.0 - x**6 / 72.0 + x**8 / 576.0))
-    if method == "verlet":
-        return _spectral_radius(_verlet_matrix(x))
-    if method == "yoshida4":
-        m = _verlet_matrix(YOSHIDA_W1 * x) @ _verlet_matrix(YOSHIDA_W0 * x)
-        return _spectral_radius(_verlet_matrix(YOSHIDA_W1 * x) @ m)
-    if method in ("midpoint", "boris", "exact", "splitting"):
-        return 1.0
-    raise ValueError(f"no amplification factor for method {method!r}")
+def amplification(method: str | Method, x: float) -> float:
+    """Spectral radius of one step of ``method`` on the oscillation at ``x = omega h`` (the
+    method's own ``amplification``; ``ValueError`` for a method without one, an adaptive one)."""
+    m = _method(method)
+    if m.amplification is None:
+        raise ValueError(f"no amplification factor for method {m.name!r}")
+    return m.amplification(abs(float(x)))
 
 
-def _yoshida4_limit() -> float:
-    """First ``x`` where the Yoshida composition of Verlet steps leaves the unit circle: the
-    trace of its 2x2 (unit-determinant) map reaches -2 or 2. Bisection to round-off."""
-
-    def excess(x: float) -> float:
-        m = _verlet_matrix(YOSHIDA_W1 * x) @ _verlet_matrix(YOSHIDA_W0 * x)
-        return abs(np.trace(_verlet_matrix(YOSHIDA_W1 * x) @ m)) - 2.0
-
-    lo, hi = 0.5, 0.5
-    while excess(hi) < 0.0:
-        lo, hi = hi, hi + 0.01
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid) < 0.0 else (lo, mid)
-    return lo
+def reason(method: str | Method) -> str:
+    """Why the method's limit is where it is (shown beside the marker in the viewer and the
+    chart); ``ValueError`` for a method without a fixed-step limit."""
+    m = _method(method)
+    if not m.limit_reason:
+        raise ValueError(f"no stability limit known for method {m.name!r}")
+    return m.limit_reason
 
 
-YOSHIDA4_LIMIT = _yoshida4_limit()
-MIDPOINT_SOLVE_LIMIT = 2.0 * MIDPOINT_TOL ** (1.0 / MIDPOINT_MAX_ITER)  # 1.449 for 1e-14, 100
-
-# Largest stable x = omega h per method: 0.0 = never stable, None = stable at every step.
-LIMITS: dict[str, float | None] = {
-    "euler": 0.0,
-    "rk4": SQRT8,
-    "verlet": 2.0,
-    "yoshida4": YOSHIDA4_LIMIT,
-    # Not the method (A-stable) but its fixed-point solve: on the oscillation each sweep shrinks
-    # the error by x/2, and MIDPOINT_MAX_ITER sweeps must reach MIDPOINT_TOL.
-    "midpoint": MIDPOINT_SOLVE_LIMIT,
-    "boris": None,
-    "exact": None,
-    "splitting": None,
-}
-
-# Why the limit is where it is (shown beside the marker in the viewer and the chart).
-REASONS = {
-    "euler": "explicit Euler amplifies every oscillation by sqrt(1 + (omega dt)^2) per step",
-    "rk4": "RK4 is stable on an oscillation for omega dt <= 2 sqrt 2",
-    "verlet": "Stormer-Verlet is stable for omega_max dt < 2",
-    "yoshida4": "the Yoshida composition of Verlet steps is stable for omega dt < 1.5734",
-    "midpoint": (
-        "the implicit midpoint rule's fixed-point solve reaches 1e-14 in 100 sweeps only for "
-        "omega dt < 1.449"
-    ),
-    "boris": "Boris rotates the velocity exactly: stable at any step",
-    "exact": "the exact flow: stable at any step",
-    "splitting": "exact rotations keep |L|: stable at any step",
-}
-
-
-def limit_omega_dt(method: str, system=None) -> float | None:
+def limit_omega_dt(method: str | Method, system=None) -> float | None:
     """Largest stable ``omega h`` for ``method`` (``None``: no limit; ``0``: none stable).
 
     ``yoshida4`` composes ``system``'s own symmetric step (a :mod:`mechviz.dynamics.systems` adapter or
@@ -126,11 +69,15 @@ def limit_omega_dt(method: str, system=None) -> float | None:
     splitting on the free body) so does the composition; only over Verlet (the hoop) is there a
     limit.
     """
-    if method not in LIMITS:
-        raise ValueError(f"no stability limit known for method {method!r}")
-    if method == "yoshida4" and system is not None and LIMITS.get(system.symmetric_step) is None:
-        return None
-    return LIMITS[method]
+    m = _method(method)
+    reason(m)  # raises for a method without a fixed-step limit
+    if m.needs == "symmetric" and system is not None:
+        # a composition of the system's own step (a method of that name): no limit where that
+        # step has none
+        own = METHODS.get(system.symmetric_step)
+        if own is None or own.limit_omega_dt is None:
+            return None
+    return m.limit_omega_dt
 
 
 def fastest_frequency(system, state: np.ndarray | None = None) -> float:

@@ -7,11 +7,12 @@ import pytest
 from scipy.integrate import DOP853, solve_ivp
 
 from mechviz.dynamics import Cyclotron, Hoop, Simulation, hoop
-from mechviz.dynamics.integrators import dop853, kernels
+from mechviz.dynamics.integrators import kernels, rk
 from mechviz.dynamics.simulation import REFERENCE_ACCURACY, reference_run
 
 HOOP_STATE = hoop.mode_state(Hoop().params, (0.5, 0.2))  # both modes: no exact solution
 CHARGE_STATE = np.array([1.0, -0.5, 0.2, 0.3, 1.0, 0.1])
+PAIR = rk.load_pair("dop853")
 
 
 def _scipy_rhs(system):
@@ -26,22 +27,23 @@ def _scipy_rhs(system):
 
 
 def _one_step(system, y0, h):
-    """One DOP853 step of length ``h`` from ``y0`` (the module's tableau) and its interpolation
-    coefficients from the module's dense output."""
+    """One DOP853 step of length ``h`` from ``y0`` (its tableau) and its interpolation
+    coefficients from the runner's dense output."""
     rhs, p = kernels.RHS[system.sys_id], system.kernel_params()
     d = y0.size
-    K = np.zeros((dop853.N_STAGES_EXTENDED, d))
+    K = np.zeros((PAIR.n_all, d))
     kout = np.empty(d)
     rhs(y0, p, kout)
     K[0] = kout
-    for s in range(1, dop853.N_STAGES + 1):
-        coef = dop853._A[s, :s] if s < dop853.N_STAGES else dop853._B
-        y = y0 + h * (coef @ K[: coef.size])
+    for s in range(1, PAIR.n_stages + 1):
+        y = y0 + h * (PAIR.A[s, :s] @ K[:s])
         rhs(y, p, kout)
         K[s] = kout
-    Q = np.empty((dop853.INTERPOLATOR_POWER, d))
-    tab = dop853._A_DENSE, dop853._D
-    dop853._dense_coefficients(system.sys_id, p, y0, y, K, h, Q, np.empty(d), kout, *tab)
+    Q = np.empty((PAIR.rows, d))
+    _, _, _, P = PAIR.arrays()
+    rk.dense_coefficients(
+        system.sys_id, p, y0, y, K, h, Q, np.empty(d), kout, PAIR.A, P, PAIR.n_stages, True
+    )
     return y, Q
 
 
@@ -56,7 +58,7 @@ def test_the_interpolant_at_mid_step_is_seventh_order():
     for h in hs:
         _, Q = _one_step(system, CHARGE_STATE, h)
         mid = np.empty(CHARGE_STATE.size)
-        dop853._interpolate(Q, CHARGE_STATE, 0.5, mid)
+        rk.interpolate(Q, CHARGE_STATE, 0.5, mid, True)
         errs.append(float(system.error(mid, system.exact(CHARGE_STATE, h / 2))))
     slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
     assert abs(slope - 8.0) < 0.3, (slope, errs)
@@ -65,8 +67,8 @@ def test_the_interpolant_at_mid_step_is_seventh_order():
 def test_the_interpolant_meets_the_step_at_both_ends():
     y1, Q = _one_step(Cyclotron(), CHARGE_STATE, 0.7)
     ends = np.empty((2, CHARGE_STATE.size))
-    dop853._interpolate(Q, CHARGE_STATE, 0.0, ends[0])
-    dop853._interpolate(Q, CHARGE_STATE, 1.0, ends[1])
+    rk.interpolate(Q, CHARGE_STATE, 0.0, ends[0], True)
+    rk.interpolate(Q, CHARGE_STATE, 1.0, ends[1], True)
     np.testing.assert_allclose(ends, [CHARGE_STATE, y1], rtol=0, atol=1e-15)
 
 

@@ -339,3 +339,60 @@ def test_the_disk_cache_stops_growing_once_every_method_has_run(tmp_path):
         assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr[-2000:]
         sizes.append(sorted(str(f.relative_to(cache)) for f in cache.rglob("*.nbc")))
     assert sizes[0] and sizes[1] == sizes[0] and sizes[2] == sizes[0]
+
+
+def test_every_fixed_step_method_carries_its_stability_facts_and_adaptive_ones_none():
+    """A method's amplification factor, limit and reason are on its description: every
+    fixed-step method of ours has them (the stability module and the viewer read nothing
+    else), each limit is where its own amplification factor crosses 1, and an adaptive method,
+    whose step control sets the step, is refused by name."""
+    from mechviz.dynamics import stability
+    from mechviz.dynamics.integrators import METHODS
+
+    for m in METHODS.values():
+        if m.adaptive:
+            with pytest.raises(ValueError, match=m.name):
+                stability.limit_omega_dt(m.name)
+            continue
+        assert m.amplification is not None and m.limit_reason, m.name
+        x = m.limit_omega_dt
+        if x is None:  # stable at every step: never above 1
+            assert all(m.amplification(v) <= 1.0 + 1e-12 for v in (0.1, 1.0, 3.0, 10.0)), m.name
+        elif x == 0.0:  # stable at none
+            assert m.amplification(0.1) > 1.0, m.name
+        elif m.name != "midpoint":  # (its limit is its fixed-point solve's, not its map's)
+            assert m.amplification(0.999 * x) <= 1.0 + 1e-9 < m.amplification(1.01 * x), m.name
+
+
+def test_a_method_no_product_module_knows_is_refused_not_run_as_another():
+    """An adaptive method with neither a Runge-Kutta pair nor Taylor's kernel: the driver
+    raises instead of running DOP853 in its place; the stability module and the benchmark's
+    charts refuse a name they do not know."""
+    import dataclasses
+
+    from mechviz.bench.charts import color
+    from mechviz.dynamics import stability
+    from mechviz.dynamics.integrators import METHODS
+
+    stranger = dataclasses.replace(METHODS["dop853"], name="stranger", pair=None)
+    sim = Simulation(Cyclotron(), stranger, rtol=1e-6, reference=None)
+    with pytest.raises(ValueError, match="stranger"):
+        sim.advance_to(1.0)
+    with pytest.raises(ValueError, match="stranger"):
+        stability.amplification(stranger, 0.5)
+    with pytest.raises(KeyError, match="stranger"):
+        color("stranger")
+    assert color("vern8") == METHODS["vern8"].chart_color
+
+
+def test_the_benchmark_lists_are_read_from_the_methods():
+    """Our adaptive methods in the sweeps, scipy's side of the ratios and ours against the
+    peers in their fastest forms are the methods whose descriptions say so, Verner's among
+    them."""
+    from mechviz.bench import fastest, problems
+    from mechviz.dynamics.integrators import METHODS
+
+    assert set(problems.ADAPTIVE_OURS) == {m.name for m in METHODS.values() if "sweep" in m.bench}
+    assert {"dop853", "vern6", "vern7", "vern8", "vern9", "taylor"} <= set(problems.ADAPTIVE_OURS)
+    assert all(METHODS[m].backend == "scipy" for m in problems.ADAPTIVE_SCIPY)
+    assert "vern8" in fastest.OURS

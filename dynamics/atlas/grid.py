@@ -57,19 +57,6 @@ MIN_RTOL = 1e-12
 MIN_SEPARATION, MAX_SEPARATION = 1e-12, 1e-3
 #: Target wall time [s] of one chunk (one task) on one core.
 CHUNK_SECONDS = 1.0
-#: Rough cost [ns] of one compiled step of one member on one core, used only to size chunks
-#: (the atlas benchmark measures the real figures). Unknown methods count as the costliest.
-STEP_COST_NS = {
-    "euler": 50.0,
-    "boris": 50.0,
-    "verlet": 80.0,
-    "rk4": 100.0,
-    "splitting": 150.0,
-    "midpoint": 300.0,
-    "yoshida4": 400.0,
-    "dop853": 2000.0,
-    "taylor": 2000.0,
-}
 
 
 @dataclass(frozen=True)
@@ -286,9 +273,11 @@ def steps_per_cell(spec: AtlasSpec, method: str) -> float:
         finest = min(spec.y.start, spec.y.stop)
         span = spec.periods * fastest_period(spec) if spec.kind == "stability" else spec.duration
         return span / finest
-    # adaptive: about 2 rtol^(-1/8) steps per fastest period, and a reference run beside it
+    # adaptive: about 2 rtol^(-1/p) steps per fastest period (p the method's order, at most 8:
+    # Taylor's rule picks higher orders only where they pay), and a reference run beside it
     rtol = min(spec.y.start, spec.y.stop)
-    return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / 8.0)
+    order = min(get_method(method).order, 8)
+    return 2.0 * spec.duration / fastest_period(spec) * 2.0 * rtol ** (-1.0 / order)
 
 
 def estimated_steps(spec: AtlasSpec) -> float:
@@ -299,7 +288,7 @@ def estimated_steps(spec: AtlasSpec) -> float:
     method ``2 rtol^(-1/order)`` steps per shortest period; a map measured against a tight DOP853
     run (accuracy, where the system has no exact solution) adds that run, once per chunk."""
     from ..integrators import get_method
-    from ..simulation import REFERENCE_TOL, _steps_per_period
+    from ..simulation import REFERENCE_TOL
 
     cells = spec.y.n * spec.x.n
     if spec.kind == "chaos":
@@ -313,7 +302,7 @@ def estimated_steps(spec: AtlasSpec) -> float:
             if spec.kind == "stability":
                 total += float(np.sum(spec.periods * period / ys)) * spec.x.n
             elif m.adaptive:
-                per = sum(_steps_per_period(m, float(r)) for r in ys)
+                per = sum(m.steps_per_period(float(r)) for r in ys)
                 total += spec.duration / period * per * spec.x.n
             else:
                 total += float(np.sum(spec.duration / ys)) * spec.x.n
@@ -323,9 +312,7 @@ def estimated_steps(spec: AtlasSpec) -> float:
 
             amps = np.array([max(abs(spec.x.start), abs(spec.x.stop))])
             if not system.has_exact(start_states(system, amps)):
-                ref = (
-                    spec.duration / period * _steps_per_period(get_method("dop853"), REFERENCE_TOL)
-                )
+                ref = spec.duration / period * get_method("dop853").steps_per_period(REFERENCE_TOL)
                 # each chunk runs it for its own columns: every column once per row of chunks
                 total += ref * spec.x.n * spec.chunk_grid[0] * spec.chunk_grid[1]
     return float(total) if math.isfinite(total) else math.inf
@@ -346,8 +333,7 @@ def chunk_shape_for(spec: AtlasSpec) -> tuple[int, int]:
     """(rows, columns) worth about :data:`CHUNK_SECONDS` on one core: whole rows of the grid when
     they fit (a chunk of a stability or accuracy map shares one step size per row), else part of
     one row."""
-    costliest = max(STEP_COST_NS.values())
-    worst = max(STEP_COST_NS.get(m, costliest) * steps_per_cell(spec, m) for m in spec.methods)
+    worst = max(get_method(m).step_cost_ns * steps_per_cell(spec, m) for m in spec.methods)
     cells = max(1, int(CHUNK_SECONDS * 1e9 / max(worst, 1.0)))
     if cells >= spec.x.n:
         return (max(1, min(spec.y.n, cells // spec.x.n)), spec.x.n)

@@ -6,8 +6,10 @@ Implementers add a :class:`Method` to :data:`METHODS`:
 - ``backend="numba"``, ``adaptive=False``: ``kernel`` names the step in
   :mod:`mechviz.dynamics.integrators.kernels` (see :func:`step_functions`); the driver calls
   ``run_fixed`` with it.
-- ``backend="numba"``, ``adaptive=True``: the compiled DOP853 (``run_dop853``), or with
-  ``kernel="taylor"`` Taylor's method (:mod:`mechviz.dynamics.integrators.taylor`).
+- ``backend="numba"``, ``adaptive=True``: with ``pair`` naming an embedded Runge-Kutta pair (a
+  module of this package defining its tableau, listed in :data:`.rk.PAIRS`), the one compiled
+  runner :func:`.rk.run_rk`; with ``kernel="taylor"`` Taylor's method
+  (:mod:`mechviz.dynamics.integrators.taylor`).
 - ``backend="scipy"``: ``scipy_name`` is a ``solve_ivp`` method or ``"odeint"``; the driver calls
   :func:`mechviz.dynamics.integrators.scipy_ivp.advance_scipy` with the same compiled right-hand side.
 - ``backend="exact"``: the system's closed-form flow.
@@ -19,10 +21,12 @@ step size and the time) when a state turns non-finite or an implicit step fails 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from . import kernels as _k
+from . import limits as _lim
 
 Structure = Literal["symplectic", "symmetric", "volume-preserving", "norm-preserving"]
 
@@ -78,6 +82,25 @@ class Method:
     #: particular variables: ``((system name, structure there, why), ...)``; the other systems
     #: have ``structure``. Each pair is measured (:mod:`mechviz.dynamics.structure`).
     structure_by_system: tuple[tuple[str, tuple[Structure, ...], str], ...] = ()
+
+    #: The embedded Runge-Kutta pair this method runs (:mod:`.rk`), by its module's name.
+    pair: str | None = None
+    #: On the test oscillation (:mod:`mechviz.dynamics.stability`): the amplification factor of
+    #: one step as a function of ``x = omega h``, the largest stable ``x`` (``None``: any step;
+    #: 0.0: none) and why, in words. A method without ``limit_reason`` (an adaptive one, whose
+    #: step control sets ``h``) has no fixed-step limit.
+    amplification: Callable[[float], float] | None = None
+    limit_omega_dt: float | None = None
+    limit_reason: str = ""
+    #: Rough cost [ns] of one compiled step of one member on one core: sizes the atlas's chunks
+    #: (its benchmark measures the real figures).
+    step_cost_ns: float = 2000.0
+    #: The benchmark's lists this method is in: ``"sweep"`` (our adaptive methods in the
+    #: work-precision sweeps), ``"scipy"`` (the scipy side of the speed ratios), ``"fastest"``
+    #: (ours against the peers in their fastest forms).
+    bench: tuple[str, ...] = ()
+    #: Its colour in the benchmark's charts (a matplotlib colour).
+    chart_color: str | None = None
 
     def structure_on(self, system: Any) -> tuple[Structure, ...]:
         """The structure this method keeps on ``system`` (an adapter, its class or its name)."""
@@ -140,6 +163,24 @@ class Method:
             return f"variable order (at most {self.order})"
         return "no truncation error" if self.backend == "exact" else f"order {self.order}"
 
+    def order_at(self, rtol: float, atol: float, sys_id: int | None = None) -> int | None:
+        """The order a run at these tolerances uses: Taylor's from its rule (for the system
+        ``sys_id``, or over all), ``None`` for a variable order (LSODA's), else ``order``."""
+        if self.kernel == "taylor":
+            from .taylor import order_for  # deferred: the compiled series are not needed
+
+            return (
+                order_for(rtol, atol, sys_id)[0] if sys_id is not None else order_for(rtol, atol)[0]
+            )
+        return None if self.variable_order else self.order
+
+    def steps_per_period(self, rtol: float) -> float:
+        """Roughly the steps an adaptive method of order p takes per period of the fastest
+        motion: ``2 rtol^(-1/p)`` (Taylor's method: p the order it chooses for ``rtol``; a
+        variable order: its highest)."""
+        order = self.order_at(rtol, rtol) or self.order
+        return 2.0 * rtol ** (-1.0 / max(order, 1))
+
     def describe(self) -> str:
         if self.adaptive:
             kind = "adaptive"
@@ -169,6 +210,10 @@ METHODS: dict[str, Method] = {
             kernel="exact",
             stability="exact for any step",
             counts="nothing (the closed form costs no evaluation)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="the exact flow: stable at any step",
+            chart_color="tab:gray",
         ),
         Method(
             "euler",
@@ -181,6 +226,11 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="euler",
             stability="on an oscillation |R(i w h)|^2 = 1 + (w h)^2 > 1: unstable at every step",
+            amplification=_lim.euler,
+            limit_omega_dt=0.0,
+            limit_reason="explicit Euler amplifies every oscillation by sqrt(1 + (omega dt)^2) per step",
+            step_cost_ns=50.0,
+            chart_color="tab:brown",
         ),
         Method(
             "rk4",
@@ -193,6 +243,11 @@ METHODS: dict[str, Method] = {
             "numba",
             kernel="rk4",
             stability="oscillation bounded (slowly damped) for w h < 2 sqrt(2)",
+            amplification=_lim.rk4,
+            limit_omega_dt=_lim.SQRT8,
+            limit_reason="RK4 is stable on an oscillation for omega dt <= 2 sqrt 2",
+            step_cost_ns=100.0,
+            chart_color="tab:blue",
         ),
         Method(
             "midpoint",
@@ -218,6 +273,14 @@ METHODS: dict[str, Method] = {
                     "not Lie-Poisson: applied to (omega, q); it keeps |L| and E, quadratic in omega",
                 ),
             ),
+            amplification=_lim.unit,
+            limit_omega_dt=_lim.MIDPOINT_SOLVE_LIMIT,
+            limit_reason=(
+                "the implicit midpoint rule's fixed-point solve reaches 1e-14 in 100 sweeps only "
+                "for omega dt < 1.449"
+            ),
+            step_cost_ns=300.0,
+            chart_color="tab:purple",
         ),
         Method(
             "boris",
@@ -231,6 +294,11 @@ METHODS: dict[str, Method] = {
             kernel="symmetric2",
             stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
             counts="force evaluations (one per step)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="Boris rotates the velocity exactly: stable at any step",
+            step_cost_ns=50.0,
+            chart_color="tab:green",
         ),
         Method(
             "verlet",
@@ -248,6 +316,11 @@ METHODS: dict[str, Method] = {
                 "2x2 velocity solve and a force) and of the implicit drift (a 2x2 velocity solve, "
                 "no force), and the explicit closing half kick (a solve and a force)"
             ),
+            amplification=_lim.verlet,
+            limit_omega_dt=2.0,
+            limit_reason="Stormer-Verlet is stable for omega_max dt < 2",
+            step_cost_ns=80.0,
+            chart_color="tab:green",
         ),
         Method(
             "splitting",
@@ -261,6 +334,11 @@ METHODS: dict[str, Method] = {
             kernel="symmetric2",
             stability="keeps |L| to round-off at any step",
             counts="exact rotations (five per step)",
+            amplification=_lim.unit,
+            limit_omega_dt=None,
+            limit_reason="exact rotations keep |L|: stable at any step",
+            step_cost_ns=150.0,
+            chart_color="tab:green",
         ),
         Method(
             "yoshida4",
@@ -274,6 +352,11 @@ METHODS: dict[str, Method] = {
             kernel="yoshida4",
             stability="composition of Boris / Stormer-Verlet / splitting",
             counts="its base steps' units (forces, fixed-point sweeps or rotations)",
+            amplification=_lim.yoshida4,
+            limit_omega_dt=_lim.YOSHIDA4_LIMIT,
+            limit_reason="the Yoshida composition of Verlet steps is stable for omega dt < 1.5734",
+            step_cost_ns=400.0,
+            chart_color="tab:olive",
         ),
         Method(
             "dop853",
@@ -286,6 +369,74 @@ METHODS: dict[str, Method] = {
             "numba",
             stability="step size controlled to rtol, atol",
             counts="right-hand-side evaluations (the dense output's included)",
+            pair="dop853",
+            step_cost_ns=2000.0,
+            bench=("sweep", "fastest"),
+            chart_color="tab:orange",
+        ),
+        Method(
+            "vern6",
+            "Verner's most efficient 6(5) (compiled)",
+            6,
+            (),
+            True,
+            False,
+            "rhs",
+            "numba",
+            stability="step size controlled to rtol, atol",
+            counts="right-hand-side evaluations (the dense output's included)",
+            pair="vern6",
+            step_cost_ns=1500.0,
+            bench=("sweep",),
+            chart_color="goldenrod",
+        ),
+        Method(
+            "vern7",
+            "Verner's most efficient 7(6) (compiled)",
+            7,
+            (),
+            True,
+            False,
+            "rhs",
+            "numba",
+            stability="step size controlled to rtol, atol",
+            counts="right-hand-side evaluations (the dense output's included)",
+            pair="vern7",
+            step_cost_ns=1700.0,
+            bench=("sweep",),
+            chart_color="sienna",
+        ),
+        Method(
+            "vern8",
+            "Verner's most efficient 8(7) (compiled)",
+            8,
+            (),
+            True,
+            False,
+            "rhs",
+            "numba",
+            stability="step size controlled to rtol, atol",
+            counts="right-hand-side evaluations (the dense output's included)",
+            pair="vern8",
+            step_cost_ns=2200.0,
+            bench=("sweep", "fastest"),
+            chart_color="chocolate",
+        ),
+        Method(
+            "vern9",
+            "Verner's most efficient 9(8) (compiled)",
+            9,
+            (),
+            True,
+            False,
+            "rhs",
+            "numba",
+            stability="step size controlled to rtol, atol",
+            counts="right-hand-side evaluations (the dense output's included)",
+            pair="vern9",
+            step_cost_ns=2700.0,
+            bench=("sweep",),
+            chart_color="peru",
         ),
         Method(
             "taylor",
@@ -300,6 +451,9 @@ METHODS: dict[str, Method] = {
             stability="step from the series' radius of convergence (Jorba and Zou)",
             variable_order=True,
             counts="series expansions (one per step)",
+            step_cost_ns=2000.0,
+            bench=("sweep", "fastest"),
+            chart_color="magenta",
         ),
         Method(
             "scipy-rk45",
@@ -312,6 +466,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="RK45",
             counts="right-hand-side evaluations (scipy's nfev)",
+            bench=("scipy",),
+            chart_color="tab:pink",
         ),
         Method(
             "scipy-dop853",
@@ -324,6 +480,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="DOP853",
             counts="right-hand-side evaluations (scipy's nfev)",
+            bench=("scipy",),
+            chart_color="tab:red",
         ),
         Method(
             "scipy-radau",
@@ -336,6 +494,8 @@ METHODS: dict[str, Method] = {
             "scipy",
             scipy_name="Radau",
             counts="right-hand-side evaluations (scipy's nfev: Jacobians' not included)",
+            bench=("scipy",),
+            chart_color="black",
         ),
         Method(
             "scipy-lsoda",
@@ -349,6 +509,8 @@ METHODS: dict[str, Method] = {
             scipy_name="LSODA",
             variable_order=True,
             counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
+            bench=("scipy",),
+            chart_color="tab:cyan",
         ),
         Method(
             "odeint",
@@ -362,6 +524,8 @@ METHODS: dict[str, Method] = {
             scipy_name="odeint",
             variable_order=True,
             counts="right-hand-side evaluations (LSODA's count: Jacobians' included)",
+            bench=("scipy",),
+            chart_color="darkgoldenrod",
         ),
     ]
 }

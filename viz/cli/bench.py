@@ -106,6 +106,28 @@ def _video(args: argparse.Namespace) -> int:
     return 0 if result["targets"]["met"] else 1
 
 
+def _tableau_cost(args: argparse.Namespace) -> int:
+    """The generic Runge-Kutta runner against DOP853's own loop, per step on each system."""
+    from mechviz.bench.tableau_cost import GOAL, missed, tableau_cost
+
+    result = tableau_cost(quick=args.quick)
+    if args.json:
+        print(json.dumps(result, indent=1))
+        return 1 if missed(result) else 0
+    print(f"DOP853 per step: generic runner / its own loop (goal <= {GOAL}), side by side:")
+    for name, r in result.items():
+        print(
+            f"  {name:7s} {r['ns_per_step_generic']:8.1f} / {r['ns_per_step_before']:8.1f} ns, "
+            f"median of round ratios {r['ratio']:.3f} (of medians {r['ratio_of_medians']:.3f}; "
+            f"{r['steps']} steps, same counts {r['same_counts']}, largest state difference "
+            f"{r['max_state_difference']:.1e})"
+        )
+    lost = missed(result)
+    for line in lost:
+        print(f"missed: {line}")
+    return 1 if lost else 0
+
+
 def _whole(flag: str, text: str, lo: int, hi: int) -> int:
     from .errors import CliError
 
@@ -133,6 +155,8 @@ def _run(args: argparse.Namespace) -> int:
         return _endurance(args)
     if args.video:
         return _video(args)
+    if args.tableau_cost:
+        return _tableau_cost(args)
     from mechviz.bench import PROBLEMS, peers, run_bench, summary
 
     from ..interrupts import ctrl_c_within_a_second
@@ -285,6 +309,12 @@ def add_commands(sub) -> None:
         help="run only the video benchmark (Chromium; pip install 'mechviz-lab[video]'): a 10 s "
         "960x540 video, as a ratio to real time beside one page with and without shadow maps; "
         "writes video.json; exit status 1 if slower than real time",
+    )
+    p.add_argument(
+        "--tableau-cost",
+        action="store_true",
+        help="run only the cost per step of DOP853 through the generic Runge-Kutta runner against "
+        "its own loop, side by side on each system; exit status 1 if above 1.05",
     )
     p.add_argument(
         "--clients",

@@ -360,7 +360,7 @@ class ExhibitModel(Rewinding):
         if m.backend == "exact":
             return "<small>exact flow: any step</small>"
         limit = stability.stability_limit(m.name, sim.system, self.state)
-        reason = stability.REASONS.get(m.name, "")
+        reason = m.limit_reason
         if limit is None:
             return f"<small>Stable at any dt ({reason}).</small>"
         if limit == 0.0:

@@ -219,12 +219,7 @@ def _describe(sim: dynamics.Simulation) -> dict[str, Any]:
 
 def _order(sim: dynamics.Simulation) -> int | None:
     """The order the run used: Taylor's from its tolerance, ``None`` for LSODA's variable one."""
-    m = sim.method
-    if m.kernel == "taylor":
-        from mechviz.dynamics.integrators.taylor import order_for
-
-        return order_for(sim.rtol, sim.atol, sim.system.sys_id)[0]
-    return None if m.variable_order else m.order
+    return sim.method.order_at(sim.rtol, sim.atol, sim.system.sys_id)
 
 
 def _raise_if_failed(ex: ExhibitModel) -> None:
