@@ -123,11 +123,12 @@ class MechvizApp(Views):
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
         self.figures: dict[str, Any] = {}  # key -> the label of its key figures
-        self._syncing = False
+        self._sync_flag = threading.local()  # see _syncing
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
-        self.typing = Typing()  # number fields holding typed text not yet read
+        # number fields typed in; leaving them is carried out between frames
+        self.typing = Typing(run=lambda fn: self.enqueue("call", lambda app: fn()))
         self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
         self.rewind_control = RewindControl(
             self
@@ -189,6 +190,37 @@ class MechvizApp(Views):
             self.start()
 
     # ------------------------------------------------------------------ properties
+    @property
+    def _syncing(self) -> bool:
+        """Whether the app itself is setting widgets in this thread. An assignment from Python
+        runs the widget's callbacks inline, in the assigning thread; a person's change runs
+        them on a pool thread, which must not be taken for the app's own (one flag shared by
+        all threads dropped a person's change made while the loop showed a value)."""
+        return getattr(self._sync_flag, "on", False)
+
+    @_syncing.setter
+    def _syncing(self, value: bool) -> None:
+        self._sync_flag.on = bool(value)
+
+    @contextlib.contextmanager
+    def quiet(self):
+        """A context in which the app's own widget changes are not taken for the person's."""
+        syncing, self._syncing = self._syncing, True
+        try:
+            yield
+        finally:
+            self._syncing = syncing
+
+    def field_hooks(self) -> dict[str, Any]:
+        """What every :class:`mechviz.viz.scene.fields.NumberField` of the app is given."""
+        return {
+            "on": self._on,
+            "typing": self.typing,
+            "quiet": self.quiet,
+            "defer": lambda fn: self.enqueue("call", lambda app: fn()),
+            "notify": lambda title, body: self.notify(title, body, color="orange"),
+        }
+
     @property
     def port(self) -> int:
         return self.server.get_port()
@@ -439,9 +471,8 @@ class MechvizApp(Views):
                 self.speed,
                 read=lambda text: self.enqueue("app", {"op": "speed", "value": text}),
                 current=lambda: self.speed,
-                on=self._on,
-                typing=self.typing,
-                hint="Simulated seconds per real second (type a number and press Enter)",
+                hint="Simulated seconds per real second",
+                **self.field_hooks(),
                 track=(SPEEDS[0], SPEEDS[1], 0.1),
                 track_apply=lambda x: self.enqueue("app", {"op": "speed", "value": x}),
             )
@@ -504,12 +535,12 @@ class MechvizApp(Views):
         def _(_event) -> None:
             if not self._syncing:
                 if type(widget).__name__ != "GuiTextHandle":
-                    self.typing.commit()
+                    self.typing.left()
                 fn(widget.value)
 
     def _click(self, command) -> None:
         """A button of the app: pending typed numbers are read first, then ``command``."""
-        self.typing.commit()
+        self.typing.left()
         self.enqueue("app", command)
 
     def _sync_play_button(self) -> None:
@@ -545,9 +576,10 @@ class MechvizApp(Views):
                 _, _, ms, _ = self.frame_log.since(self.frame_log.count - 600)  # the last 10 s
                 self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
+            # no time here: each exhibit's readout has its own clock (each restarts on its own),
+            # and a second time beside it, counted since the viewer started, read as a contradiction
             self.w["status"].content = (
-                f"**t = {self.sim_time - self.rewind_control.sim_back():.2f} s** simulated · "
-                f"real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
+                f"Real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
                 f"{'playing' if self.playing else 'paused'}{self.rewind_control.status()}  \n"
                 f"<small>{self._cost_text} (server side)</small>"
             )

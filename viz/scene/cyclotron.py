@@ -353,7 +353,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             )
 
         def give_kick(_event) -> None:
-            panel.app.typing.commit()  # a kick typed and not yet entered is the one meant
+            panel.app.typing.left()  # the person left any box typed in (text not entered stays so)
             panel.send({"op": "kick"})  # dv: the kick in force when the command is applied
 
         kick.on_click(give_kick)

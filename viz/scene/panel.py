@@ -151,17 +151,20 @@ class Panel:
             value,
             read=read,
             current=current,
-            on=self.on,
-            typing=self.app.typing,
             hint=hint,
             track=track,
             track_apply=apply,
+            lo=lo,
+            hi=hi,
+            **self.app.field_hooks(),
         )
         self.fields[name] = field
         self.app.number_fields[f"{self.key}.{name}"] = field
         self.put(name, field.box)
         if field.track is not None:
             self.put(f"{name}_track", field.track)
+        if field.stepper is not None:
+            self.put(f"{name}_stepper", field.stepper)
         return field
 
     def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
