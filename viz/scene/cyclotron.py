@@ -163,6 +163,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.beam_trails.points[:] = np.nan
             self.beam_trails.box = box
 
+    def _beam_changed(self) -> None:
+        self._rebuild_beam_node()
+
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
             self.beam_node.remove()

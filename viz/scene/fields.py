@@ -194,7 +194,9 @@ class NumberField:
             on(self.track, dragged)
         elif stepper:
             self.stepper = gui.add_button_group(
-                "", options=("−", "+"), hint=f"{label}: the next value down or up (1, 2, 5, 10, ...)"
+                "",
+                options=("−", "+"),
+                hint=f"{label}: the next value down or up (1, 2, 5, 10, ...)",
             )
 
             def step(_event) -> None:

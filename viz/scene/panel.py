@@ -250,6 +250,9 @@ class Panel:
                     "x": viser.uplot.Scale(time=False),
                     "y": viser.uplot.Scale(auto=False, range=(LOG_FLOOR, 2.0)),
                 },
+                # the series' names only: a live legend shows "--" for the value under a cursor
+                # that is not on the chart
+                legend=viser.uplot.Legend(live=False),
                 aspect=1.6,
             ),
         )
