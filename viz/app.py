@@ -57,7 +57,7 @@ from .frames import FrameLog
 from .live_record import add_record_toggle
 from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
-from .scene.fields import NumberField, Typing
+from .scene.fields import NumberField, ThreadFlag, Typing
 from .scene.panel import Panel, parse_number
 from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
@@ -83,6 +83,10 @@ GRIDS = {
 # --------------------------------------------------------------------------- the app
 class MechvizApp(Views):
     """Server, exhibits, GUI and the simulation loop."""
+
+    # the app is setting widgets itself, in this thread: a person's change runs its callback on
+    # a pool thread, and must not be taken for the app's own (a flag shared by all threads was)
+    _syncing = ThreadFlag()
 
     def __init__(
         self,
@@ -123,7 +127,6 @@ class MechvizApp(Views):
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
         self.figures: dict[str, Any] = {}  # key -> the label of its key figures
-        self._sync_flag = threading.local()  # see _syncing
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
@@ -190,18 +193,6 @@ class MechvizApp(Views):
             self.start()
 
     # ------------------------------------------------------------------ properties
-    @property
-    def _syncing(self) -> bool:
-        """Whether the app itself is setting widgets in this thread. An assignment from Python
-        runs the widget's callbacks inline, in the assigning thread; a person's change runs
-        them on a pool thread, which must not be taken for the app's own (one flag shared by
-        all threads dropped a person's change made while the loop showed a value)."""
-        return getattr(self._sync_flag, "on", False)
-
-    @_syncing.setter
-    def _syncing(self, value: bool) -> None:
-        self._sync_flag.on = bool(value)
-
     @contextlib.contextmanager
     def quiet(self):
         """A context in which the app's own widget changes are not taken for the person's."""
@@ -213,13 +204,10 @@ class MechvizApp(Views):
 
     def field_hooks(self) -> dict[str, Any]:
         """What every :class:`mechviz.viz.scene.fields.NumberField` of the app is given."""
-        return {
-            "on": self._on,
-            "typing": self.typing,
-            "quiet": self.quiet,
-            "defer": lambda fn: self.enqueue("call", lambda app: fn()),
-            "notify": lambda title, body: self.notify(title, body, color="orange"),
-        }
+        later = lambda fn: self.enqueue("call", lambda app: fn())  # noqa: E731
+        notify = lambda title, body: self.notify(title, body, color="orange")  # noqa: E731
+        return {"on": self._on, "typing": self.typing, "quiet": self.quiet, "defer": later,
+                "notify": notify}  # fmt: skip
 
     @property
     def port(self) -> int:
@@ -336,19 +324,15 @@ class MechvizApp(Views):
 
     def _show_speed(self) -> None:
         if self.gui is not None:
-            self._syncing = True
-            try:
+            with self.quiet():
                 self.speed_field.show(self.speed)
-            finally:
-                self._syncing = False
 
     def _apply_theme(self, theme: str) -> None:
         """Page and floor for ``theme``; the scene's palette reads on both (mechviz.viz.geometry)."""
         self.theme = theme
         if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
-            self._syncing = True
-            self.w["theme"].value = theme
-            self._syncing = False
+            with self.quiet():
+                self.w["theme"].value = theme
         self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
         self._show_figures()
         self._configure_page()
@@ -552,11 +536,8 @@ class MechvizApp(Views):
         """Make the widgets show the exhibit's actual config (after a change or a refusal)."""
         if self.gui is None:
             return
-        self._syncing = True
-        try:
+        with self.quiet():
             self.panels[key].sync()
-        finally:
-            self._syncing = False
 
     # GUI refresh schedule, a 12-frame cycle at 60 Hz: the status line at 10 Hz (frames 0 and 6),
     # each exhibit's readout and chart at 5 Hz (one frame each); the other frames push nothing.

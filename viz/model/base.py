@@ -470,8 +470,7 @@ class ExhibitModel(Rewinding):
         return described
 
     def _apply_live(self, changed: set[str]) -> None:
-        """Apply the ``live_fields`` in ``changed`` (the config already holds them) to the
-        running exhibit, for exhibits that list ``live_fields``."""
+        """Apply the ``live_fields`` in ``changed`` (already in the config) to the run."""
         raise NotImplementedError
 
     def _jump_to_start(self) -> None:
@@ -568,13 +567,10 @@ class ExhibitModel(Rewinding):
 
     def forget_figures(self, *names: str) -> None:
         """The motion changed: the figures ``names`` (all if none given) are measured afresh."""
-        if not names:
-            self._kept.clear()
-        for name in names:
+        for name in names or list(self._kept):
             self._kept.pop(name, None)
 
-    def _measure(self) -> dict[str, Any]:
-        """The figures measured from the motion's samples now, by name (subclasses)."""
+    def _measure(self) -> dict[str, Any]:  # the figures from the samples now, by name
         return {}
 
     @classmethod

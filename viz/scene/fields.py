@@ -98,6 +98,21 @@ def stepped(x: float, direction: int, lo: float | None, hi: float | None) -> flo
     return float(f"{y:.12g}")
 
 
+class ThreadFlag:
+    """A boolean attribute each thread sees on its own (a descriptor; False until set)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.key = f"_{name}_by_thread"
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        return getattr(obj.__dict__.setdefault(self.key, threading.local()), "on", False)
+
+    def __set__(self, obj, value: bool) -> None:
+        obj.__dict__.setdefault(self.key, threading.local()).on = bool(value)
+
+
 class Typing:
     """The number fields the person has typed in; touching any other control is leaving them."""
 
