@@ -73,24 +73,24 @@ def entered_line(before: str, after: str) -> tuple[bool, str | None]:
 
 def stepped(x: float, direction: int, lo: float | None, hi: float | None) -> float:
     """The next value of the 1-2-5 series (…, 0.01, 0.02, 0.05, 0.1, …) above (``direction``
-    +1) or below (-1) ``x``, negative values mirrored, 0 between -0.1 and 0.1 of the range's
-    scale; held to ``lo..hi``."""
+    +1) or below (-1) ``x``, negative values mirrored, held to ``lo..hi``. Where the range holds
+    0 (``lo <= 0``), a step below a thousandth of the range's scale goes to 0, and from 0 to
+    that thousandth."""
     scale = max(abs(v) for v in (x, lo or 0.0, hi or 0.0)) or 1.0
-    floor = 10.0 ** (math.floor(math.log10(scale)) - 3)  # steps smaller than this reach 0
-    if abs(x) < floor:
-        y = direction * floor
+    has_zero = lo is not None and lo <= 0.0
+    floor = 10.0 ** (math.floor(math.log10(scale)) - 3) if has_zero else 0.0
+    if x == 0.0 or abs(x) < floor:
+        y = direction * (floor or 10.0 ** (math.floor(math.log10(scale)) - 3))
     else:
         sign = 1.0 if x > 0 else -1.0
-        d = direction * sign  # +1: away from 0
         decade = 10.0 ** math.floor(math.log10(abs(x)))
-        grid = [m * decade * 10.0**k for k in (-1, 0, 1) for m in (1.0, 2.0, 5.0)]
-        grid.sort()
+        grid = sorted(m * decade * 10.0**k for k in (-1, 0, 1) for m in (1.0, 2.0, 5.0))
         eps = 1e-9 * abs(x)
-        if d > 0:
+        if direction * sign > 0:  # away from 0
             y = sign * next(g for g in grid if g > abs(x) + eps)
         else:
-            below = [g for g in grid if g < abs(x) - eps]
-            y = sign * below[-1] if below[-1] >= floor else 0.0
+            below = [g for g in grid if g < abs(x) - eps][-1]
+            y = sign * below if below >= floor else 0.0
     if lo is not None:
         y = max(y, lo)
     if hi is not None:
@@ -184,6 +184,7 @@ class NumberField:
         self._text = number_text(value)  # the box's text as last seen (sent or received)
         self._pending = False  # the person typed text not yet entered
         self._used = False  # the person typed in the box and has not moved on
+        self._asked: float | None = None  # the value a stepper click asked for, until shown
         hint = (hint + ". " if hint else "") + "Type a number and press Enter"
         self.box = gui.add_text(label, initial_value=self._text, multiline=True, hint=hint)
         self.track = self.stepper = None
@@ -214,13 +215,15 @@ class NumberField:
                 hint=f"{label}: the next value down or up (1, 2, 5, 10, ...)",
             )
 
-            def step(_event) -> None:
+            def step(event) -> None:
+                if event.client_id is None:
+                    return  # the reset below
                 typing.left()
                 direction = 1 if self.stepper.value == "+" else -1
-                # read in the loop thread, from the value in force then, and checked as typed
-                self._defer(
-                    lambda: read(number_text(stepped(current(), direction, self.lo, self.hi)))
-                )
+                # viser calls a button group's callbacks only when its value changes: without
+                # this, a second click on the same arrow would do nothing
+                self.stepper.value = ""
+                self._defer(lambda: self._step(direction))
 
             self.stepper.on_click(step)
 
@@ -231,6 +234,14 @@ class NumberField:
             if event.client_id is None:
                 return  # set from Python: the app showing a value, or a test (then submit())
             self._received(self.box.value)
+
+    def _step(self, direction: int) -> None:
+        """In the loop thread: the next value from the one in force, or from the one the last
+        click asked for if that is still on its way (two quick clicks are two steps), checked
+        as a typed number is."""
+        base = self._current() if self._asked is None else self._asked
+        self._asked = stepped(base, direction, self.lo, self.hi)
+        self._read(number_text(self._asked))
 
     # ------------------------------------------------------------------ the person's text
     def _received(self, text: str) -> None:
@@ -287,6 +298,7 @@ class NumberField:
     def show(self, x: float | str) -> None:
         """Show the value in force in the box (and on the track), unless the person is using
         the box; call with the app's syncing flag set, so the change is not taken for theirs."""
+        self._asked = None  # what a step asked for is in force now (or was refused)
         if self.track is not None and not isinstance(x, str):
             self.track.value = (min(max(float(x), self.lo), self.hi),)
         with self._lock:
