@@ -10,9 +10,10 @@ One rule for every number a person types, the command line's and the demo files'
 (:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a float
 (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
 non-finite or subnormal value or one outside the control's range is refused with a notification
-that names the field as the panel labels it, and the box goes back to the value in force.
-Number fields are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`) for that reason: the
-browser's own number input rewrites scientific notation as it is typed. A parameter's range is
+that names the field as the panel labels it; the box shows the value in force again once the
+person moves on to another control (never while they may still be typing in it). Number fields
+are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider track
+beside each: the browser's own number input rewrites scientific notation as it is typed. A parameter's range is
 the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
 a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
 taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
@@ -128,10 +129,10 @@ class Panel:
         why="",
     ):
         """A number field (:class:`mechviz.viz.scene.fields.NumberField`): ``apply(x)`` gets the value
-        once it is submitted (Enter, or another control touched), read by :func:`parse_number`
-        and held to ``lo``..``hi``; ``check(x)`` may refuse it further (``ValueError``) or warn
-        (returns a message). ``current()`` is the value in force. With ``track = (lo, hi, step)``
-        a slider track under the box sets it too."""
+        entered (Enter), read by :func:`parse_number` and held to ``lo``..``hi``; ``check(x)``
+        may refuse it further (``ValueError``) or warn (returns a message). ``current()`` is the
+        value in force. With ``track = (lo, hi, step)`` a slider track under the box sets it
+        too, else a stepper (− / +) whose values are checked as typed ones."""
         self.labels[name.split(".")[-1]] = label
 
         def read(text):
