@@ -18,7 +18,6 @@ from __future__ import annotations
 import contextlib
 import os
 import random
-import re
 import subprocess
 import sys
 import time
@@ -54,9 +53,7 @@ def busy_loops(n: int = 2):
 
 
 def _box(page, label: str):
-    """The visible number box labelled exactly ``label`` (each exhibit's tab has its own)."""
-    row = page.locator("label:visible", has_text=re.compile(f"^{re.escape(label)}$")).first
-    return row.locator("xpath=ancestor::div[.//textarea][1]//textarea").first
+    return browser.number_box(page, label, exact=True)  # each exhibit's tab has its own
 
 
 def _close_notes(page) -> None:
