@@ -91,7 +91,8 @@ BOXES = {  # name: (label, value in force, good texts, bad texts)
         "Step dt [s]",
         lambda app: app.exhibits[CYC].config.dt,
         ["0.02", "2.5e-2", "1E-2", "0.005", ".03", "5e-3", "0.0125", "4E-2"],
-        ["0", "-0.01", "7", "1e", "abc", "inf", "0.0.1"],
+        # 1e4 s: longer than a turn of the charge at every mass entered (2 pi x 250 s at most)
+        ["0", "-0.01", "1e4", "1e", "abc", "inf", "0.0.1"],
     ),
     "mass": (
         "Mass m [kg]",
@@ -207,6 +208,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
                     if value(app) != old:
                         misread.append((k, label, text, value(app), "changed although refused"))
                 _close_notes(page)
+                print(f"{k:3d} {label}: {text!r} {'applied' if good else 'refused'}", flush=True)
             # the last values shown by every frame: one more frame after the last entry
             frame = app.frame
             wait_until(lambda: app.frame > frame + 2, 20, "a frame")

@@ -307,8 +307,9 @@ class NumberField:
             text = x if isinstance(x, str) else number_text(x)
             if self.box.value == text:
                 return
+            # under the lock: a text the person sends meanwhile is seen after it, not before
             self._text = text
-        self.box.value = text
+            self.box.value = text
 
     @property
     def visible(self) -> bool:
