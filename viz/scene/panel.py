@@ -13,8 +13,8 @@ non-finite or subnormal value or one outside the control's range is refused with
 that names the field as the panel labels it; the box shows the value in force again once the
 person moves on to another control (never while they may still be typing in it). Number fields
 are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider track
-beside each: the browser's own number input rewrites scientific notation as it is typed. A parameter's range is
-the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
+beside each: the browser's own number input rewrites scientific notation as it is typed. A
+parameter's range is the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
 a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
 taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
 """
