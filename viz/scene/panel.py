@@ -14,8 +14,8 @@ that names the field as the panel labels it; the box shows the value in force ag
 person moves on to another control (never while they may still be typing in it). Number fields
 are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider track
 beside each: the browser's own number input rewrites scientific notation as it is typed. A
-parameter's range is the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
-a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
+parameter's range is the one its system's description gives for a live exhibit
+(:attr:`mechviz.dynamics.spec.Setting.span`); a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
 taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
 """
 
