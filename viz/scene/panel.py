@@ -7,16 +7,17 @@ threads and only queue commands; the app applies them between frames and then ca
 springs back).
 
 One rule for every number a person types, the command line's and the demo files' too
-(:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a float
-(``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
+(:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a
+float (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
 non-finite or subnormal value or one outside the control's range is refused with a notification
 that names the field as the panel labels it; the box shows the value in force again once the
 person moves on to another control (never while they may still be typing in it). Number fields
-are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider track
-beside each: the browser's own number input rewrites scientific notation as it is typed. A
-parameter's range is the one its system's description gives for a live exhibit
-(:attr:`mechviz.dynamics.spec.Setting.span`); a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
-taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
+are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider
+track beside each: the browser's own number input rewrites scientific notation as it is typed.
+A parameter's range is the one its system's description gives for a live exhibit
+(:attr:`mechviz.dynamics.spec.Setting.span`); a step is refused beyond one period of the fastest
+motion (the exhibit would stand still) and taken with a warning beyond the method's stability
+limit (:mod:`mechviz.dynamics.stability`).
 """
 
 from __future__ import annotations
