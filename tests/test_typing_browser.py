@@ -10,7 +10,8 @@ The long test enters 100 values into the speed, kick, step and mass boxes, each 
 another change (a kick, the beam, play/pause, the method), with two busy loops taking both
 cores. Pauses between keys are drawn as 3 s x u^4 (u uniform in 0..1): every pause from 0 to
 3 s occurs, but most are short (mean 0.6 s, one in ten over 2 s), to keep the run near ten
-minutes. The seed is printed; ``MECHVIZ_TYPING_SEED`` replays a run.
+minutes on a machine with two free cores. The seed is printed; ``MECHVIZ_TYPING_SEED`` replays a
+run, ``MECHVIZ_TYPING_ENTRIES`` sets how many entries (100).
 """
 
 from __future__ import annotations
@@ -164,7 +165,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
     app.frame_hooks.append(watch)
     entered: dict[str, list[float]] = {name: [] for name in BOXES}  # good values, in order
     misread = []
-    plan = _plan(rng, 100)
+    plan = _plan(rng, int(os.environ.get("MECHVIZ_TYPING_ENTRIES", "100")))
     try:
         with busy_loops(2):
             for k, (name, text, good) in enumerate(plan):
@@ -190,6 +191,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
                         wait_until(lambda m=meant, v=value: v(app) == m, 20, f"{label} = {text}")
                     except TimeoutError:
                         misread.append((k, label, text, value(app), app.messages[n_messages:]))
+                        print(f"{k:3d} {label}: {text!r} MISREAD {misread[-1]}", flush=True)
                         continue
                     entered[name].append(meant)
                 else:
@@ -219,7 +221,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
         # the values in force, in order, were the start's and then exactly those entered: no
         # half-typed value was ever applied, not even for a frame
         assert seen[name][1:] == values, (name, seen[name], values)
-    assert sum(len(v) for v in entered.values()) >= 50
+    assert sum(len(v) for v in entered.values()) >= len(plan) // 2
 
 
 def test_a_box_typed_in_keeps_its_text_and_shows_the_value_in_force_once_left(viewer):
