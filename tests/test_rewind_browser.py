@@ -50,7 +50,7 @@ def test_pausing_and_scrubbing_back_moves_the_time_and_the_exhibits_back():
         assert hoop.scrubbed == pytest.approx(5.0, abs=0.02)
         # the hoop's readout on its tab says the same time
         page.get_by_role("tab", name="Hoop").click()
-        page.get_by_text(f"t = {hoop.t:.2f} s", exact=False).first.wait_for(
+        page.locator("strong:visible", has_text=f"t = {hoop.t:.2f} s").first.wait_for(
             timeout=scaled(15) * 1000
         )
 
