@@ -298,3 +298,21 @@ def analysis(p: CyclotronParams, speed: float = 1.0) -> dict:
         "effective_potential_minimum_radius": g(lambda: effective_potential_minimum(p, p_phi)),
         "radial_oscillation_frequency": g(lambda: radial_oscillation_frequency(p, p_phi)),
     }
+
+
+# --------------------------------------------------------------------------- structure check
+def canonical_maps(params: CyclotronParams):
+    """``(to_canonical, from_canonical)``: the state ``(x, v)`` to the canonical ``(x, m v + q A)``
+    in the symmetric gauge ``A = B (-y, x, 0) / 2`` and back."""
+    q, m, B = params.charge, params.mass, params.field
+
+    def potential(x):
+        return 0.5 * B * np.array([-x[1], x[0], 0.0])
+
+    def to_canonical(y):
+        return np.concatenate([y[:3], m * y[3:6] + q * potential(y[:3])])
+
+    def from_canonical(z):
+        return np.concatenate([z[:3], (z[3:6] - q * potential(z[:3])) / m])
+
+    return to_canonical, from_canonical

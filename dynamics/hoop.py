@@ -199,53 +199,6 @@ def mode1_period(p: HoopParams, amplitude: float) -> float:
     return 4.0 * float(special.ellipk(math.sin(0.5 * amplitude) ** 2)) / w0
 
 
-def mode1_monodromy(p: HoopParams, amplitude: float, eps: float = 1e-6) -> np.ndarray:
-    """The monodromy matrix (4, 4) of the mode-1 swing of ``amplitude`` [rad], released at rest:
-    how a small departure ``d`` of the state at the turning point comes back after one period,
-    ``d -> D d``, from central differences of the flow over :func:`mode1_period` (a DOP853 run
-    at rtol 1e-13 of the full equations, each of the eight displaced starts beside the others).
-    Its eigenvalues are 1, 1 (along the swing, and to a neighbouring amplitude) and the Floquet
-    multipliers of the departure from mode 1, ``l`` and ``1/l`` (the flow keeps volume)."""
-    from .simulation import Simulation  # deferred: the driver imports the systems' modules
-    from .systems import Hoop
-
-    A = _v.finite("amplitude", amplitude)
-    if not 0.0 < abs(A) < math.pi:
-        raise _v.SettingError("amplitude", f"amplitude must lie in (0, pi) rad, got {A!r}")
-    start = np.array([A, A, 0.0, 0.0])
-    starts = np.repeat(start[None, :], 8, axis=0)
-    for j in range(4):
-        starts[2 * j, j] += eps
-        starts[2 * j + 1, j] -= eps
-    sim = Simulation(Hoop(p), "dop853", rtol=1e-13, atol=1e-15, state=starts, reference=None)
-    sim.advance_to(mode1_period(p, abs(A)), final=True)
-    end = sim.state
-    return np.column_stack([(end[2 * j] - end[2 * j + 1]) / (2.0 * eps) for j in range(4)])
-
-
-#: Mode 1's tangent directions (theta1 = theta2, omega1 = omega2) and the departures from it.
-_ALONG_ACROSS = np.array(
-    [[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 1.0], [0.0, 1.0, 0.0, -1.0]]
-)
-
-
-def mode1_floquet_multiplier(p: HoopParams, amplitude: float) -> float:
-    """The largest |Floquet multiplier| of a departure from the mode-1 swing of ``amplitude``
-    [rad] (:func:`mode1_monodromy`): 1 where a departure stays small (it only turns), ``l`` above
-    1 where it grows ``l``-fold each period, so that one from round-off (1e-16) reaches 0.1 rad
-    after about ``ln(1e15) / ln(l)`` periods. On the default hoop about 38 at 2 rad: under ten
-    periods (35 s); a hoop with a bead of a tenth of its mass keeps mode 1 stable at 2 rad.
-
-    Mode 1 is an invariant set, so the monodromy maps its tangent directions among themselves,
-    and the departures' multipliers are those of the block of the departures (the pair ``l``,
-    ``1/l``), apart from the pair along the swing (1 and 1, but a Jordan block that differences
-    split by the square root of their error)."""
-    D = mode1_monodromy(p, amplitude)
-    B = _ALONG_ACROSS
-    across = np.linalg.solve(B, D @ B)[2:, 2:]
-    return float(np.max(np.abs(np.linalg.eigvals(across))))
-
-
 # --------------------------------------------------------------------------- compiled pieces
 @njit(cache=True)
 def acceleration(th1, th2, w1, w2, M, m, ga):
@@ -381,3 +334,23 @@ def analysis(p: HoopParams) -> dict:
         "mode_periods": g(lambda: (2 * np.pi / freqs).tolist()),
         "mode_shapes": shapes.tolist(),
     }
+
+
+# --------------------------------------------------------------------------- structure check
+def canonical_maps(params: HoopParams):
+    """``(to_canonical, from_canonical)``: the state ``(theta1, theta2, theta1', theta2')`` to
+    the canonical ``(theta, p = M(theta) theta')`` (``M`` the Lagrangian's mass matrix,
+    ``p`` the generalized momenta ``dL/dtheta'``) and back."""
+    M, m, a = params.hoop_mass, params.bead_mass, params.radius
+
+    def mass(th1, th2):
+        c = np.cos(th1 - th2)
+        return a * a * np.array([[2 * M + m, m * c], [m * c, m]])
+
+    def to_canonical(y):
+        return np.concatenate([y[:2], mass(y[0], y[1]) @ y[2:4]])
+
+    def from_canonical(z):
+        return np.concatenate([z[:2], np.linalg.solve(mass(z[0], z[1]), z[2:4])])
+
+    return to_canonical, from_canonical

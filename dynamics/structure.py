@@ -44,37 +44,6 @@ def one_step(method: Method, system, state: np.ndarray, h: float) -> np.ndarray:
     return Y[0]
 
 
-def _hoop_maps(params):
-    M, m, a = params.hoop_mass, params.bead_mass, params.radius
-
-    def mass(th1, th2):
-        c = np.cos(th1 - th2)
-        return a * a * np.array([[2 * M + m, m * c], [m * c, m]])
-
-    def to_canonical(y):
-        return np.concatenate([y[:2], mass(y[0], y[1]) @ y[2:4]])
-
-    def from_canonical(z):
-        return np.concatenate([z[:2], np.linalg.solve(mass(z[0], z[1]), z[2:4])])
-
-    return to_canonical, from_canonical
-
-
-def _cyclotron_maps(params):
-    q, m, B = params.charge, params.mass, params.field
-
-    def potential(x):
-        return 0.5 * B * np.array([-x[1], x[0], 0.0])
-
-    def to_canonical(y):
-        return np.concatenate([y[:3], m * y[3:6] + q * potential(y[:3])])
-
-    def from_canonical(z):
-        return np.concatenate([z[:3], (z[3:6] - q * potential(z[:3])) / m])
-
-    return to_canonical, from_canonical
-
-
 def symplecticity_defect(
     method: Method, system, state: np.ndarray, h: float, eps: float = 1e-6
 ) -> float:
@@ -82,10 +51,9 @@ def symplecticity_defect(
     docstring): symplecticity in canonical variables for the charge and the hoop, Lie-Poisson
     for the released disk."""
     state = np.asarray(state, dtype=float)
-    if system.name == "free-body":
+    if system.structure_check == "lie-poisson":
         return _lie_poisson_defect(method, system, state, h, eps)
-    maps = {"hoop": _hoop_maps, "cyclotron": _cyclotron_maps}[system.name](system.params)
-    to_c, from_c = maps
+    to_c, from_c = system.canonical_maps()
     z0 = to_c(state)
     n = len(z0)
     D = np.empty((n, n))

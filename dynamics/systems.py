@@ -65,6 +65,16 @@ class _Adapter:
     state_labels: ClassVar[dict[str, str]] = {}
     closed_form: ClassVar[bool] = False
     symmetric_step: ClassVar[str | None] = None
+    #: Where a method in this system's variables keeps less structure than its label (method
+    #: name -> (structure kept, why)), and how a step's structure is measured here: "canonical"
+    #: (symplecticity in :meth:`canonical_maps`' variables) or "lie-poisson" (a free rigid body).
+    method_structure: ClassVar[dict[str, tuple[tuple[str, ...], str]]] = {}
+    structure_check: ClassVar[str] = "canonical"
+
+    def canonical_maps(self):
+        """``(to_canonical, from_canonical)``: the state to canonical ``(q, p)`` and back."""
+        raise NotImplementedError(f"{self.name} states no canonical variables")
+
     #: The one-amplitude family of starts the stability atlas sweeps: its unit, its axis label
     #: and the default range of amplitudes (see :meth:`amplitude_state`).
     amplitude: ClassVar[tuple[str, str, tuple[float, float]] | None] = None
@@ -109,6 +119,10 @@ class Cyclotron(_Adapter):
     vz)`` [m, m/s]; its exact flow is a helix, known from every state (the ``exact`` method)."""
 
     params: cyclotron.CyclotronParams = cyclotron.CyclotronParams()
+
+    def canonical_maps(self):
+        return cyclotron.canonical_maps(self.params)
+
     sys_id = kernels.CYCLOTRON
     state_names = cyclotron.STATE_NAMES
     state_labels: ClassVar[dict[str, str]] = {
@@ -183,6 +197,16 @@ class Cyclotron(_Adapter):
 @dataclass(frozen=True)
 class Hoop(_Adapter):
     """Bead on a hanging hoop (:mod:`mechviz.dynamics.hoop`)."""
+
+    method_structure: ClassVar[dict[str, tuple[tuple[str, ...], str]]] = {
+        "midpoint": (
+            ("symmetric",),
+            "not symplectic: applied to (theta, theta'), not canonical variables",
+        ),
+    }
+
+    def canonical_maps(self):
+        return hoop.canonical_maps(self.params)
 
     params: hoop.HoopParams = hoop.HoopParams()
     sys_id = kernels.HOOP
@@ -263,6 +287,14 @@ class Hoop(_Adapter):
 @dataclass(frozen=True)
 class ReleasedDisk(_Adapter):
     """The disk with its bead after the axle is removed: a free rigid body (:mod:`mechviz.dynamics.disk`)."""
+
+    structure_check: ClassVar[str] = "lie-poisson"
+    method_structure: ClassVar[dict[str, tuple[tuple[str, ...], str]]] = {
+        "midpoint": (
+            ("symmetric",),
+            "not Lie-Poisson: applied to (omega, q); it keeps |L| and E, quadratic in omega",
+        ),
+    }
 
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release

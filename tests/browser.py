@@ -12,6 +12,7 @@ Stable API (the recording helper imports it too)::
     CHROMIUM_ARGS                                # the command-line flags
     open_page(url, *, width=1280, height=800, timeout_s=30.0) -> context manager yielding page
     canvas(page)                                 # locator of viser's WebGL canvas
+    number_box(page, label, exact=False)         # locator of a panel row's number box
     dismiss_webgl_alert(page)                    # closes "Software WebGL rendering detected"
     wait_for_pixels(page, predicate, timeout_s)  # polls canvas screenshots until predicate(img)
     screenshot_array(page) -> np.ndarray         # (H, W, 3) uint8 of the canvas
@@ -129,6 +130,17 @@ def open_viewer(width: int = 1280, height: int = 800):
             yield app, page
     finally:
         app.stop()
+
+
+def number_box(page, label: str, *, exact: bool = False):
+    """The number box (a two-line text box: the Enter travels in its text,
+    :mod:`mechviz.viz.scene.fields`) of the visible panel row labelled ``label`` (its start, or
+    all of it with ``exact``); viser links the label to its row."""
+    import re
+
+    text = re.compile(f"^{re.escape(label)}$") if exact else label
+    row = page.locator("label:visible", has_text=text).first
+    return row.locator("xpath=ancestor::div[.//textarea][1]//textarea").first
 
 
 def canvas(page):

@@ -86,8 +86,7 @@ def test_the_stability_map_marks_the_current_step(viewer):
     page.get_by_text("Stability map", exact=True).click()
     for dt in ("0.05", "0.2"):
         # the text box of the row labelled "Step dt" (viser links the label to its row)
-        label = page.locator("label", has_text="Step dt").first
-        box = label.locator("xpath=ancestor::div[.//input][1]//input").first
+        box = browser.number_box(page, "Step dt")
         box.fill(dt)
         box.press("Enter")  # a typed number applies on Enter, never half-typed
         wait_until(lambda d=float(dt): ex.config.dt == d, 20, f"dt = {dt}")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from mechviz.dynamics import Hoop, Simulation, hoop
+from mechviz.dynamics import Hoop, Simulation, floquet, hoop
 from mechviz.dynamics.hoop import HoopParams
 
 PARAMS = [HoopParams(), HoopParams(1.0, 1.0, 1.0, 9.81), HoopParams(3.0, 0.2, 0.5, 1.62)]
@@ -217,9 +217,9 @@ def test_mode1_floquet_multiplier_predicts_how_a_departure_from_mode1_grows(bead
     several periods of the full equations: l^k where it is unstable, bounded where it is 1;
     the monodromy keeps volume (its determinant is 1)."""
     p = hoop.HoopParams(bead_mass=bead_mass)
-    D = hoop.mode1_monodromy(p, amplitude)
+    D = floquet.mode1_monodromy(p, amplitude)
     assert np.linalg.det(D) == pytest.approx(1.0, abs=1e-4)
-    lam = hoop.mode1_floquet_multiplier(p, amplitude)
+    lam = floquet.mode1_floquet_multiplier(p, amplitude)
     T = hoop.mode1_period(p, amplitude)
     # a departure along the growing direction (or, if none, the transverse one), of 1e-9
     w, V = np.linalg.eig(D)

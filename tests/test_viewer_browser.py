@@ -83,9 +83,7 @@ def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
 
 
 def _field(page, label: str):
-    """The text box of the GUI row labelled ``label...`` (viser links the label to its row)."""
-    row = page.locator("label", has_text=label).first
-    return row.locator("xpath=ancestor::div[.//input][1]//input").first
+    return browser.number_box(page, label)
 
 
 def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):

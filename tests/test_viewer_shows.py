@@ -17,6 +17,7 @@ import pytest
 
 from mechviz.dynamics import cyclotron as cy
 from mechviz.dynamics import disk as dk
+from mechviz.dynamics import floquet
 from mechviz.dynamics import hoop as hp
 
 viser = pytest.importorskip("viser")
@@ -431,7 +432,7 @@ def test_a_kick_leaves_a_ghost_of_the_orbit_before_it(app):
 def test_the_hoop_readout_says_whether_mode1_is_stable_at_its_amplitude(server):
     """Mode 1's largest Floquet multiplier at the current amplitude, worked out for this hoop."""
     swing = HoopExhibit(server, HoopConfig(mode="mode 1", amplitude=2.0))
-    lam = hp.mode1_floquet_multiplier(swing.params, 2.0)
+    lam = floquet.mode1_floquet_multiplier(swing.params, 2.0)
     assert lam > 10 and f"grows {lam:.3g}x a period" in swing.readout()
     small = HoopExhibit(server, HoopConfig(mode="mode 1", amplitude=0.5))
     assert "Floquet multiplier at this amplitude | stable" in small.readout()

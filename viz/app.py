@@ -57,7 +57,7 @@ from .frames import FrameLog
 from .live_record import add_record_toggle
 from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
-from .scene.fields import NumberField, Typing
+from .scene.fields import NumberField, ThreadFlag, Typing
 from .scene.panel import Panel, parse_number
 from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
@@ -83,6 +83,10 @@ GRIDS = {
 # --------------------------------------------------------------------------- the app
 class MechvizApp(Views):
     """Server, exhibits, GUI and the simulation loop."""
+
+    # the app is setting widgets itself, in this thread: a person's change runs its callback on
+    # a pool thread, and must not be taken for the app's own (a flag shared by all threads was)
+    _syncing = ThreadFlag()
 
     def __init__(
         self,
@@ -123,11 +127,11 @@ class MechvizApp(Views):
         self._cost_text = ""
         self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
         self.figures: dict[str, Any] = {}  # key -> the label of its key figures
-        self._syncing = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
-        self.typing = Typing()  # number fields holding typed text not yet read
+        # number fields typed in; leaving them is carried out between frames
+        self.typing = Typing(run=lambda fn: self.enqueue("call", lambda app: fn()))
         self.number_fields: dict[str, NumberField] = {}  # keyed as the widget table ``w``
         self.rewind_control = RewindControl(
             self
@@ -189,6 +193,22 @@ class MechvizApp(Views):
             self.start()
 
     # ------------------------------------------------------------------ properties
+    @contextlib.contextmanager
+    def quiet(self):
+        """A context in which the app's own widget changes are not taken for the person's."""
+        syncing, self._syncing = self._syncing, True
+        try:
+            yield
+        finally:
+            self._syncing = syncing
+
+    def field_hooks(self) -> dict[str, Any]:
+        """What every :class:`mechviz.viz.scene.fields.NumberField` of the app is given."""
+        later = lambda fn: self.enqueue("call", lambda app: fn())  # noqa: E731
+        notify = lambda title, body: self.notify(title, body, color="orange")  # noqa: E731
+        return {"on": self._on, "typing": self.typing, "quiet": self.quiet, "defer": later,
+                "notify": notify}  # fmt: skip
+
     @property
     def port(self) -> int:
         return self.server.get_port()
@@ -304,19 +324,15 @@ class MechvizApp(Views):
 
     def _show_speed(self) -> None:
         if self.gui is not None:
-            self._syncing = True
-            try:
+            with self.quiet():
                 self.speed_field.show(self.speed)
-            finally:
-                self._syncing = False
 
     def _apply_theme(self, theme: str) -> None:
         """Page and floor for ``theme``; the scene's palette reads on both (mechviz.viz.geometry)."""
         self.theme = theme
         if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
-            self._syncing = True
-            self.w["theme"].value = theme
-            self._syncing = False
+            with self.quiet():
+                self.w["theme"].value = theme
         self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
         self._show_figures()
         self._configure_page()
@@ -439,9 +455,8 @@ class MechvizApp(Views):
                 self.speed,
                 read=lambda text: self.enqueue("app", {"op": "speed", "value": text}),
                 current=lambda: self.speed,
-                on=self._on,
-                typing=self.typing,
-                hint="Simulated seconds per real second (type a number and press Enter)",
+                hint="Simulated seconds per real second",
+                **self.field_hooks(),
                 track=(SPEEDS[0], SPEEDS[1], 0.1),
                 track_apply=lambda x: self.enqueue("app", {"op": "speed", "value": x}),
             )
@@ -504,12 +519,12 @@ class MechvizApp(Views):
         def _(_event) -> None:
             if not self._syncing:
                 if type(widget).__name__ != "GuiTextHandle":
-                    self.typing.commit()
+                    self.typing.left()
                 fn(widget.value)
 
     def _click(self, command) -> None:
         """A button of the app: pending typed numbers are read first, then ``command``."""
-        self.typing.commit()
+        self.typing.left()
         self.enqueue("app", command)
 
     def _sync_play_button(self) -> None:
@@ -521,11 +536,8 @@ class MechvizApp(Views):
         """Make the widgets show the exhibit's actual config (after a change or a refusal)."""
         if self.gui is None:
             return
-        self._syncing = True
-        try:
+        with self.quiet():
             self.panels[key].sync()
-        finally:
-            self._syncing = False
 
     # GUI refresh schedule, a 12-frame cycle at 60 Hz: the status line at 10 Hz (frames 0 and 6),
     # each exhibit's readout and chart at 5 Hz (one frame each); the other frames push nothing.
@@ -545,9 +557,10 @@ class MechvizApp(Views):
                 _, _, ms, _ = self.frame_log.since(self.frame_log.count - 600)  # the last 10 s
                 self._cost_text = f"frame {np.median(ms) if len(ms) else 0:.2f} ms median"
             rtf = self.real_time_factor
+            # no time here: each exhibit's readout has its own clock (each restarts on its own),
+            # and a second time beside it, counted since the viewer started, read as a contradiction
             self.w["status"].content = (
-                f"**t = {self.sim_time - self.rewind_control.sim_back():.2f} s** simulated · "
-                f"real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
+                f"Real-time factor {'—' if rtf is None else f'{rtf:.2f}'} · speed {self.speed:g}× · "
                 f"{'playing' if self.playing else 'paused'}{self.rewind_control.status()}  \n"
                 f"<small>{self._cost_text} (server side)</small>"
             )

@@ -35,8 +35,7 @@ class RewindControl:
             0.0,
             read=lambda text: app.enqueue("app", {"op": "scrub", "value": text}),
             current=lambda: -self.back,
-            on=app._on,
-            typing=app.typing,
+            **app.field_hooks(),
             hint=(
                 f"Pause and go back through the last {SECONDS:g} s of the show (seconds of what was "
                 "on screen). Play goes on from the moment shown; what came after it is dropped. "

@@ -21,7 +21,7 @@ step size and the time) when a state turns non-finite or an implicit step fails 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -78,10 +78,6 @@ class Method:
     stability: str = ""
     variable_order: bool = False
     counts: str = "right-hand-side evaluations"
-    #: Where the structure differs by system, because a label belongs to a method applied in
-    #: particular variables: ``((system name, structure there, why), ...)``; the other systems
-    #: have ``structure``. Each pair is measured (:mod:`mechviz.dynamics.structure`).
-    structure_by_system: tuple[tuple[str, tuple[Structure, ...], str], ...] = ()
 
     #: The embedded Runge-Kutta pair this method runs (:mod:`.rk`), by its module's name.
     pair: str | None = None
@@ -103,12 +99,12 @@ class Method:
     chart_color: str | None = None
 
     def structure_on(self, system: Any) -> tuple[Structure, ...]:
-        """The structure this method keeps on ``system`` (an adapter, its class or its name)."""
-        name = system if isinstance(system, str) else system.name
-        for other, structure, _why in self.structure_by_system:
-            if other == name:
-                return structure
-        return self.structure
+        """The structure this method keeps on ``system`` (an adapter or its class): its own,
+        unless the system says that the method applied in its variables keeps less (a label
+        belongs to a method applied in particular variables; the system knows its variables,
+        :attr:`mechviz.dynamics.systems._Adapter.method_structure`). Each pair is measured
+        (:mod:`mechviz.dynamics.structure`)."""
+        return getattr(system, "method_structure", {}).get(self.name, (self.structure, ""))[0]
 
     def applies_to(self, system: Any) -> bool:
         """Whether this method can advance ``system`` (a :mod:`mechviz.dynamics.systems` adapter or its
@@ -181,14 +177,19 @@ class Method:
         order = self.order_at(rtol, rtol) or self.order
         return 2.0 * rtol ** (-1.0 / max(order, 1))
 
-    def describe(self) -> str:
+    def describe(self, systems: Iterable[Any] = ()) -> str:
+        """One line on the method; with ``systems`` (adapters or their classes), where its
+        structure there differs from its label, and why."""
         if self.adaptive:
             kind = "adaptive"
         else:
             kind = "closed-form flow" if self.backend == "exact" else "fixed step"
         props = ", ".join(self.structure) or "no geometric structure"
-        for name, structure, why in self.structure_by_system:
-            props += f"; on {name} {', '.join(structure) or 'no geometric structure'} ({why})"
+        for system in systems:
+            structure, why = getattr(system, "method_structure", {}).get(self.name, (None, ""))
+            if structure is not None:
+                props += f"; on {system.name} {', '.join(structure) or 'no geometric structure'}"
+                props += f" ({why})"
         imp = ", implicit" if self.implicit else ""
         return (
             f"{self.title}: {self.order_text()}, {kind}{imp}, {props}; evaluations: {self.counts}"
@@ -261,18 +262,6 @@ METHODS: dict[str, Method] = {
             kernel="midpoint",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
             counts="right-hand-side evaluations (one per fixed-point iteration)",
-            structure_by_system=(
-                (
-                    "hoop",
-                    ("symmetric",),
-                    "not symplectic: applied to (theta, theta'), not canonical variables",
-                ),
-                (
-                    "free-body",
-                    ("symmetric",),
-                    "not Lie-Poisson: applied to (omega, q); it keeps |L| and E, quadratic in omega",
-                ),
-            ),
             amplification=_lim.unit,
             limit_omega_dt=_lim.MIDPOINT_SOLVE_LIMIT,
             limit_reason=(

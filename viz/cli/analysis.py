@@ -426,7 +426,7 @@ def method_list() -> list[dict[str, Any]]:
         {
             "name": m.name,
             "title": m.title,
-            "description": m.describe(),
+            "description": m.describe(SYSTEMS.values()),
             "order": m.order,
             "variable_order": m.variable_order,
             "adaptive": m.adaptive,
@@ -454,7 +454,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
             return 0
         for m in METHODS.values():
             systems = ", ".join(sorted(n for n, cls in SYSTEMS.items() if m.applies_to(cls)))
-            print(f"{m.name:13s} {m.describe()}; applies to {systems}")
+            print(f"{m.name:13s} {m.describe(SYSTEMS.values())}; applies to {systems}")
         return 0
     if not 2 <= args.samples <= MAX_SAMPLES:
         raise CliError(f"--samples: must be from 2 to {MAX_SAMPLES}, got {args.samples}")

@@ -136,6 +136,9 @@ class ExhibitModel(Rewinding):
     # settings that only choose the start: applied as a jump of the running simulations to the
     # new start, so the clock and the work counters go on (``_jump_to_start``)
     start_fields: ClassVar[frozenset[str]] = frozenset()
+    # settings applied to the running exhibit by ``_apply_live`` (a beam added to the run):
+    # the clock, the runs and what was given them (a kick) go on
+    live_fields: ClassVar[frozenset[str]] = frozenset()
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -163,6 +166,7 @@ class ExhibitModel(Rewinding):
         self.compare: dynamics.Simulation | None = None
         self._sample: dynamics.Sample | None = None
         self._compare_sample: dynamics.Sample | None = None
+        self._kept: dict[str, Any] = {}  # the last resolved figure of each name (measured())
         if start:
             self._start()
 
@@ -345,6 +349,12 @@ class ExhibitModel(Rewinding):
         if self.scrubbed is not None:  # scrubbed back: the charts end at the moment shown
             keep = data[0] <= self.t + 1e-12
             data = tuple(a[keep] for a in data)
+            if not data[0].size or data[0][-1] < self.t - 1e-12:
+                # the kept points are spaced (a long window's even more): the last one at the
+                # moment shown is that moment's own sample
+                values = self._chart_values()
+                now = (self.t, *(values.get(n, math.nan) for n in self.history.names))
+                data = tuple(np.append(a, v) for a, v in zip(data, now, strict=True))
         return data
 
     def stability_text(self) -> str:
@@ -431,6 +441,14 @@ class ExhibitModel(Rewinding):
         if changed <= self.view_fields:  # how it is drawn, not what moves: the run goes on
             self.config = new
             return described
+        if changed <= self.view_fields | self.live_fields:  # applied to the run as it goes
+            self.config = new
+            try:
+                self._apply_live(changed & self.live_fields)
+            except (ValueError, TypeError):
+                self.config = old
+                raise
+            return described
         if changed <= self.start_fields:  # a new start, applied now: time and counts go on
             self.config = new
             try:
@@ -451,6 +469,10 @@ class ExhibitModel(Rewinding):
             raise
         return described
 
+    def _apply_live(self, changed: set[str]) -> None:
+        """Apply the ``live_fields`` in ``changed`` (already in the config) to the run."""
+        raise NotImplementedError
+
     def _jump_to_start(self) -> None:
         """Put every run at the configured start without restarting it
         (:meth:`mechviz.dynamics.Simulation.jump`), for exhibits that list ``start_fields``."""
@@ -468,6 +490,7 @@ class ExhibitModel(Rewinding):
         self._compare_sample = None
         self.history.clear()
         self.long_history.clear()
+        self.forget_figures()
         d = self.sim.state.shape[1]
         if self.trace.shape != (d + 4,):  # t, the state, energy, energy error, error
             self.trace = Ring((d + 4,), self.history.maxlen)
@@ -529,7 +552,25 @@ class ExhibitModel(Rewinding):
         pass
 
     def measured(self) -> dict[str, Any]:
-        """The figures measured from the motion, by name (``None``: not yet)."""
+        """The figures measured from the motion, by name (``None``: not yet): ``_measure()``'s,
+        where a figure no longer resolved (its samples slid on to a stretch that cannot tell,
+        a growth that saturated) shows the last value it was measured at, until the motion
+        changes (:meth:`forget_figures`: a new start, a jump, a kick)."""
+        out = self._measure()
+        for name, value in out.items():
+            if isinstance(value, dynamics.measure.Estimate):
+                if value:
+                    self._kept[name] = value
+                elif name in self._kept:
+                    out[name] = self._kept[name]
+        return out
+
+    def forget_figures(self, *names: str) -> None:
+        """The motion changed: the figures ``names`` (all if none given) are measured afresh."""
+        for name in names or list(self._kept):
+            self._kept.pop(name, None)
+
+    def _measure(self) -> dict[str, Any]:  # the figures from the samples now, by name
         return {}
 
     @classmethod

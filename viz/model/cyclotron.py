@@ -4,7 +4,9 @@ The charge starts on a circle (or from a whole state), optionally with a compari
 beam of charges from the same point with a spread of speeds, advanced in one batched call. A
 radial kick (``mechviz.dynamics.cyclotron.radial_kick``) changes the state at the current time without
 restarting the run; the circle theory predicts moves at once, and the estimators start a new
-segment of samples. The view is :class:`mechviz.viz.scene.cyclotron.CyclotronExhibit`.
+segment of samples. The kick's strength is a setting of the next kick only, and the beam comes
+and goes while the run goes on: switched on, its charges leave from where the charge is then, in
+its direction, at the beam's speeds. The view is :class:`mechviz.viz.scene.cyclotron.CyclotronExhibit`.
 """
 
 from __future__ import annotations
@@ -86,9 +88,10 @@ class CyclotronConfig(ExhibitConfig):
             return np.array(self.state, dtype=float)
         return cy.circular_orbit_state(self.physics(), self.speed, self.centre, self.vz)
 
-    def beam_states(self) -> np.ndarray:
-        """(beam_size, 6): every charge at the start point, moving the same way, at its speed."""
-        s0 = self.initial_state()
+    def beam_states(self, s0: np.ndarray | None = None) -> np.ndarray:
+        """(beam_size, 6): every charge at the start point (or at the state ``s0``'s point),
+        moving the same way, at its speed."""
+        s0 = self.initial_state() if s0 is None else np.asarray(s0, float)
         speeds = np.linspace(self.beam_speeds[0], self.beam_speeds[1], self.beam_size)
         out = np.tile(s0, (self.beam_size, 1))
         direction = s0[3:5] / math.hypot(s0[3], s0[4])
@@ -102,6 +105,8 @@ class CyclotronModel(ExhibitModel):
     title = "Cyclotron"
     name = "Cyclotron"
     Config = CyclotronConfig
+    view_fields = frozenset({"kick"})  # the strength of the next kick: nothing moves yet
+    live_fields = frozenset({"beam", "beam_size", "beam_speeds"})
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:
@@ -128,8 +133,34 @@ class CyclotronModel(ExhibitModel):
             n = len(self.beam.state)
             self.beam_motion = Motion((n, 2), maxlen=min(1800, max(64, 400_000 // n)))
         self._segment_started()
+        self.forget_figures()  # another circle: measured afresh
         self.trace.clear()  # the plot's points before a kick lie in another well
         self._observe()
+
+    def _apply_live(self, changed: set[str]) -> None:
+        """The beam on, off or another one, while the run goes on: its charges leave from the
+        charge's position and direction now, at the time the run is at."""
+        c, sim = self.config, self.sim
+        beam = None
+        if c.beam:
+            beam = self._make_simulation(
+                sim.system, c.method, c.beam_states(self.state), reference=None
+            )
+            beam.t = beam.t0 = sim.t  # the system is autonomous: start it now
+            beam.clock = sim.clock  # and on the main run's step grid
+        self.beam = beam
+        self.beam_motion = None
+        if beam is not None:
+            n = len(beam.state)
+            self.beam_motion = Motion((n, 2), maxlen=min(1800, max(64, 400_000 // n)))
+            self.beam_motion.add(beam.t, beam.state[:, 3:5])
+        self.forget_figures("beam_gyrofrequencies")
+        # the states kept for Rewind have the runs' widths: the kept past starts here
+        self._rewind_start()
+        self._beam_changed()
+
+    def _beam_changed(self) -> None:
+        """Called when the beam came, went or changed: a view redraws it."""
 
     def _rewound(self) -> None:
         # the circle theory predicts from the state shown (a kick after it is undone)
@@ -157,7 +188,7 @@ class CyclotronModel(ExhibitModel):
         if self.beam_motion is not None:
             self.beam_motion.add(self.beam.t, self.beam.state[:, 3:5])
 
-    def measured(self) -> dict:
+    def _measure(self) -> dict:
         """Gyrofrequency and circle of the charge since its start or last kick
         (:func:`mechviz.dynamics.measure.gyrofrequency`,
         :func:`mechviz.dynamics.measure.fit_circle`), and each

@@ -144,7 +144,7 @@ class DiskModel(ExhibitModel):
             self.sim.system.kernel_params(), self.sim.state0[0]
         )
 
-    def measured(self) -> dict:
+    def _measure(self) -> dict:
         """Driven: the bearing force amplitude at B from dL/dt of the sampled motion
         (:func:`mechviz.dynamics.measure.bearing_force_amplitude`); released: the wobble's growth rate
         (:func:`mechviz.dynamics.measure.wobble_growth_rate`)."""

@@ -50,6 +50,10 @@ class Ring:
         self.count -= n
         self.version += 1
 
+    def newest(self):
+        """The newest row (a view; the ring must not be empty)."""
+        return self._buf[self._i - 1 + self.maxlen]
+
     def array(self) -> np.ndarray:
         """The rows held, oldest first, as a fresh array."""
         end = self._i + self.maxlen
@@ -120,6 +124,12 @@ class Motion:
         self._x.clear()
 
     def add(self, t: float, x) -> None:
+        """Keep the state at ``t`` [s], once: a frame in which the run took no step (a step
+        longer than a frame) adds nothing, so the estimators read the run's own samples, not
+        the same one over and over (a charge that seemed not to move between two frames looked
+        like an alias)."""
+        if len(self._t) and t <= self._t.newest():
+            return
         self._t.add(t)
         self._x.add(x)
 

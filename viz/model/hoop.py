@@ -109,6 +109,7 @@ class HoopModel(ExhibitModel):
         self.revision += 1
         self._sample = self._compare_sample = None
         self._jumped()
+        self.forget_figures()
         self.motion.clear()
         self.trace.clear()
         self._observe()
@@ -122,7 +123,7 @@ class HoopModel(ExhibitModel):
     def _observe(self) -> None:
         self.motion.add(self.t, self.state[:2])
 
-    def measured(self) -> dict:
+    def _measure(self) -> dict:
         """Both normal-mode frequencies from the sampled angles
         (:func:`mechviz.dynamics.measure.mode_frequencies`)."""
         t, angles = self.motion.arrays()

@@ -163,6 +163,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self.beam_trails.points[:] = np.nan
             self.beam_trails.box = box
 
+    def _beam_changed(self) -> None:
+        self._rebuild_beam_node()
+
     def _rebuild_beam_node(self) -> None:
         if self.beam_node is not None:
             self.beam_node.remove()
@@ -353,7 +356,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             )
 
         def give_kick(_event) -> None:
-            panel.app.typing.commit()  # a kick typed and not yet entered is the one meant
+            panel.app.typing.left()  # the person left any box typed in (text not entered stays so)
             panel.send({"op": "kick"})  # dv: the kick in force when the command is applied
 
         kick.on_click(give_kick)

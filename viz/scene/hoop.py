@@ -16,19 +16,19 @@ import math
 
 import numpy as np
 
+from mechviz.dynamics import floquet
 from mechviz.dynamics import hoop as hp
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import MAP_SIZE, add_maps
 from .base import Exhibit, against_theory, error_text, fmt
-from .panel import number_text
 
 
 @functools.lru_cache(maxsize=64)
 def _floquet(p: hp.HoopParams, amplitude: float) -> float:
     """Mode 1's largest Floquet multiplier (a run over one period: worked out once per swing)."""
-    return hp.mode1_floquet_multiplier(p, amplitude)
+    return floquet.mode1_floquet_multiplier(p, amplitude)
 
 
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
@@ -385,6 +385,7 @@ class HoopExhibit(HoopModel, Exhibit):
                         u.Series(label="q2 linear", stroke="#3c6ef0", width=1.0, dash=[4, 3]),
                     ),
                     scales={"x": u.Scale(time=False), "y": u.Scale(auto=False, range=(-1.0, 1.0))},
+                    legend=u.Legend(live=False),  # names only: no "--" for a value at no cursor
                     aspect=1.6,
                 ),
             )
@@ -393,5 +394,5 @@ class HoopExhibit(HoopModel, Exhibit):
         self.maps_view = add_maps(panel, self)  # the chaos and stability maps
 
     def sync_panel(self, panel) -> None:
-        w = panel.w
-        w["hoop.th1"].value, w["hoop.th2"].value = (number_text(x) for x in self.config.angles)
+        for k, x in enumerate(self.config.angles):  # never into a box the person is typing in
+            panel.show(f"th{k + 1}", x)

@@ -7,15 +7,17 @@ threads and only queue commands; the app applies them between frames and then ca
 springs back).
 
 One rule for every number a person types, the command line's and the demo files' too
-(:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a float
-(``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
+(:func:`mechviz.dynamics.params.parse_number`): what a person writes is read as Python reads a
+float (``0.025``, ``2.5e-2``, ``2.5E-2``, ``−1`` with a typographic minus); anything else, a
 non-finite or subnormal value or one outside the control's range is refused with a notification
-that names the field as the panel labels it, and the box goes back to the value in force.
-Number fields are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`) for that reason: the
-browser's own number input rewrites scientific notation as it is typed. A parameter's range is
-the one its system's description gives for a live exhibit (:attr:`mechviz.dynamics.spec.Setting.span`);
-a step is refused beyond one period of the fastest motion (the exhibit would stand still) and
-taken with a warning beyond the method's stability limit (:mod:`mechviz.dynamics.stability`).
+that names the field as the panel labels it; the box shows the value in force again once the
+person moves on to another control (never while they may still be typing in it). Number fields
+are text boxes read on Enter (:mod:`mechviz.viz.scene.fields`), with a stepper or a slider
+track beside each: the browser's own number input rewrites scientific notation as it is typed.
+A parameter's range is the one its system's description gives for a live exhibit
+(:attr:`mechviz.dynamics.spec.Setting.span`); a step is refused beyond one period of the fastest
+motion (the exhibit would stand still) and taken with a warning beyond the method's stability
+limit (:mod:`mechviz.dynamics.stability`).
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ def method_text(name: str) -> str:
     m = dynamics.get_method(name)
     if m.backend == "exact":
         return f"<small>{m.title}: the closed-form solution, exact at any time; no step</small>"
-    text = m.describe()
+    text = m.describe(dynamics.SYSTEMS.values())
     if m.stability:
         text += f". Stability: {m.stability}"
     return f"<small>{text}</small>"
@@ -128,10 +130,10 @@ class Panel:
         why="",
     ):
         """A number field (:class:`mechviz.viz.scene.fields.NumberField`): ``apply(x)`` gets the value
-        once it is submitted (Enter, or another control touched), read by :func:`parse_number`
-        and held to ``lo``..``hi``; ``check(x)`` may refuse it further (``ValueError``) or warn
-        (returns a message). ``current()`` is the value in force. With ``track = (lo, hi, step)``
-        a slider track under the box sets it too."""
+        entered (Enter), read by :func:`parse_number` and held to ``lo``..``hi``; ``check(x)``
+        may refuse it further (``ValueError``) or warn (returns a message). ``current()`` is the
+        value in force. With ``track = (lo, hi, step)`` a slider track under the box sets it
+        too, else a stepper (− / +) whose values are checked as typed ones."""
         self.labels[name.split(".")[-1]] = label
 
         def read(text):
@@ -151,17 +153,20 @@ class Panel:
             value,
             read=read,
             current=current,
-            on=self.on,
-            typing=self.app.typing,
             hint=hint,
             track=track,
             track_apply=apply,
+            lo=lo,
+            hi=hi,
+            **self.app.field_hooks(),
         )
         self.fields[name] = field
         self.app.number_fields[f"{self.key}.{name}"] = field
         self.put(name, field.box)
         if field.track is not None:
             self.put(f"{name}_track", field.track)
+        if field.stepper is not None:
+            self.put(f"{name}_stepper", field.stepper)
         return field
 
     def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
@@ -247,6 +252,9 @@ class Panel:
                     "x": viser.uplot.Scale(time=False),
                     "y": viser.uplot.Scale(auto=False, range=(LOG_FLOOR, 2.0)),
                 },
+                # the series' names only: a live legend shows "--" for the value under a cursor
+                # that is not on the chart
+                legend=viser.uplot.Legend(live=False),
                 aspect=1.6,
             ),
         )
