@@ -185,6 +185,7 @@ class MechvizApp(Views):
         )
         if gui:
             self._build_gui()
+            self._show_stage()  # the labels the GUI's parts made (the hoop's maps), for home
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
         # after the GUI: the hoop's chaos map (built with its tab) is part of the home view

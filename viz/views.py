@@ -33,7 +33,7 @@ LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1
 TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
 STAGE_TEXT = 3.0  # font_screen_scale on a stage: 33 px of ink, 3.06 % of 1080 px
 HOME_TEXT = 1.0  # the labels other than the titles at home (the titles: TITLE_TEXT)
-TITLE_TEXT = 2.0
+TITLE_TEXT = 1.0
 LINE_PX = 14.5  # px a line of a label takes (text and box) per unit of scale (measured 14.2)
 CHAR_PX = 5.6  # px a character of the figures takes, on average, per unit of scale (5.35)
 COLUMN_CHARS = 20  # characters a line of the figures' column holds
@@ -112,6 +112,15 @@ class Views:
     :class:`mechviz.viz.app.MechvizApp`, whose ``exhibits``, ``server``, ``stage``,
     ``presenting`` and ``theme`` they use)."""
 
+    def scene_nodes(self) -> dict:
+        """Name -> handle of every node the viewer keeps: each exhibit's (its
+        :class:`mechviz.viz.scene.base.NodeBook`; trail pieces are not kept) and the stage's
+        words. Public viser API only: the handles as they were made."""
+        nodes = {"/stage/words": self.stage_label}
+        for ex in self.exhibits.values():
+            nodes.update(ex.scene.handles)
+        return nodes
+
     # ------------------------------------------------------------------ clients
     def _frame_new_client(self, client) -> None:
         """Frame the view in force for the page of a client that has just connected, once it
@@ -139,16 +148,16 @@ class Views:
         """``(position, look_at)`` of a view for a page of ``width`` x ``height`` pixels whose
         right ``panel_px`` the GUI panel covers (:func:`mechviz.viz.scene.framing.frame`):
         *Home* (or *All*) frames the three together as large as the page allows; an exhibit's
-        name, its stage (:meth:`stage_view`); *Top* looks straight down on the cyclotron's
-        orbit."""
+        name, its stage (:meth:`stage_view`); *Top* looks straight down on the exhibit on
+        stage (at home, on the cyclotron's orbit)."""
         if view in (HOME, "All"):  # the three boxes' own corners: their pictures
             corners = np.concatenate([framing.corners(*ex.bounds) for ex in self.exhibits.values()])
             direction = np.subtract(OVERVIEW[1], OVERVIEW[0])
             return framing.frame_points(
                 corners, direction, width, height, fill=OVERVIEW_FILL, panel_px=panel_px
             )
-        if view == "Top":
-            lo, hi = self.exhibits[CyclotronExhibit.key].bounds
+        if view == "Top":  # on the exhibit on stage (at home: the cyclotron's orbit)
+            lo, hi = self.exhibits[self.stage or CyclotronExhibit.key].bounds
             return framing.frame(
                 lo, hi, (0.0, 0.01, -1.0), width, height, fill=FILL, panel_px=panel_px
             )
@@ -217,6 +226,9 @@ class Views:
         """Move the camera of ``client`` (all clients if None) to ``view`` framed for its page
         (the panel's width left free unless it is minimized for presenting)."""
         clients = [client] if client is not None else list(self.server.get_clients().values())
+        if not clients and view in VIEWS:  # no page yet: the words where a 1280 x 800 one has them
+            position, target, words = self.stage_view(VIEWS[view])
+            self._place_words(words, position, target, (1280, 800))
         for c in clients:
             size = page_size(c)
             panel = 0 if self.presenting else PANEL_PX
@@ -299,6 +311,8 @@ class Views:
             for h in ex.labels():
                 h.font_screen_scale = TITLE_TEXT if h is ex.label and self.stage is None else scale
             ex.label.visible = self.stage is None  # on stage the title is in the stage's words
+            for h in ex.stage_labels():
+                h.visible = self.stage == key
         self.stage_label.visible = self.stage is not None
         if "stage" in getattr(self, "w", {}):
             shown = HOME if self.stage is None else self.exhibits[self.stage].name

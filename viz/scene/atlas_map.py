@@ -212,7 +212,7 @@ class HoopMapsView:
         self.title = s.add_label(
             f"{r}/chaos_map_title",
             MAP_TITLE,
-            position=self.centre_local + (-0.5 * MAP_SIZE, 0.0, 0.5 * MAP_SIZE + 0.03),
+            position=self.centre_local + (-0.5 * MAP_SIZE, 0.0, 0.5 * MAP_SIZE + 0.1),
             anchor="bottom-left",
         )
         self.marker = geo.lines(

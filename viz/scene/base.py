@@ -172,5 +172,10 @@ class Exhibit(ExhibitModel):
         """The exhibit's text labels in the scene (the stage sizes them for the page)."""
         return [h for h in self.nodes.values() if type(h).__name__ == "LabelHandle"]
 
+    def stage_labels(self) -> list:
+        """Labels shown only while the exhibit is on stage (at home, beside the other
+        exhibits, they would run into them)."""
+        return []
+
     def world(self, local) -> np.ndarray:
         return self.origin + np.asarray(local, dtype=float)

@@ -273,6 +273,10 @@ class HoopExhibit(HoopModel, Exhibit):
         dist = 6.0 if self.compare is None else 8.0
         return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
 
+    def stage_labels(self) -> list:
+        maps = getattr(self, "maps_view", None)  # the maps come with the GUI
+        return [maps.title] if maps is not None else []
+
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:
         freqs, meas = self.mode_frequencies, self.measured()["mode_frequencies"]
