@@ -89,6 +89,18 @@ def page_size(client) -> tuple[int, int]:
     return (round(800 * w / h), 800) if w and h else (1280, 800)
 
 
+def css_scale(client) -> float:
+    """Page pixels (as :func:`page_size` takes the page, 800 high) per CSS pixel, for what
+    keeps its size in CSS pixels (the panel, the labels): 800 over the height the client
+    reports, taken between 800 and 1080 (a dense screen reports more pixels than it has CSS
+    pixels, and a browser drawing slowly fewer: both err towards more room for the words)."""
+    try:
+        h = client.camera.image_height
+    except AssertionError:  # not reported yet
+        return 1.0
+    return 800.0 / min(max(float(h or 800), 800.0), 1080.0)
+
+
 def wrap(parts: list[str], chars: int) -> list[str]:
     """``parts`` joined with wide spaces into lines of at most ``chars`` characters (a part
     longer than that is a line of its own)."""
@@ -164,12 +176,20 @@ class Views:
         position, target, _ = self.stage_view(VIEWS[view], width, height, panel_px)
         return position, target
 
-    def stage_view(self, key: str, width: int = 1280, height: int = 800, panel_px=PANEL_PX):
+    def stage_view(
+        self,
+        key: str,
+        width: int = 1280,
+        height: int = 800,
+        panel_px: float = PANEL_PX,
+        px: float = 1.0,
+    ):
         """``(position, look_at, words)`` of ``key``'s stage on a page of ``width`` x
         ``height`` px whose right ``panel_px`` the panel covers. ``words`` places the label of
         the title, figures and caption: ``(text, page point (x, y) [px], anchor)``. Two layouts
         are tried, the words in a column right of the exhibit or in a band above it, and the
-        one where the exhibit's box is larger on the page is taken."""
+        one where the exhibit's box is larger on the page is taken. ``px``: page pixels per
+        CSS pixel of the labels (:func:`css_scale`)."""
         ex = self.exhibits[key]
         lo, hi = ex.bounds
         position, target = ex.camera
@@ -177,12 +197,12 @@ class Views:
         free = max(width - panel_px, 1)
         best = None
         for layout in LAYOUTS:
-            text = self._stage_text(key, layout, free)
-            w, h = label_px(text, STAGE_TEXT)
+            text = self._stage_text(key, layout, free / px)
+            w, h = (px * v for v in label_px(text, STAGE_TEXT))
             if layout.startswith("column"):
                 region = (0.0, 0.0, max(free - w - GAP_PX, 0.3 * free), float(height))
             else:
-                region = (0.0, min(h + GAP_PX, 0.5 * height), float(free), float(height))
+                region = (0.0, min(h + GAP_PX * px, 0.5 * height), float(free), float(height))
             pos, look = framing.frame(
                 lo, hi, direction, width, height, fill=STAGE_FILL, region=region
             )
@@ -230,13 +250,14 @@ class Views:
             position, target, words = self.stage_view(VIEWS[view])
             self._place_words(words, position, target, (1280, 800))
         for c in clients:
-            size = page_size(c)
-            panel = 0 if self.presenting else PANEL_PX
+            size, px = page_size(c), css_scale(c)
+            panel = 0 if self.presenting else PANEL_PX * px
             if view in VIEWS and size[0] - panel < NARROW * size[0]:
                 panel = 0  # a narrow page: the exhibit takes it all, the panel minimized
                 c.gui.main_panel.minimize()
             if view in VIEWS:
-                position, target, words = self.stage_view(VIEWS[view], *size, panel_px=panel)
+                position, target, words = self.stage_view(VIEWS[view], *size, panel_px=panel, px=px)
+                self._words_free = (size[0] - panel) / px  # CSS px the words' lines may take
                 self._place_words(words, position, target, size)
             else:
                 position, target = self.camera_preset(view, *size, panel_px=panel)
@@ -275,6 +296,7 @@ class Views:
         )
         self._stage_words = None
         self._stage_layout = "band"
+        self._words_free = 940.0  # CSS px across the page the words' lines may take
         self.framed: dict[int, tuple] = {}  # client id -> (position, look_at) last framed for it
         self._show_stage()
 
@@ -334,12 +356,7 @@ class Views:
         """The stage's words anew (the figures move on), where the framing put them."""
         if self.stage is None:
             return
-        free = None
-        clients = list(self.server.get_clients().values())
-        if clients:
-            w, _ = page_size(clients[0])
-            free = w - (0 if self.presenting else PANEL_PX)
-        self.stage_label.text = self._stage_text(self.stage, self._stage_layout, free or 940)
+        self.stage_label.text = self._stage_text(self.stage, self._stage_layout, self._words_free)
 
     def _build_leave(self) -> None:
         """The ways out of presentation mode: the Escape key (a command of viser's palette with
