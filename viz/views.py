@@ -183,21 +183,25 @@ class Views:
         height: int = 800,
         panel_px: float = PANEL_PX,
         px: float = 1.0,
+        bar_px: float | None = None,
     ):
         """``(position, look_at, words)`` of ``key``'s stage on a page of ``width`` x
         ``height`` px whose right ``panel_px`` the panel covers. ``words`` places the label of
         the title, figures and caption: ``(text, page point (x, y) [px], anchor)``. Two layouts
         are tried, the words in a column right of the exhibit or in a band above it, and the
         one where the exhibit's box is larger on the page is taken. ``px``: page pixels per
-        CSS pixel of the labels (:func:`css_scale`)."""
+        CSS pixel of the labels (:func:`css_scale`); ``bar_px``: page pixels on the right the
+        words keep clear of (the panel's width by default: a minimized panel keeps its title
+        bar at the top right, where the band of words runs)."""
         ex = self.exhibits[key]
         lo, hi = ex.bounds
         position, target = ex.camera
         direction = np.subtract(target, position)
         free = max(width - panel_px, 1)
+        across = max(width - (panel_px if bar_px is None else bar_px), 1)  # the words' width
         best = None
         for layout in LAYOUTS:
-            text = self._stage_text(key, layout, free / px)
+            text = self._stage_text(key, layout, across / px)
             w, h = (px * v for v in label_px(text, STAGE_TEXT))
             if layout.startswith("column"):
                 region = (0.0, 0.0, max(free - w - GAP_PX, 0.3 * free), float(height))
@@ -210,7 +214,7 @@ class Views:
             if layout.startswith("column"):
                 words = (text, (min(x1 + GAP_PX, region[2] + GAP_PX), max(y0, 4.0)), "top-left")
             else:
-                words = (text, (free / 2, 4.0), "top-center")
+                words = (text, (across / 2, 4.0), "top-center")
             fits = share >= STAGE_SHARE or (x1 - x0) >= STAGE_WIDTH * free
             size = max(share / STAGE_SHARE, (x1 - x0) / (STAGE_WIDTH * free))
             words = (*words, layout)
@@ -256,8 +260,11 @@ class Views:
                 panel = 0  # a narrow page: the exhibit takes it all, the panel minimized
                 c.gui.main_panel.minimize()
             if view in VIEWS:
-                position, target, words = self.stage_view(VIEWS[view], *size, panel_px=panel, px=px)
-                self._words_free = (size[0] - panel) / px  # CSS px the words' lines may take
+                bar = PANEL_PX * px  # minimized, the panel keeps its bar at the top right
+                position, target, words = self.stage_view(
+                    VIEWS[view], *size, panel_px=panel, px=px, bar_px=bar
+                )
+                self._words_free = (size[0] - bar) / px  # CSS px the words' lines may take
                 self._place_words(words, position, target, size)
             else:
                 position, target = self.camera_preset(view, *size, panel_px=panel)
