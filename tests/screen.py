@@ -3,8 +3,10 @@
 viser draws labels in WebGL, so the page holds no boxes to measure; this module projects each
 visible label's anchor through a pinhole camera (viser's: vertical field of view ``FOV``, +z up)
 onto a page of ``width`` x ``height`` pixels and gives it the box its text takes there (viser's
-screen-size labels are about ``CHAR_PX`` wide per character and ``LINE_PX`` tall, measured on
-the screenshots at 1280x800).
+screen-size labels are about ``CHAR_PX`` wide per character and ``LINE_PX`` tall per unit of
+``font_screen_scale``, the same in CSS pixels on every page: measured on screenshots at
+1280x800 and, at scale 3, 1920x1080). The nodes are the viewer's own handles
+(``app.scene_nodes()``): viser has no public list of them.
 """
 
 from __future__ import annotations
@@ -105,10 +107,10 @@ def project(point, position, look_at, width: int, height: int) -> tuple[float, f
     return (nx + 1) / 2 * width, (1 - ny) / 2 * height
 
 
-def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Box]:
-    """Screen boxes of every visible, non-empty label for ``camera`` = (position, look_at)
-    (several lines of text: as wide as the longest, one line height each)."""
-    handles = server.scene._handle_from_node_name
+def label_boxes(handles: dict, camera, width: int = 1280, height: int = 800) -> list[Box]:
+    """Screen boxes of every visible, non-empty label of ``handles`` (name -> handle) for
+    ``camera`` = (position, look_at) (several lines of text: as wide as the longest, one line
+    height each)."""
     out = []
     # a snapshot: the app's loop adds nodes (trail pieces) while this reads
     for name, h in list(handles.items()):
@@ -120,8 +122,7 @@ def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
         xy = project(p, *camera, width, height)
         if xy is None:
             continue
-        # viser keeps a screen label's size in proportion to the page's height (800 px: 1x)
-        size = float(getattr(h, "font_screen_scale", 1.0)) * height / 800
+        size = float(getattr(h, "font_screen_scale", 1.0))  # px per unit, whatever the page
         lines = h.text.split("\n")
         w, hgt = size * (CHAR_PX * max(len(t) for t in lines) + 6), size * LINE_PX * len(lines)
         x, y = xy
@@ -134,10 +135,10 @@ def label_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Bo
     return out
 
 
-def image_boxes(server, camera, width: int = 1280, height: int = 800) -> list[Box]:
-    """Screen boxes of every visible image in the scene, each with its outline (its four
-    corners projected; an image lies in its node's x-y plane, centred on the node)."""
-    handles = server.scene._handle_from_node_name
+def image_boxes(handles: dict, camera, width: int = 1280, height: int = 800) -> list[Box]:
+    """Screen boxes of every visible image of ``handles`` (name -> handle), each with its
+    outline (its four corners projected; an image lies in its node's x-y plane, centred on
+    the node)."""
     out = []
     # a snapshot: the app's loop adds nodes (trail pieces) while this reads
     for name, h in list(handles.items()):

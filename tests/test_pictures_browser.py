@@ -127,7 +127,7 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
     try:
         wait_until(lambda: app.presenting is not None, 20, "presentation mode")
         # the still shows the construction, not presentation mode's key figures beside it
-        app.enqueue("call", lambda a: setattr(a.figures["disk"], "visible", False))
+        app.enqueue("call", lambda a: setattr(a.stage_label, "visible", False))
         frames_later(app, 60)  # the camera's move to the disk is a second of frames
         img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
         # the README's still: the disk's box as the browser's camera sees it (the body, its

@@ -257,12 +257,15 @@ def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
     for _ in range(48):  # 3.2 s at 1x: a whole turn of the driven disk (omega = 2 rad/s)
         for _ in range(4):
             app.step_frame()
-        for view in ("All", "Cyclotron", "Disk", "Hoop", "Top"):
+        for view in ("Home", "Cyclotron", "Disk", "Hoop", "Top"):
+            # Top looks down on the exhibit on stage: the cyclotron's orbit
+            app.enqueue("app", {"op": "stage", "value": "Cyclotron" if view == "Top" else view})
+            app.step_frame()
             camera = app.camera_preset(view)
             boxes = [
                 b
-                for b in screen.label_boxes(app.server, camera, *PAGE)
-                + screen.image_boxes(app.server, camera, *PAGE)
+                for b in screen.label_boxes(app.scene_nodes(), camera, *PAGE)
+                + screen.image_boxes(app.scene_nodes(), camera, *PAGE)
                 if b.x0 < PANEL_LEFT and b.y0 < PAGE[1]
             ]
             assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
@@ -281,18 +284,30 @@ def test_each_charge_of_a_beam_leaves_a_trail_on_its_own_circle(server):
         np.testing.assert_allclose(r, cy.larmor_radius(p, s0[j]), rtol=1e-5)
 
 
-def test_presenting_one_exhibit_hides_the_others_and_enlarges_its_labels(app):
-    app.w["present"].value = "Hoop"
+def test_a_stage_shows_one_exhibit_alone_with_every_label_a_thirtieth_of_a_1080_px_page(app):
+    from mechviz.viz.views import LABEL_INK_PX
+
+    nodes = app.scene_nodes()
+    app.enqueue("app", {"op": "stage", "value": "Hoop"})
     frames(app, 1)
-    scene = app.server.scene
-    assert app.presenting == "hoop"
-    assert scene.get_handle_by_name("/hoop").visible
-    assert not any(scene.get_handle_by_name(f"/{k}").visible for k in ("disk", "cyclotron"))
-    assert all(h.font_screen_scale > 1.0 for h in app.exhibits["hoop"].labels())
-    app.w["present"].value = "Off"
+    assert app.stage == "hoop" and nodes["/hoop"].visible
+    assert not nodes["/disk"].visible and not nodes["/cyclotron"].visible
+    # every node an exhibit makes is under its root frame, so hiding the root hides it all
+    for ex in app.exhibits.values():
+        assert all(name == ex.root or name.startswith(ex.root + "/") for name in ex.nodes)
+    shown = [h for h in app.exhibits["hoop"].labels() if h.visible and h.text]
+    assert shown and all(h.font_screen_scale * LABEL_INK_PX >= 0.03 * 1080 for h in shown)
+    words = app.stage_label
+    assert words.visible and "ω1" in words.text and "theory" in words.text and "t " in words.text
+    assert words.font_screen_scale * LABEL_INK_PX >= 0.03 * 1080
+    app.enqueue("app", {"op": "present", "value": "Disk"})
     frames(app, 1)
-    assert all(scene.get_handle_by_name(f"/{k}").visible for k in app.exhibits)
-    assert all(h.font_screen_scale == 1.0 for ex in app.exhibits.values() for h in ex.labels())
+    assert app.presenting == app.stage == "disk" and app.leave_panel.visible
+    app.enqueue("app", {"op": "present", "value": "Off"})  # what Escape and the button send
+    frames(app, 1)
+    assert app.stage is None and app.presenting is None and not app.leave_panel.visible
+    assert all(nodes[f"/{k}"].visible for k in app.exhibits)
+    assert not words.visible
 
 
 def test_the_charge_moves_in_its_effective_potential_under_the_level_of_its_energy(server):

@@ -1,8 +1,9 @@
-"""The live viewer: three exhibits in one viser world, a GUI, and one 60 Hz simulation loop.
+"""The live viewer: three exhibits, one on stage at a time, a GUI, and one 60 Hz simulation loop.
 
 Layout (:data:`ORIGINS`, +z up): the spinning disk near the origin, the cyclotron to its left, the
-hoop to its right and nearer the first view's camera: seen from above the front left, the three
-go down the page as well as across it, so together they use its height.
+hoop to its right and nearer the home view's camera: seen from above the front left, the three
+go down the page as well as across it, so together they use its height. An exhibit on stage is
+shown alone, large, with its key figures beside it (:mod:`mechviz.viz.views`).
 GUI callbacks (viser pool threads) only enqueue commands; the loop thread applies them between
 frames, advances every exhibit by ``speed x frame time`` in one compiled ``dynamics`` call each,
 and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit while the loop runs.
@@ -59,7 +60,7 @@ from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
 from .scene.fields import NumberField, ThreadFlag, Typing
 from .scene.panel import Panel, parse_number
-from .views import OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
+from .views import GRIDS, HOME, OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
 # m: where each exhibit stands, in the order of mechviz.viz.scene.EXHIBITS, left to right as the first
@@ -73,11 +74,6 @@ CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 CHART_WINDOWS = {"10 s": 10.0, "1 min": 60.0, "10 min": 600.0}
 FPS = 60.0  # display rate of the simulation loop
 SPEEDS = (0.1, 10.0)  # simulated seconds per real second: the speed control's range
-# The floor grid of each theme (plane, cells, sections): quiet against the theme's background.
-GRIDS = {
-    "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
-    "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
-}
 
 
 # --------------------------------------------------------------------------- the app
@@ -101,6 +97,7 @@ class MechvizApp(Views):
         fps: float | None = None,
         quiet: bool = True,
         theme: str = "light",
+        dev: bool = False,
     ) -> None:
         import viser
 
@@ -125,8 +122,11 @@ class MechvizApp(Views):
         self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
         self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
         self._cost_text = ""
-        self.presenting: str | None = None  # the exhibit shown alone, in presentation mode
+        self.stage: str | None = None  # the exhibit on stage; None: home, the three together
+        self.presenting: str | None = None  # the exhibit on stage with the panel minimized
         self.figures: dict[str, Any] = {}  # key -> the label of its key figures
+        self.dev = dev  # viser's share button shown (developers only)
+        self._page_shapes: dict[int, tuple[int, int]] = {}  # client id -> page shape framed for
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.common_folder = None
@@ -175,6 +175,7 @@ class MechvizApp(Views):
         for ex in self.exhibits.values():
             ex.chart_window = self.chart_window  # the charts draw on the long history
         self.panels: dict[str, Panel] = {}
+        self._build_stage()
         with server.atomic():
             self._draw()
         server.on_client_connect(self._frame_new_client)
@@ -184,11 +185,11 @@ class MechvizApp(Views):
         )
         if gui:
             self._build_gui()
-            self._build_figures()
+            self._show_stage()  # the labels the GUI's parts made (the hoop's maps), for home
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
-        # after the GUI: the hoop's chaos map (built with its tab) is part of the first view
-        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("All")
+        # after the GUI: the hoop's chaos map (built with its tab) is part of the home view
+        server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("Home")
         if start_loop:
             self.start()
 
@@ -296,6 +297,11 @@ class MechvizApp(Views):
             self.rewind_control.scrub(cmd.get("value"))
         elif op == "camera":
             self._move_camera(cmd.get("client"), cmd["view"])
+        elif op == "stage":
+            self._set_stage(cmd.get("value"), cmd.get("client"))
+        elif op == "reframe":  # a page changed shape (or has just connected)
+            view = "Home" if self.stage is None else self.exhibits[self.stage].name
+            self._move_camera(cmd.get("client"), view)
         elif op == "chart_window":
             v = cmd.get("value")
             if v not in CHART_WINDOWS.values():
@@ -316,8 +322,8 @@ class MechvizApp(Views):
             self._apply_theme(cmd["value"])
         else:
             raise ValueError(
-                "app op must be play, pause, toggle, step, speed, reset, scrub, camera, "
-                f"chart_window, present or theme; got {op!r}"
+                "app op must be play, pause, toggle, step, speed, reset, scrub, camera, stage, "
+                f"reframe, chart_window, present or theme; got {op!r}"
             )
         if self.gui is not None:
             self._sync_play_button()
@@ -326,30 +332,6 @@ class MechvizApp(Views):
         if self.gui is not None:
             with self.quiet():
                 self.speed_field.show(self.speed)
-
-    def _apply_theme(self, theme: str) -> None:
-        """Page and floor for ``theme``; the scene's palette reads on both (mechviz.viz.geometry)."""
-        self.theme = theme
-        if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
-            with self.quiet():
-                self.w["theme"].value = theme
-        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
-        self._show_figures()
-        self._configure_page()
-
-    def _configure_page(self) -> None:
-        """The page's theme; while presenting, the panel minimized (its button brings it back)."""
-        if self.gui is not None:
-            self.gui.configure_theme(
-                control_width="medium",
-                show_logo=False,
-                brand_color=(40, 110, 200),
-                dark_mode=self.theme == "dark",
-            )
-            if self.presenting:
-                self.gui.main_panel.minimize()
-            else:
-                self.gui.main_panel.expand()
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         self.messages.append((title, body))
@@ -440,6 +422,14 @@ class MechvizApp(Views):
         w = self.w
         self._apply_theme(self.theme)
         gui.add_markdown("**mechviz**: three systems of classical mechanics, integrated live.")
+        # the main actions at the top: an exhibit on stage (Home: the three), presenting
+        w["stage"] = gui.add_button_group("Stage", options=(HOME, *VIEWS))
+        w["present"] = gui.add_dropdown(
+            "Present",
+            options=("Off", *VIEWS),
+            initial_value="Off",
+            hint="An exhibit on stage with the panel minimized, for a projector (Escape leaves)",
+        )
         with gui.add_folder("Simulation", expand_by_default=True) as folder:
             self.common_folder = folder
             w["play"] = gui.add_button(
@@ -464,13 +454,7 @@ class MechvizApp(Views):
             self.number_fields["speed"] = self.speed_field
             self.rewind_control.build(gui)
             w["status"] = gui.add_markdown("t = 0 s")
-            w["view"] = gui.add_button_group("View", options=("All", *VIEWS, "Top"))
-            w["present"] = gui.add_dropdown(
-                "Present",
-                options=("Off", *VIEWS),
-                initial_value="Off",
-                hint="One exhibit alone, larger text, the panel collapsible: for a projector",
-            )
+            w["view"] = gui.add_button_group("Camera", options=("Frame", "Top"))
             w["chart_window"] = gui.add_dropdown(
                 "Chart window",
                 options=tuple(CHART_WINDOWS),
@@ -502,7 +486,17 @@ class MechvizApp(Views):
 
         @w["view"].on_click
         def _(event) -> None:
-            self.enqueue("app", {"op": "camera", "view": w["view"].value, "client": event.client})
+            view = w["view"].value
+            if view == "Frame":  # the view in force, framed again
+                view = HOME if self.stage is None else self.exhibits[self.stage].name
+            self.enqueue("app", {"op": "camera", "view": view, "client": event.client})
+
+        @w["stage"].on_click
+        def _(event) -> None:
+            self.typing.left()  # the person moved on: a box typed in shows the value in force
+            self.enqueue("app", {"op": "stage", "value": w["stage"].value, "client": event.client})
+
+        self._build_leave()
 
         tabs = gui.add_tab_group()
         for key, ex in self.exhibits.items():
@@ -572,7 +566,7 @@ class MechvizApp(Views):
             if not force and shown == (ex.revision, ex.chart_version()):
                 continue  # nothing new to show (e.g. paused)
             self.w[f"{key}.readout"].content = ex.readout()
-            if key == self.presenting:
+            if key == self.stage:
                 self._show_figures()
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])

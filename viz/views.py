@@ -1,10 +1,27 @@
-"""What the viewer shows each browser: camera presets framed for its page, presentation mode
-with its key figures, and the error chart's fitted axis (:class:`Views`, a part of
-:class:`mechviz.viz.app.MechvizApp`)."""
+"""What the viewer shows each browser: a home view of the three exhibits and one stage per
+exhibit, framed for the page, with the exhibit's key figures on the stage itself
+(:class:`Views`, a part of :class:`mechviz.viz.app.MechvizApp`).
+
+*Home* shows the three exhibits together, their titles large, to choose one. An exhibit *on
+stage* is alone: the others' scene nodes are hidden (their root frames ``visible = False``), its
+title, key figures (measured against theory, time, energy error) and a "what you see" caption
+stand in one label beside it, every label of the scene is :data:`STAGE_TEXT` times viser's
+screen size, and the camera frames the exhibit as large as the page leaves room for: the
+figures go in a column right of the exhibit or in a band above it, whichever lets the exhibit
+be larger on that page (:meth:`Views.stage_view`). *Present* is a stage with the panel
+minimized; a button and the Escape key leave it.
+
+viser 1.1 draws a screen label at a size in CSS pixels that does not depend on the page: "Hg"
+is :data:`LABEL_INK_PX` from the top of the H to the bottom of the g per unit of
+``font_screen_scale`` (measured at 1280x800, 1920x1080 and 800x1000 in headless Chromium).
+The page's CSS height is not reported (the camera's image size follows the browser's drawing
+scale), so the stage's text is sized for a 1080-pixel page and is larger than 3 % on smaller ones.
+"""
 
 from __future__ import annotations
 
 import math
+import textwrap
 import time
 
 import numpy as np
@@ -12,17 +29,30 @@ import numpy as np
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, CyclotronExhibit, framing
 
-PRESENT_TEXT = 1.6  # label size in presentation mode, times the usual
-FIGURE_SCALE = 2.8  # presentation mode's key figures: 2.8 x 12 px text on an 800 px page
-FIGURES_SHARE = 0.38  # of the page's width kept for them, right of the presented exhibit
+LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1, any page)
+TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
+STAGE_TEXT = 3.0  # font_screen_scale on a stage: 33 px of ink, 3.06 % of 1080 px
+HOME_TEXT = 1.0  # the labels other than the titles at home (the titles: TITLE_TEXT)
+TITLE_TEXT = 1.0
+LINE_PX = 14.5  # px a line of a label takes (text and box) per unit of scale (measured 14.2)
+CHAR_PX = 5.6  # px a character of the figures takes, on average, per unit of scale (5.35)
+COLUMN_CHARS = 20  # characters a line of the figures' column holds
+GAP_PX = 16  # px between the exhibit and its figures
+STAGE_FILL = 0.98  # of the height the figures leave, the exhibit's box at most
+STAGE_SHARE = 0.76  # of the page's height an exhibit on stage should fill (75 % and a margin),
+STAGE_WIDTH = 0.91  # or of the width the panel leaves, when its shape is wide
+# the places of the stage's words, in the order of preference: a band above the exhibit or a
+# column right of it, with the caption, then without it (the panel's readout explains more)
+LAYOUTS = ("band", "column", "band-short", "column-short")
+NARROW = 0.6  # a page whose panel would leave less than this share of its width free has the
+# panel minimized on stage (the panel's button opens it over the scene)
 PANEL_PX = framing.PANEL_PX  # px of the page's right edge the GUI panel covers
-FILL = 0.72  # of the page's height an exhibit's box takes in its own view
-PRESENT_FILL = 0.8  # the same in presentation mode (the panel collapsed)
-# the direction the first view looks in: from the front left, 36 degrees above the floor (any
-# steeper and the driven disk's L label passes over its ω label)
+FILL = STAGE_FILL  # the exhibits' presets are their stages
+# the direction the home view looks in: from the front left, 36 degrees above the floor
 OVERVIEW = ((-2.42, -6.0, 4.7), (0.0, 0.0, 0.0))
-OVERVIEW_FILL = 0.9  # of the page's height the three exhibits' pictures span in the first view
-VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # camera preset -> exhibit
+OVERVIEW_FILL = 0.9  # of the page's height the three exhibits' pictures span at home
+VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # stage name -> exhibit
+HOME = "Home"
 
 
 def log_axis(series) -> tuple[float, float]:
@@ -59,124 +89,333 @@ def page_size(client) -> tuple[int, int]:
     return (round(800 * w / h), 800) if w and h else (1280, 800)
 
 
-class Views:
-    """The app's camera presets and presentation mode (mixed into :class:`mechviz.viz.app.MechvizApp`,
-    whose ``exhibits``, ``server``, ``figures``, ``presenting`` and ``theme`` they use)."""
+def css_scale(client) -> float:
+    """Page pixels (as :func:`page_size` takes the page, 800 high) per CSS pixel, for what
+    keeps its size in CSS pixels (the panel, the labels): 800 over the height the client
+    reports, taken between 800 and 1080 (a dense screen reports more pixels than it has CSS
+    pixels, and a browser drawing slowly fewer: both err towards more room for the words)."""
+    try:
+        h = client.camera.image_height
+    except AssertionError:  # not reported yet
+        return 1.0
+    return 800.0 / min(max(float(h or 800), 800.0), 1080.0)
 
+
+def wrap(parts: list[str], chars: int) -> list[str]:
+    """``parts`` joined with wide spaces into lines of at most ``chars`` characters (a part
+    longer than that is a line of its own)."""
+    lines: list[str] = []
+    for part in parts:
+        if lines and len(lines[-1]) + 3 + len(part) <= chars:
+            lines[-1] += "   " + part
+        else:
+            lines.append(part)
+    return lines
+
+
+def label_px(text: str, scale: float) -> tuple[float, float]:
+    """Width and height [px] a label of ``text`` takes at ``scale``."""
+    lines = text.split("\n")
+    return scale * (CHAR_PX * max(len(t) for t in lines) + 6), scale * LINE_PX * len(lines)
+
+
+# The floor grid of each theme (plane, cells, sections): quiet against the theme's background.
+GRIDS = {
+    "light": ((255, 255, 255), (200, 200, 200), (140, 140, 140)),
+    "dark": ((33, 34, 38), (62, 64, 70), (100, 102, 110)),
+}
+
+
+class Views:
+    """The app's home view, stages and presentation mode (mixed into
+    :class:`mechviz.viz.app.MechvizApp`, whose ``exhibits``, ``server``, ``stage``,
+    ``presenting`` and ``theme`` they use)."""
+
+    def scene_nodes(self) -> dict:
+        """Name -> handle of every node the viewer keeps: each exhibit's (its
+        :class:`mechviz.viz.scene.base.NodeBook`; trail pieces are not kept) and the stage's
+        words. Public viser API only: the handles as they were made."""
+        nodes = {"/stage/words": self.stage_label}
+        for ex in self.exhibits.values():
+            nodes.update(ex.scene.handles)
+        return nodes
+
+    # ------------------------------------------------------------------ clients
     def _frame_new_client(self, client) -> None:
-        """Frame the first view for the page of a client that has just connected, once it has
-        reported its size (the initial camera is framed for 1280 x 800)."""
+        """Frame the view in force for the page of a client that has just connected, once it
+        has reported its size, and again whenever the page changes shape (a resize)."""
         deadline = time.monotonic() + 10.0
         while time.monotonic() < deadline and not camera_reported(client):
             if self._stop.wait(0.1):
                 return
-        view = "All" if self.presenting is None else self.exhibits[self.presenting].name
-        self.enqueue(
-            "app",
-            {
-                "op": "camera" if self.presenting is None else "present",
-                "view": view,
-                "value": view,
-                "client": client,
-            },
-        )
+        shapes = self._page_shapes
+        shapes[client.client_id] = page_size(client)
 
+        @client.camera.on_update
+        def _(_camera) -> None:
+            size = page_size(client)
+            if shapes.get(client.client_id) != size:
+                shapes[client.client_id] = size
+                self.enqueue("app", {"op": "reframe", "client": client})
+
+        self.enqueue("app", {"op": "reframe", "client": client})
+
+    # ------------------------------------------------------------------ cameras
     def camera_preset(
         self, view: str, width: int = 1280, height: int = 800, panel_px: int = PANEL_PX
     ):
-        """``(position, look_at)`` of a preset for a page of ``width`` x ``height`` pixels whose
-        right ``panel_px`` the GUI panel covers (:func:`mechviz.viz.scene.framing.frame`): an exhibit's
-        own view frames its box to ``FILL`` of the height, in the middle of the page left of
-        the panel; *All* frames the three together (as large as the free width allows); *Top*
-        looks straight down on the cyclotron's orbit."""
-        if view == "All":  # the three boxes' own corners: their pictures, not a box around all
+        """``(position, look_at)`` of a view for a page of ``width`` x ``height`` pixels whose
+        right ``panel_px`` the GUI panel covers (:func:`mechviz.viz.scene.framing.frame`):
+        *Home* (or *All*) frames the three together as large as the page allows; an exhibit's
+        name, its stage (:meth:`stage_view`); *Top* looks straight down on the exhibit on
+        stage (at home, on the cyclotron's orbit)."""
+        if view in (HOME, "All"):  # the three boxes' own corners: their pictures
             corners = np.concatenate([framing.corners(*ex.bounds) for ex in self.exhibits.values()])
             direction = np.subtract(OVERVIEW[1], OVERVIEW[0])
             return framing.frame_points(
                 corners, direction, width, height, fill=OVERVIEW_FILL, panel_px=panel_px
             )
-        if view == "Top":
-            lo, hi = self.exhibits[CyclotronExhibit.key].bounds
+        if view == "Top":  # on the exhibit on stage (at home: the cyclotron's orbit)
+            lo, hi = self.exhibits[self.stage or CyclotronExhibit.key].bounds
             return framing.frame(
                 lo, hi, (0.0, 0.01, -1.0), width, height, fill=FILL, panel_px=panel_px
             )
-        ex = self.exhibits[VIEWS[view]]
-        position, target = ex.camera
+        position, target, _ = self.stage_view(VIEWS[view], width, height, panel_px)
+        return position, target
+
+    def stage_view(
+        self,
+        key: str,
+        width: int = 1280,
+        height: int = 800,
+        panel_px: float = PANEL_PX,
+        px: float = 1.0,
+        bar_px: float | None = None,
+    ):
+        """``(position, look_at, words)`` of ``key``'s stage on a page of ``width`` x
+        ``height`` px whose right ``panel_px`` the panel covers. ``words`` places the label of
+        the title, figures and caption: ``(text, page point (x, y) [px], anchor)``. Two layouts
+        are tried, the words in a column right of the exhibit or in a band above it, and the
+        one where the exhibit's box is larger on the page is taken. ``px``: page pixels per
+        CSS pixel of the labels (:func:`css_scale`); ``bar_px``: page pixels on the right the
+        words keep clear of (the panel's width by default: a minimized panel keeps its title
+        bar at the top right, where the band of words runs)."""
+        ex = self.exhibits[key]
         lo, hi = ex.bounds
-        return framing.frame(
-            lo, hi, np.subtract(target, position), width, height, fill=FILL, panel_px=panel_px
-        )
-
-    def _present(self, view, client=None) -> None:
-        """Presentation mode: ``view`` (an exhibit's preset name) alone on the page, framed to
-        ``PRESENT_FILL`` of its height with its key figures drawn large beside it
-        (``FIGURE_SCALE``), labels ``PRESENT_TEXT`` times larger and the panel minimized (its
-        button opens it again); ``"Off"`` brings the three and the panel back."""
-        if view not in ("Off", *VIEWS):
-            raise ValueError(f"Present must be Off or one of {', '.join(VIEWS)}, got {view!r}")
-        self.presenting = None if view == "Off" else VIEWS[view]
-        scale = 1.0 if self.presenting is None else PRESENT_TEXT
-        for key, ex in self.exhibits.items():
-            ex.scene.get_handle_by_name(ex.root).visible = self.presenting in (None, key)
-            for h in ex.labels():
-                h.font_screen_scale = scale
-            if key in self.figures:
-                self.figures[key].visible = self.presenting == key
-        self._show_figures()
-        self._configure_page()
-        if self.presenting is None:
-            self._move_camera(client, "All")
-        else:
-            self._move_camera(client, view, present=True)
-
-    def _build_figures(self) -> None:
-        """Presentation mode's key figures: for each exhibit a label of large text at the top
-        right corner of its box (``FIGURE_SCALE`` times viser's 12 px screen labels), hidden
-        until the exhibit is presented."""
-        for key, ex in self.exhibits.items():
-            lo, hi = ex.bounds
-            self.figures[key] = self.server.scene.add_label(
-                f"/key_figures/{key}",
-                "",
-                font_size_mode="screen",
-                font_screen_scale=FIGURE_SCALE,
-                anchor="top-left",
-                position=(float(hi[0]), float(lo[1]), float(hi[2])),
-                visible=False,
-            )
-
-    def _show_figures(self) -> None:
-        key = self.presenting
-        if key is not None and key in self.figures:
-            lines = []
-            for name, value in self.exhibits[key].key_figures():
-                # the theory on a line of its own: drawn large, a whole line runs off the page
-                shown, _, theory = value.partition(" (theory ")
-                lines.append(f"{name} = {shown}")
-                if theory:
-                    lines.append(f"   (theory {theory}")
-            self.figures[key].text = "\n".join(lines)
-
-    def _move_camera(self, client, view: str, *, present: bool = False) -> None:
-        """Move the camera of ``client`` (all clients if None) to the preset ``view``, framed
-        for its page; ``present``: the panel collapsed and room on the right for the figures."""
-        clients = [client] if client is not None else list(self.server.get_clients().values())
-        for c in clients:
-            size = page_size(c)
-            if present:
-                ex = self.exhibits[VIEWS[view]]
-                position, target = ex.camera
-                lo, hi = ex.bounds
-                position, target = framing.frame(
-                    lo,
-                    hi,
-                    np.subtract(target, position),
-                    *size,
-                    fill=PRESENT_FILL,
-                    panel_px=round(FIGURES_SHARE * size[0]),
-                )
+        position, target = ex.camera
+        direction = np.subtract(target, position)
+        free = max(width - panel_px, 1)
+        across = max(width - (panel_px if bar_px is None else bar_px), 1)  # the words' width
+        best = None
+        for layout in LAYOUTS:
+            text = self._stage_text(key, layout, across / px)
+            w, h = (px * v for v in label_px(text, STAGE_TEXT))
+            if layout.startswith("column"):
+                region = (0.0, 0.0, max(free - w - GAP_PX, 0.3 * free), float(height))
             else:
-                position, target = self.camera_preset(view, *size)
+                region = (0.0, min(h + GAP_PX * px, 0.5 * height), float(free), float(height))
+            pos, look = framing.frame(
+                lo, hi, direction, width, height, fill=STAGE_FILL, region=region
+            )
+            share, x0, x1, y0, _ = framing.share(lo, hi, pos, look, width, height)
+            if layout.startswith("column"):
+                words = (text, (min(x1 + GAP_PX, region[2] + GAP_PX), max(y0, 4.0)), "top-left")
+            else:
+                words = (text, (across / 2, 4.0), "top-center")
+            fits = share >= STAGE_SHARE or (x1 - x0) >= STAGE_WIDTH * free
+            size = max(share / STAGE_SHARE, (x1 - x0) / (STAGE_WIDTH * free))
+            words = (*words, layout)
+            if fits:  # the first layout (in the order of preference) that fits is taken
+                return pos, look, words
+            if best is None or size > best[0]:
+                best = (size, pos, look, words)
+        _, pos, look, words = best
+        return pos, look, words
+
+    def _stage_text(self, key: str, layout: str, free_px: float) -> str:
+        """The words of ``key``'s stage: title, key figures and (``layout`` not ending in
+        ``-short``) the caption, wrapped for ``layout``: a narrow column, or a band across the
+        ``free_px`` the panel leaves."""
+        ex = self.exhibits[key]
+        figures = []
+        for name, value in ex.key_figures():
+            shown, _, theory = value.partition(" (theory ")
+            figures.append((f"{name} {shown}", f"  theory {theory[:-1]}" if theory else ""))
+        headline = ex.title if layout.endswith("-short") else f"{ex.title}: {ex.caption}"
+        if layout.startswith("column"):
+            lines = textwrap.wrap(headline, COLUMN_CHARS)
+            for figure, theory in figures:
+                lines += [figure] + ([theory] if theory else [])
+            return "\n".join(lines)
+        chars = max(int(free_px / (CHAR_PX * STAGE_TEXT)) - 1, COLUMN_CHARS)
+        parts = [f"{f} ({t.strip()})" if t else f for f, t in figures]
+        if layout.endswith("-short"):  # the title shares its line with the figures
+            return "\n".join(wrap([headline, *parts], chars))
+        return "\n".join([*textwrap.wrap(headline, chars), *wrap(parts, chars)])
+
+    def _move_camera(self, client, view: str) -> None:
+        """Move the camera of ``client`` (all clients if None) to ``view`` framed for its page
+        (the panel's width left free unless it is minimized for presenting)."""
+        clients = [client] if client is not None else list(self.server.get_clients().values())
+        if not clients and view in VIEWS:  # no page yet: the words where a 1280 x 800 one has them
+            position, target, words = self.stage_view(VIEWS[view])
+            self._place_words(words, position, target, (1280, 800))
+        for c in clients:
+            size, px = page_size(c), css_scale(c)
+            panel = 0 if self.presenting else PANEL_PX * px
+            if view in VIEWS and size[0] - panel < NARROW * size[0]:
+                panel = 0  # a narrow page: the exhibit takes it all, the panel minimized
+                c.gui.main_panel.minimize()
+            if view in VIEWS:
+                bar = PANEL_PX * px  # minimized, the panel keeps its bar at the top right
+                position, target, words = self.stage_view(
+                    VIEWS[view], *size, panel_px=panel, px=px, bar_px=bar
+                )
+                self._words_free = (size[0] - bar) / px  # CSS px the words' lines may take
+                self._place_words(words, position, target, size)
+            else:
+                position, target = self.camera_preset(view, *size, panel_px=panel)
+            self.framed[c.client_id] = (position, target)
             with c.atomic():
                 c.camera.position = position
                 c.camera.look_at = target
+                c.camera.up_direction = (0.0, 0.0, 1.0)
+
+    def _place_words(self, words, position, target, size) -> None:
+        """Put the stage's label where ``words`` says, for the camera ``position`` looking at
+        ``target`` on a page of ``size``: on the plane through the point looked at, facing
+        the camera (viser draws labels over the scene, so the depth only sets the point)."""
+        text, (x, y), anchor, self._stage_layout = words
+        w, h = size
+        f, r, u = framing.basis(position, target)
+        depth = float(np.dot(np.subtract(target, position), f))
+        t = math.tan(framing.FOV / 2)
+        nx, ny = 2 * x / w - 1, 1 - 2 * y / h
+        ray = f + r * nx * t * w / h + u * ny * t
+        self.stage_label.position = tuple(np.asarray(position, float) + depth * ray)
+        self.stage_label.anchor = anchor
+        self.stage_label.text = text
+        self._stage_words = words
+
+    # ------------------------------------------------------------------ the stage
+    def _build_stage(self) -> None:
+        """The stage's one label (title, key figures, caption), hidden at home."""
+        self.stage_label = self.server.scene.add_label(
+            "/stage/words",
+            "",
+            font_size_mode="screen",
+            font_screen_scale=STAGE_TEXT,
+            anchor="top-left",
+            visible=False,
+        )
+        self._stage_words = None
+        self._stage_layout = "band"
+        self._words_free = 940.0  # CSS px across the page the words' lines may take
+        self.framed: dict[int, tuple] = {}  # client id -> (position, look_at) last framed for it
+        self._show_stage()
+
+    def _set_stage(self, view, client=None) -> None:
+        """Put ``view`` (an exhibit's name, or *Home*) on stage for every page."""
+        if view not in (HOME, "All", *VIEWS):
+            raise ValueError(f"Stage must be {HOME} or one of {', '.join(VIEWS)}, got {view!r}")
+        self.stage = VIEWS.get(view)
+        if self.stage is None:
+            self.presenting = None
+        elif self.presenting is not None:
+            self.presenting = self.stage
+        self._show_stage()
+        self._configure_page()
+        self._move_camera(None, HOME if self.stage is None else view)
+        self._show_figures()
+
+    def _present(self, view, client=None) -> None:
+        """Presentation mode: ``view`` (an exhibit's name) on stage with the panel minimized;
+        ``"Off"`` goes back home with the panel open."""
+        if view not in ("Off", *VIEWS):
+            raise ValueError(f"Present must be Off or one of {', '.join(VIEWS)}, got {view!r}")
+        self.presenting = None if view == "Off" else VIEWS[view]
+        self._set_stage(HOME if view == "Off" else view, client)
+
+    def _show_stage(self) -> None:
+        """Nodes and label sizes for the view in force: at home every exhibit, its title
+        large and its other labels small; on stage the one exhibit and every label large."""
+        for key, ex in self.exhibits.items():
+            on = self.stage in (None, key)
+            ex.nodes[ex.root].visible = on
+            scale = STAGE_TEXT if self.stage == key else HOME_TEXT
+            ex.scene.label_scale = scale
+            for h in ex.labels():
+                h.font_screen_scale = TITLE_TEXT if h is ex.label and self.stage is None else scale
+            ex.label.visible = self.stage is None  # on stage the title is in the stage's words
+            for h in ex.stage_labels():
+                h.visible = self.stage == key
+        self.stage_label.visible = self.stage is not None
+        if "stage" in getattr(self, "w", {}):
+            shown = HOME if self.stage is None else self.exhibits[self.stage].name
+            if self.w["stage"].value != shown:
+                self._syncing = True
+                self.w["stage"].value = shown
+                self._syncing = False
+        if "present" in getattr(self, "w", {}):
+            shown = "Off" if self.presenting is None else self.exhibits[self.presenting].name
+            if self.w["present"].value != shown:
+                self._syncing = True
+                self.w["present"].value = shown
+                self._syncing = False
+        leave = getattr(self, "leave_panel", None)
+        if leave is not None:
+            leave.visible = self.presenting is not None
+
+    def _show_figures(self) -> None:
+        """The stage's words anew (the figures move on), where the framing put them."""
+        if self.stage is None:
+            return
+        self.stage_label.text = self._stage_text(self.stage, self._stage_layout, self._words_free)
+
+    def _build_leave(self) -> None:
+        """The ways out of presentation mode: the Escape key (a command of viser's palette with
+        that hotkey) and a button in a small panel floating at the page's bottom right, shown
+        only while presenting (the main panel is minimized then)."""
+        viser, gui = self._viser, self.gui
+
+        def leave(_event) -> None:
+            if self.presenting is not None:
+                self.enqueue("app", {"op": "present", "value": "Off"})
+
+        gui.add_command(
+            "Leave presentation", description="Back home, the panel open", hotkey="escape"
+        ).on_trigger(leave)
+        self.leave_panel = gui.add_panel(visible=False)
+        with self.leave_panel.add_tab("Presenting"):
+            self.w["leave"] = gui.add_button(
+                "Leave presentation (Esc)", icon=viser.Icon.X, hint="Back home, the panel open"
+            )
+        self.w["leave"].on_click(leave)
+        self.leave_panel.float(x=-15, y=-15)
+
+    # ------------------------------------------------------------------ the page
+    def _apply_theme(self, theme: str) -> None:
+        """Page and floor for ``theme``; the scene's palette reads on both (mechviz.viz.geometry)."""
+        self.theme = theme
+        if "theme" in getattr(self, "w", {}) and self.w["theme"].value != theme:
+            with self.quiet():
+                self.w["theme"].value = theme
+        self.grid.plane_color, self.grid.cell_color, self.grid.section_color = GRIDS[theme]
+        self._show_figures()
+        self._configure_page()
+
+    def _configure_page(self) -> None:
+        """The page's theme; while presenting, the panel minimized (its button brings it back).
+        viser's share button only for developers (``mechviz view --dev``)."""
+        if self.gui is not None:
+            self.gui.configure_theme(
+                control_width="medium",
+                show_logo=False,
+                show_share_button=self.dev,
+                brand_color=(40, 110, 200),
+                dark_mode=self.theme == "dark",
+            )
+            if self.presenting:
+                self.gui.main_panel.minimize()
+            else:
+                self.gui.main_panel.expand()

@@ -40,6 +40,11 @@ def add_commands(sub) -> None:
         default="light",
         help="page theme (default light; the panel switches it too)",
     )
+    p.add_argument(
+        "--dev",
+        action="store_true",
+        help="show viser's share button (for developers; hidden in a lecture by default)",
+    )
     p.set_defaults(func=_view)
 
 
@@ -80,7 +85,11 @@ def _view(args: argparse.Namespace) -> int:
             print("mechviz: interrupted", flush=True)
             return 130
         app = MechvizApp(
-            host=args.host, port=args.port, environment_map=not args.no_env_map, theme=args.theme
+            host=args.host,
+            port=args.port,
+            environment_map=not args.no_env_map,
+            theme=args.theme,
+            dev=args.dev,
         )
         # The other methods compile while the viewer already runs, so a later switch of method
         # starts at once (the frame rate holds while they compile, but for a few late frames).

@@ -33,10 +33,8 @@ MAP_SIZE = 1.0  # m, the side of the map in the scene
 # above the configuration square (the same axes), clear of the mode lines' names at the
 # square's top edge; beside it the hoop's box would grow wider and its view smaller
 MAP_SHIFT = np.array([0.0, 0.0, 1.45])  # m, from the configuration square's centre
-MAP_AND_SQUARE_TITLE = (
-    "configuration space (lower square),\nchaos map (upper; click to start there):\n"
-    "θ1 → (across), θ2 ↑ (up)"
-)
+MAP_AND_SQUARE_TITLE = "θ1 → θ2 ↑ configuration"  # under the square; the map shares its axes
+MAP_TITLE = "chaos map (click)"  # above the map
 MARKER_RGB = (230, 30, 30)  # the current start on the chaos maps
 STEP_RGB = (255, 0, 255)  # the current step on the stability map (a colour no map uses)
 REFRESH_FRAMES = 6  # frames between looks at the background work (10 Hz at 60 Hz)
@@ -211,6 +209,12 @@ class HoopMapsView:
         # named with the square below it, whose axes it shares (a title of its own, over or
         # under it, runs into the disk's or the mode lines' names in the first view)
         ex.config_space.title.text = MAP_AND_SQUARE_TITLE
+        self.title = s.add_label(
+            f"{r}/chaos_map_title",
+            MAP_TITLE,
+            position=self.centre_local + (-0.5 * MAP_SIZE, 0.0, 0.5 * MAP_SIZE + 0.1),
+            anchor="bottom-left",
+        )
         self.marker = geo.lines(
             s, f"{r}/chaos_map_start", np.zeros((2, 2, 3), np.float32), MARKER_RGB, 3.0
         )

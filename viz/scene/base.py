@@ -15,7 +15,7 @@ and the hooks ``_build`` (scene nodes, once) and ``_started`` (reset what is dra
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -62,11 +62,55 @@ def error_text(smp) -> str:
     return error_verdict(float(np.max(smp.error)), bar)
 
 
+class NodeBook:
+    """An exhibit's view of viser's scene API that keeps every handle it creates, by name.
+
+    viser 1.1 has no public way to list the nodes under a name, and the stage needs them: it
+    hides the other exhibits and sizes every label. Every ``add_*`` call goes through this book
+    (the scenes, their helpers in :mod:`mechviz.viz.geometry` and the maps take it as their
+    ``scene``); anything else is viser's own API, passed through. Line segments are made and
+    removed by the thousand as trails grow (:class:`mechviz.viz.geometry.ChunkedTrail`), so they
+    are not kept: they hide with their exhibit's root frame. ``label_scale`` is the size new
+    labels get (the stage sets it, and the size of the ones already made, for the page).
+    """
+
+    def __init__(self, scene) -> None:
+        self._scene = scene
+        self.handles: dict[str, Any] = {}  # node name -> the handle of its latest add_* call
+        self.label_scale = 1.0  # times viser's screen label size, for labels made from now on
+
+    def __getattr__(self, attr: str):
+        value = getattr(self._scene, attr)
+        if not attr.startswith("add_") or not callable(value):
+            return value
+
+        def add(name: str, *args, **kwargs):
+            if attr == "add_label":
+                kwargs.setdefault("font_screen_scale", self.label_scale)
+            handle = value(name, *args, **kwargs)
+            if attr != "add_line_segments":
+                self.handles[name] = handle
+            return handle
+
+        return add
+
+    def under(self, root: str) -> dict[str, Any]:
+        """Name -> handle of the kept nodes at or below ``root`` (a name made again is its
+        newest handle)."""
+        prefix = root.rstrip("/") + "/"
+        return {
+            name: h
+            for name, h in list(self.handles.items())  # a snapshot: the loop may add nodes
+            if name == root or name.startswith(prefix)
+        }
+
+
 class Exhibit(ExhibitModel):
     """A model drawn: subclasses add ``icon``, ``_build``, ``_started``, ``draw``, ``readout``,
     ``camera``, ``_extent`` and ``build_panel`` to a model class."""
 
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
+    caption: ClassVar[str] = ""  # "what you see", shown on the exhibit's stage
 
     def __init__(
         self,
@@ -81,7 +125,7 @@ class Exhibit(ExhibitModel):
         # box, and a run that leaves it diverging is paused; alone (a recording) it is drawn all
         self.bounded = bounded
         self.server = server
-        self.scene = server.scene
+        self.scene = NodeBook(server.scene)  # every node this exhibit makes, by name
         self.origin = np.asarray(origin, dtype=float)
         self.root = f"/{self.key}"
         super().__init__(config, history_len=history_len, start=False)
@@ -130,14 +174,19 @@ class Exhibit(ExhibitModel):
             ("ΔE/E", f"{float(np.max(np.abs(smp.energy_error))):.1e}"),
         ]
 
+    @property
+    def nodes(self) -> dict[str, Any]:
+        """Name -> handle of every scene node of the exhibit (its root frame included)."""
+        return self.scene.under(self.root)
+
     def labels(self) -> list:
-        """The exhibit's text labels in the scene (for presentation mode's larger text)."""
-        handles = self.scene._handle_from_node_name
-        return [
-            h
-            for name, h in handles.items()
-            if name.startswith(self.root + "/") and type(h).__name__ == "LabelHandle"
-        ]
+        """The exhibit's text labels in the scene (the stage sizes them for the page)."""
+        return [h for h in self.nodes.values() if type(h).__name__ == "LabelHandle"]
+
+    def stage_labels(self) -> list:
+        """Labels shown only while the exhibit is on stage (at home, beside the other
+        exhibits, they would run into them)."""
+        return []
 
     def world(self, local) -> np.ndarray:
         return self.origin + np.asarray(local, dtype=float)

@@ -72,6 +72,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     comparison run and the beam."""
 
     icon = "ATOM"
+    caption = "every orbit takes 2πm/|q|B, whatever its speed"
 
     # ------------------------------------------------------------------ scene (built once)
     def _build(self) -> None:

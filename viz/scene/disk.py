@@ -132,6 +132,7 @@ class DiskExhibit(DiskModel, Exhibit):
     while driven, the Poinsot construction once released."""
 
     icon = "DISC"
+    caption = "L is not along ω: held, the bearings push; free, it tumbles"
 
     def _build(self) -> None:
         s, r = self.scene, self.root

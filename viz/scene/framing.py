@@ -18,7 +18,7 @@ from ..framing import axes, corners
 
 FOV = 1.3089969389957472  # rad: viser's default vertical field of view (75 degrees)
 PANEL_PX = 340  # px: the right edge of the page viser's panel covers ("medium" width, margins)
-SIDE_MARGIN = 0.04  # of the free width kept clear on each side
+SIDE_MARGIN = 0.02  # of the free width kept clear on each side
 
 
 def basis(position, look_at) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -58,13 +58,19 @@ def frame_points(
     fill: float = 0.7,
     panel_px: int = PANEL_PX,
     fov: float = FOV,
+    region: tuple[float, float, float, float] | None = None,
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """:func:`frame` for any world points (N, 3) [m]: the corners of several boxes are framed
-    by their own picture, not by the larger box that holds them all."""
+    by their own picture, not by the larger box that holds them all. ``region`` = ``(x0, y0,
+    x1, y1)`` [page px] is the part of the page the picture goes in (default: left of the
+    panel, the whole height); ``fill`` is then a share of its height."""
     pts = np.asarray(pts, float)
     centre = pts.mean(axis=0)
     f = np.asarray(direction, float) / np.linalg.norm(direction)
-    free = max(width - panel_px, 1)
+    if region is None:
+        region = (0.0, 0.0, float(max(width - panel_px, 1)), float(height))
+    rx0, ry0, rx1, ry1 = region
+    free, free_h = max(rx1 - rx0, 1.0), max(ry1 - ry0, 1.0)
     offset = np.zeros(3)
 
     def view(dist):
@@ -87,7 +93,7 @@ def frame_points(
         for _ in range(60):
             d = math.sqrt(near * far)
             w, h = size(d)
-            if max(h / (fill * height), w / ((1 - 2 * SIDE_MARGIN) * free)) > 1:
+            if max(h / (fill * free_h), w / ((1 - 2 * SIDE_MARGIN) * free)) > 1:
                 near = d
             else:
                 far = d
@@ -103,7 +109,8 @@ def frame_points(
                 offset = offset + step * axis
                 jac[:, k] = (middle(d) - mid) / step
                 offset = offset - step * axis
-            move = np.linalg.solve(jac, np.array([free / 2, height / 2]) - mid)
+            want = np.array([(rx0 + rx1) / 2, (ry0 + ry1) / 2])
+            move = np.linalg.solve(jac, want - mid)
             offset = offset + move[0] * r + move[1] * u
     position, target = view(d)
     return tuple(float(v) for v in position), tuple(float(v) for v in target)

@@ -34,8 +34,10 @@ def _floquet(p: hp.HoopParams, amplitude: float) -> float:
 COMPARE_OFFSET = np.array([2.8, 0.0, 0.0])
 # Configuration space, drawn as a square standing left of the stand: theta1 across, theta2 up.
 CONFIG_SIZE = 1.0  # m, the square's side
-CONFIG_CENTRE = np.array([-2.3, 0.0, 0.9])  # m from the exhibit origin (times the hoop radius in x)
-CONFIG_TITLE = "configuration space:\nθ1 → (across), θ2 ↑ (up)"
+# m from the exhibit origin (times the hoop radius in x): its right edge clear of the hoop,
+# which reaches 2a from the pivot whatever its swing
+CONFIG_CENTRE = np.array([-2.75, 0.0, 0.9])
+CONFIG_TITLE = "θ1 → θ2 ↑ configuration"
 MODE_COLOURS = ((230, 60, 60), (60, 110, 240))  # mode 1 and mode 2 directions (geo.AXES_RGB)
 
 
@@ -120,6 +122,7 @@ class HoopExhibit(HoopModel, Exhibit):
     the configuration-space square."""
 
     icon = "CIRCLE"
+    caption = "(θ1, θ2) left, chaos map above it (click)"
 
     def _build(self) -> None:
         s, r = self.scene, self.root
@@ -269,7 +272,7 @@ class HoopExhibit(HoopModel, Exhibit):
         left = CONFIG_CENTRE[0] * a - 0.5 * CONFIG_SIZE
         top = self.pivot_local[2] + 0.1
         if hasattr(self, "maps_view"):  # the chaos map stands above the configuration square
-            top = max(top, self.maps_view.centre_local[2] + 0.5 * MAP_SIZE)
+            top = max(top, self.maps_view.centre_local[2] + 0.5 * MAP_SIZE + 0.3)  # + its title
         return (left, -0.3, 0.0), (1.1 * a + right, 0.3, top)
 
     @property
@@ -277,6 +280,10 @@ class HoopExhibit(HoopModel, Exhibit):
         o = self.origin + (0.5 * COMPARE_OFFSET if self.compare is not None else 0.0)
         dist = 6.0 if self.compare is None else 8.0
         return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
+
+    def stage_labels(self) -> list:
+        maps = getattr(self, "maps_view", None)  # the maps come with the GUI
+        return [maps.title] if maps is not None else []
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:
