@@ -131,8 +131,10 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
 
         def figures_drawn():
             img = browser.screenshot_array(page)
-            # left of the panel's title bar, which a minimized panel keeps at the top right
-            crop = img[: 60 * len(label.text.split("\n")), : img.shape[1] - 350].astype(int)
+            # the stage's words stand right of the exhibit, below the minimized panel's title
+            # bar (its "Connected" is ink too, so the band starts under it)
+            lines = len(label.text.split("\n"))
+            crop = img[60 : 60 + 60 * lines, int(0.68 * img.shape[1]) :].astype(int)
             rows = (crop.sum(axis=2) < 270).sum(axis=1) >= 2
             starts = np.flatnonzero(rows[1:] & ~rows[:-1])
             return len(starts) >= len(label.text.split("\n"))
