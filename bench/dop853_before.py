@@ -62,12 +62,12 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERROR_EXPONENT = -1.0 / 8.0  # error estimator of order 7
 
 
-@njit(cache=True)
+@njit()  # not cached: the benchmark keeps no kernel in the cache
 def _rms(x):
     return math.sqrt(np.sum(x * x) / x.size)
 
 
-@njit(cache=True)
+@njit()  # not cached: the benchmark keeps no kernel in the cache
 def _interpolate(Q, y0, x, out):
     """The continuous extension at the fraction ``x`` of the step (0: its start, 1: its end),
     into ``out`` (scipy's ``Dop853DenseOutput``: nested in ``x`` and ``1 - x``, alternately)."""
@@ -83,7 +83,7 @@ def _interpolate(Q, y0, x, out):
         out[j] = v + y0[j]
 
 
-@njit(cache=True)
+@njit()  # not cached: the benchmark keeps no kernel in the cache
 def _rhs(sys_id, y, p, out):
     """The right-hand side of system ``sys_id`` (:mod:`.kernels`' ids). Called with a constant
     ``sys_id``, the compiled loop keeps only its branch."""
@@ -95,7 +95,7 @@ def _rhs(sys_id, y, p, out):
         disk.free_rhs(y, p, out)
 
 
-@njit(cache=True)
+@njit()  # not cached: the benchmark keeps no kernel in the cache
 def _initial_step(sys_id, y0, f0, p, interval, rtol, atol, tmp, f1):
     """scipy's ``select_initial_step`` (one extra evaluation)."""
     d = y0.size
@@ -115,7 +115,7 @@ def _initial_step(sys_id, y0, f0, p, interval, rtol, atol, tmp, f1):
     return min(100.0 * h0, h1, interval)
 
 
-@njit(cache=True)
+@njit()  # not cached: the benchmark keeps no kernel in the cache
 def _dense_coefficients(sys_id, p, y0, y1, K, h, Q, tmp, kout, A_DENSE, D):
     """The continuous extension of the step ``y0 -> y1`` of length ``h`` whose stages are
     ``K[0 ... N_STAGES]`` (scipy's ``DOP853._dense_output_impl``): the three extra stages into
@@ -155,7 +155,7 @@ def _runner(sys_id: int, d: int):
     :func:`run_dop853`). Both are integers the closure holds, constants of its machine code, and
     numba keys its disk cache on them."""
 
-    @njit(cache=True)
+    @njit()  # not cached: the benchmark keeps no kernel in the cache
     def run(
         Y,
         p,
