@@ -196,6 +196,27 @@ class Method:
         )
 
 
+def _verner(order: int, step_cost_ns: float, bench: tuple[str, ...], color: str) -> Method:
+    """Verner's "most efficient" pair of ``order`` (its error estimate one order lower), run by
+    the compiled Runge-Kutta runner from its tableau file ``vern<order>``."""
+    return Method(
+        f"vern{order}",
+        f"Verner's most efficient {order}({order - 1}) (compiled)",
+        order,
+        (),
+        True,
+        False,
+        "rhs",
+        "numba",
+        stability="step size controlled to rtol, atol",
+        counts="right-hand-side evaluations (the dense output's included)",
+        pair=f"vern{order}",
+        step_cost_ns=step_cost_ns,
+        bench=bench,
+        chart_color=color,
+    )
+
+
 METHODS: dict[str, Method] = {
     m.name: m
     for m in [
@@ -363,70 +384,10 @@ METHODS: dict[str, Method] = {
             bench=("sweep", "fastest"),
             chart_color="tab:orange",
         ),
-        Method(
-            "vern6",
-            "Verner's most efficient 6(5) (compiled)",
-            6,
-            (),
-            True,
-            False,
-            "rhs",
-            "numba",
-            stability="step size controlled to rtol, atol",
-            counts="right-hand-side evaluations (the dense output's included)",
-            pair="vern6",
-            step_cost_ns=1500.0,
-            bench=("sweep",),
-            chart_color="goldenrod",
-        ),
-        Method(
-            "vern7",
-            "Verner's most efficient 7(6) (compiled)",
-            7,
-            (),
-            True,
-            False,
-            "rhs",
-            "numba",
-            stability="step size controlled to rtol, atol",
-            counts="right-hand-side evaluations (the dense output's included)",
-            pair="vern7",
-            step_cost_ns=1700.0,
-            bench=("sweep",),
-            chart_color="sienna",
-        ),
-        Method(
-            "vern8",
-            "Verner's most efficient 8(7) (compiled)",
-            8,
-            (),
-            True,
-            False,
-            "rhs",
-            "numba",
-            stability="step size controlled to rtol, atol",
-            counts="right-hand-side evaluations (the dense output's included)",
-            pair="vern8",
-            step_cost_ns=2200.0,
-            bench=("sweep", "fastest"),
-            chart_color="chocolate",
-        ),
-        Method(
-            "vern9",
-            "Verner's most efficient 9(8) (compiled)",
-            9,
-            (),
-            True,
-            False,
-            "rhs",
-            "numba",
-            stability="step size controlled to rtol, atol",
-            counts="right-hand-side evaluations (the dense output's included)",
-            pair="vern9",
-            step_cost_ns=2700.0,
-            bench=("sweep",),
-            chart_color="peru",
-        ),
+        _verner(6, 1500.0, ("sweep",), "goldenrod"),
+        _verner(7, 1700.0, ("sweep",), "sienna"),
+        _verner(8, 2200.0, ("sweep", "fastest"), "chocolate"),
+        _verner(9, 2700.0, ("sweep",), "peru"),
         Method(
             "taylor",
             "Taylor series (compiled)",
