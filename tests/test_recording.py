@@ -333,7 +333,7 @@ BAD_ARGS = [
         "--method: method 'verlet' does not apply",
     ),
     (["record", "helix", "--out", "X", "--method", "nope"], "--method: method must be one of"),
-    (["record", "helix", "--out", "X", "--fps", "ten"], "invalid int value"),
+    (["record", "helix", "--out", "X", "--fps", "ten"], "--fps: must be a whole number, got 'ten'"),
     (["record", "helix", "--out", "X", "--duration", "nan"], "must be finite"),
     (["play", "/nonexistent/demo.viser"], "no such file or folder"),
     (["record", "helix", "--out", "X", "--duration", "1e308"], "--duration: duration x fps gives"),
