@@ -157,6 +157,44 @@ def test_a_signal_inside_a_long_atlas_chunk_ends_it_within_two_seconds(tmp_path,
     assert not (out / "atlas.zarr").with_name("atlas.zarr.partial").exists()
 
 
+def test_ctrl_c_while_the_atlas_cluster_starts_ends_the_run_once_it_is_up(tmp_path):
+    """A terminal's Ctrl-C the moment the first worker process is spawned (the cluster still
+    starting): the run is interrupted as soon as the cluster is up, with the usual message and
+    exit status, no traceback from a worker, and nothing left behind."""
+    pytest.importorskip("distributed")
+    import time
+
+    out = tmp_path / "out"
+    args = ["atlas", "chaos", "--theta1=-3:3:32", "--theta2=-3:3:32", "--duration", "30000"]
+    args += ["--chunk", "32x32", "--workers", "2", "--no-progress", "--out", str(out)]
+    tmp = tmp_path / "tmp"
+    proc = start(args, tmp)
+    try:
+        seen = wait_until(lambda: descendants(proc.pid), 180, "the first worker process")
+        t0 = time.monotonic()
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
+
+        def ended() -> bool:
+            seen.update(descendants(proc.pid))  # the workers started after the signal too
+            return proc.poll() is not None
+
+        wait_until(ended, 60, "the run to end", poll_s=0.01)
+        took = time.monotonic() - t0
+        _, err = proc.communicate()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 128 + signal.SIGINT, err[-2000:]
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
+    assert "interrupted" in err and "--resume" in err, err[-2000:]
+    # the cluster's start (two interpreters importing numpy and Dask) and its shutdown
+    assert took < scaled(6.0), f"{took:.2f} s"
+    print(f"Ctrl-C while the cluster starts: ended in {took:.2f} s")
+    wait_until(lambda: not alive(seen), 10, f"the command's processes to end: {seen}")
+    assert [p.name for p in tmp.iterdir()] == []
+
+
 def _cpu(pid: int) -> float:
     try:
         return cpu_seconds(pid)

@@ -24,6 +24,7 @@ import contextlib
 import logging
 import os
 import random
+import shlex
 import shutil
 import signal
 import sys
@@ -115,22 +116,28 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
     _LIVE_SCRATCH.append(scratch)
     cluster = client = None
     try:
-        # the scheduler's scratch folder too (it reads the configuration, not an argument)
-        with _workers_ignore_ctrl_c(), dask.config.set({"temporary-directory": scratch}):
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-                local_directory=scratch,
-            )
-        _LIVE_CLUSTERS.append(cluster)
-        client = Client(cluster)
-        client.register_plugin(_IgnoreCtrlC())  # and those a nanny starts again later
-        yield client
+        # the workers' interpreter ignores Ctrl-C for the cluster's whole life: a nanny starts a
+        # lost worker again with it
+        with _workers_ignore_ctrl_c(scratch):
+            try:
+                # the scheduler's scratch folder too (it reads the configuration, not an argument)
+                with dask.config.set({"temporary-directory": scratch}):
+                    cluster = LocalCluster(
+                        n_workers=n,
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=None,
+                        worker_dashboard_address=None,
+                        silence_logs=logging.ERROR,
+                        local_directory=scratch,
+                    )
+                _LIVE_CLUSTERS.append(cluster)
+                client = Client(cluster)
+                client.register_plugin(_IgnoreCtrlC())  # and a scheduler elsewhere's workers
+                yield client
+            finally:
+                _shut_down(client, cluster)
     finally:
-        _shut_down(client, cluster)
         shutil.rmtree(scratch, ignore_errors=True)
         with contextlib.suppress(ValueError):
             _LIVE_CLUSTERS.remove(cluster)
@@ -176,20 +183,43 @@ def _shut_down(client, cluster) -> None:
 
 
 @contextlib.contextmanager
-def _workers_ignore_ctrl_c():
-    """Worker processes started inside inherit an ignored SIGINT: a terminal's Ctrl-C reaches the
-    whole process group, and it is this process's to handle (cancel, keep, shut the cluster
-    down), not each worker's (a traceback apiece). A Ctrl-C meanwhile (the second or two the
-    workers take to start) is seen by the workers' own ignoring only; SIGTERM and SIGHUP are
-    recorded by :func:`_signals_between_chunks` and acted on once the cluster is up."""
+def _workers_ignore_ctrl_c(folder: str):
+    """Worker processes started inside ignore SIGINT from their first instruction: a terminal's
+    Ctrl-C reaches the whole process group, and it is this process's to handle (cancel, keep,
+    shut the cluster down), not each worker's (a traceback apiece, or a worker dead while it
+    imports and a cluster that fails to start).
+
+    An ignored signal is passed on through fork and exec, a blocked one or a Python handler is
+    not (a spawned process starts with neither). So the workers are spawned through a
+    two-line interpreter in ``folder`` that ignores SIGINT and execs this Python
+    (``multiprocessing.set_executable``, put back on the way out), and this process goes on
+    handling Ctrl-C meanwhile: one pressed while the cluster starts is recorded
+    (:func:`_signals_between_chunks`) and the run stops as soon as the cluster is up. Where
+    ``folder`` cannot hold a program (a ``noexec`` mount), this process ignores SIGINT while the
+    workers start instead, as the workers' only way to learn it."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    import multiprocessing
+    from multiprocessing import spawn
+
+    if os.statvfs(folder).f_flag & getattr(os, "ST_NOEXEC", 0):
+        previous_handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous_handler)
+        return
+    program = Path(folder) / "python-ignoring-ctrl-c"
+    # sh's ``trap '' INT`` is an ignored SIGINT, which ``exec`` keeps
+    program.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n")
+    program.chmod(0o700)
+    previous = spawn.get_executable()
+    multiprocessing.set_executable(str(program))
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        multiprocessing.set_executable(os.fsdecode(previous))
 
 
 class _IgnoreCtrlC(WorkerPlugin):
@@ -295,7 +325,15 @@ def _run(
     signals = stack.enter_context(_signals_between_chunks())
     try:
         if client is None:
-            client = stack.enter_context(dask_client(scheduler, workers))
+            try:
+                client = stack.enter_context(dask_client(scheduler, workers))
+            except Exception:
+                # a Ctrl-C in the instant between a worker's fork and its first instruction
+                # kills that worker (it ignores SIGINT from its first instruction on), and the
+                # cluster fails to start: that failure is the interruption
+                if signals:
+                    raise KeyboardInterrupt from None
+                raise
         if signals:
             raise KeyboardInterrupt
         report.workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
