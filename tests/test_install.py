@@ -1,6 +1,7 @@
-"""An installed wheel is the whole product: `pip install .` (not editable) and `pipx install .`
-into fresh environments, then, from outside the checkout, a built-in demo records, the viewer
-serves until Ctrl-C and the quick benchmark runs."""
+"""An installed wheel is the whole product: `pip install .` (not editable) into a fresh venv,
+`pipx install .`, `pip install --user .` and `pip install --target DIR .` (each with its
+dependencies), then, from outside the checkout, the command says its version, lists and records
+a built-in demo and serves the viewer until Ctrl-C, and the quick benchmark runs."""
 
 from __future__ import annotations
 
@@ -97,13 +98,13 @@ def test_a_wheel_installed_in_a_fresh_venv_records_a_built_in_demo(installed, tm
     assert "site-packages/mechviz/assets/demos" in where.stdout, where.stdout
 
 
-def test_the_installed_command_says_its_version_and_lists_the_demos(installed, tmp_path):
+def test_the_installed_command_says_its_version_lists_records_and_views(installed, tmp_path):
     _command_works(installed / "mechviz", tmp_path, _env())
 
 
 def _command_works(mechviz: Path, cwd: Path, env: dict[str, str]) -> None:
-    """``mechviz --version``, ``mechviz record --list`` and ``mechviz record helix`` as a new user
-    runs them after installing."""
+    """``mechviz --version``, ``mechviz record --list``, ``mechviz record helix`` and ``mechviz
+    view`` (until Ctrl-C) as a new user runs them after installing."""
     version = subprocess.run(
         [str(mechviz), "--version"], capture_output=True, text=True, timeout=300, env=env, cwd=cwd
     )
@@ -134,6 +135,38 @@ def _command_works(mechviz: Path, cwd: Path, env: dict[str, str]) -> None:
     )
     assert run.returncode == 0, run.stderr
     assert json.loads((out / "helix.json").read_text())["demo"] == "helix"
+    _view_serves_until_ctrl_c(mechviz, cwd, env)
+
+
+def _view_serves_until_ctrl_c(mechviz: Path, cwd: Path, env: dict[str, str]) -> None:
+    """``mechviz view`` says it is ready, serves its page, and stops on Ctrl-C with status 0."""
+    proc = subprocess.Popen(
+        [str(mechviz), "view", "--port", "0", "--no-env-map"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        cwd=cwd,
+    )
+    seen: list[str] = []
+    try:
+
+        def ready():
+            line = proc.stdout.readline()  # the viewer says each step on a line of its own
+            seen.append(line)
+            assert line or proc.poll() is None, "".join(seen)
+            return re.search(r"viewer ready in .* at (http://\S+)", line)
+
+        url = wait_until(ready, 600, "the viewer to say it is ready").group(1)
+        with urllib.request.urlopen(url, timeout=scaled(30)) as resp:
+            assert resp.status == 200 and b"<html" in resp.read(4000).lower()
+        proc.send_signal(signal.SIGINT)  # Ctrl-C
+        out, _ = proc.communicate(timeout=scaled(60))
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0 and "viewer stopped" in out, "".join(seen) + out
 
 
 def test_a_students_dynamics_py_and_viz_py_change_nothing(installed, tmp_path):
@@ -160,43 +193,20 @@ def test_a_students_dynamics_py_and_viz_py_change_nothing(installed, tmp_path):
         assert got.stdout.startswith(("ok 0.5", "mechviz ")), got.stdout
 
 
-@pytest.fixture(scope="module")
-def dependencies(source, tmp_path_factory) -> Path:
-    """The site-packages folder of a fresh venv holding every dependency and not the project (the
-    wheel installed, then uninstalled): the libraries for the ``--user`` and ``--target`` installs
-    below, which put only the project where those options say."""
-    venv = tmp_path_factory.mktemp("deps") / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
-    for args in (["install", "-q", str(source)], ["uninstall", "-q", "-y", "mechviz-lab"]):
-        pip = subprocess.run(
-            [str(venv / "bin" / "python"), "-m", "pip", *args],
-            capture_output=True,
-            text=True,
-            timeout=scaled(1800),
-            env=_env(),
-        )
-        assert pip.returncode == 0, pip.stderr[-2000:]
-    (site,) = (venv / "lib").glob("python3*/site-packages")
-    return site
-
-
 def _base_python() -> str:
     """The interpreter outside any venv (``--user`` installs are refused inside one)."""
     return getattr(sys, "_base_executable", None) or shutil.which("python3")
 
 
-def test_pip_install_user_finds_its_demos(source, dependencies, tmp_path):
+def test_pip_install_user_finds_its_demos(source, tmp_path):
+    """``pip install --user .`` with its dependencies, outside any venv (HOME and PYTHONUSERBASE
+    in a temporary folder): the command installed in ``~/.local/bin`` finds its data."""
     home = tmp_path / "home"
     home.mkdir()
-    env = {
-        **_env(),
-        "HOME": str(home),
-        "PYTHONUSERBASE": str(home / ".local"),
-        "PYTHONPATH": str(dependencies),
-    }
+    env = {**_env(), "HOME": str(home), "PYTHONUSERBASE": str(home / ".local")}
     env.pop("PYTHONNOUSERSITE", None)
     pip = subprocess.run(
-        [_base_python(), "-m", "pip", "install", "-q", "--user", "--no-deps", str(source)],
+        [_base_python(), "-m", "pip", "install", "-q", "--user", str(source)],
         capture_output=True,
         text=True,
         timeout=scaled(1800),
@@ -207,59 +217,20 @@ def test_pip_install_user_finds_its_demos(source, dependencies, tmp_path):
     _command_works(home / ".local" / "bin" / "mechviz", tmp_path, env)
 
 
-def test_pip_install_target_finds_its_demos(source, dependencies, tmp_path):
+def test_pip_install_target_finds_its_demos(source, tmp_path):
+    """``pip install --target DIR .`` with its dependencies, run with ``PYTHONPATH=DIR``."""
     target = tmp_path / "target"
     pip = subprocess.run(
-        [
-            _base_python(),
-            "-m",
-            "pip",
-            "install",
-            "-q",
-            "--no-deps",
-            "--target",
-            str(target),
-            str(source),
-        ],
+        [_base_python(), "-m", "pip", "install", "-q", "--target", str(target), str(source)],
         capture_output=True,
         text=True,
         timeout=scaled(1800),
-        env={**_env(), "PYTHONPATH": str(dependencies)},
-        cwd=tmp_path,
-    )
-    assert pip.returncode == 0, pip.stderr[-2000:]
-    env = {**_env(), "PYTHONPATH": f"{target}{os.pathsep}{dependencies}"}
-    _command_works(target / "bin" / "mechviz", tmp_path, env)
-
-
-def test_the_installed_viewer_serves_until_ctrl_c(installed, tmp_path):
-    proc = subprocess.Popen(
-        [str(installed / "mechviz"), "view", "--port", "0", "--no-env-map"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
         env=_env(),
         cwd=tmp_path,
     )
-    seen: list[str] = []
-    try:
-
-        def ready():
-            line = proc.stdout.readline()  # the viewer says each step on a line of its own
-            seen.append(line)
-            assert line or proc.poll() is None, "".join(seen)
-            return re.search(r"viewer ready in .* at (http://\S+)", line)
-
-        url = wait_until(ready, 600, "the viewer to say it is ready").group(1)
-        with urllib.request.urlopen(url, timeout=scaled(30)) as resp:
-            assert resp.status == 200 and b"<html" in resp.read(4000).lower()
-        proc.send_signal(signal.SIGINT)  # Ctrl-C
-        out, _ = proc.communicate(timeout=scaled(60))
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 0 and "viewer stopped" in out, "".join(seen) + out
+    assert pip.returncode == 0, pip.stderr[-2000:]
+    env = {**_env(), "PYTHONPATH": str(target)}
+    _command_works(target / "bin" / "mechviz", tmp_path, env)
 
 
 def test_the_installed_quick_benchmark_runs(installed, tmp_path):
