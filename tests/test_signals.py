@@ -117,19 +117,26 @@ def test_sigterm_ends_still_while_chromium_draws(tmp_path):
     assert not still.exists()
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
-def test_a_signal_inside_a_long_atlas_chunk_ends_it_within_two_seconds(tmp_path, signum):
-    """One chunk of about ten minutes (32 x 32 starts and their twins, 30000 s at 0.01 s): the
-    run ends within two seconds of the signal (scaled by the load), its Dask workers gone and
-    nothing left in its temporary folder (no dask-scratch-space)."""
+def _long_atlas(tmp_path: Path, workers: int) -> tuple[subprocess.Popen, Path, Path]:
+    """``mechviz atlas`` of one chunk of about ten minutes (32 x 32 starts and their twins,
+    30000 s at 0.01 s) on ``workers`` local workers: the process, its output folder and its
+    temporary folder."""
     pytest.importorskip("distributed")
-    import time
-
     out = tmp_path / "out"
     args = ["atlas", "chaos", "--theta1=-3:3:32", "--theta2=-3:3:32", "--duration", "30000"]
-    args += ["--chunk", "32x32", "--workers", "1", "--no-progress", "--out", str(out)]
+    args += ["--chunk", "32x32", "--workers", str(workers), "--no-progress", "--out", str(out)]
     tmp = tmp_path / "tmp"
-    proc = start(args, tmp)
+    return start(args, tmp), out, tmp
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_inside_a_long_atlas_chunk_ends_it_within_two_seconds(tmp_path, signum):
+    """One chunk of about ten minutes (:func:`_long_atlas`): the run ends within two seconds of
+    the signal (scaled by the load), its Dask workers gone and nothing left in its temporary
+    folder (no dask-scratch-space)."""
+    import time
+
+    proc, out, tmp = _long_atlas(tmp_path, workers=1)
     try:
         # at work: a worker process (not the command itself) has spent CPU beyond its start-up
         wait_until(
@@ -161,14 +168,9 @@ def test_ctrl_c_while_the_atlas_cluster_starts_ends_the_run_once_it_is_up(tmp_pa
     """A terminal's Ctrl-C the moment the first worker process is spawned (the cluster still
     starting): the run is interrupted as soon as the cluster is up, with the usual message and
     exit status, no traceback from a worker, and nothing left behind."""
-    pytest.importorskip("distributed")
     import time
 
-    out = tmp_path / "out"
-    args = ["atlas", "chaos", "--theta1=-3:3:32", "--theta2=-3:3:32", "--duration", "30000"]
-    args += ["--chunk", "32x32", "--workers", "2", "--no-progress", "--out", str(out)]
-    tmp = tmp_path / "tmp"
-    proc = start(args, tmp)
+    proc, _, tmp = _long_atlas(tmp_path, workers=2)
     try:
         seen = wait_until(lambda: descendants(proc.pid), 180, "the first worker process")
         t0 = time.monotonic()
