@@ -8,6 +8,9 @@ import pytest
 
 from mechviz.dynamics.codegen.equations import EQUATIONS
 from mechviz.dynamics.codegen.rhs import generated_rhs
+from mechviz.dynamics.codegen.series import generated_expand
+from mechviz.dynamics.ids import FREE_BODY, HOOP
+from mechviz.dynamics.integrators import taylor
 from mechviz.dynamics.integrators.kernels import RHS
 
 ROUND_OFF = 1e-14  # relative to the size of the right-hand side's terms
@@ -42,3 +45,61 @@ def test_the_generated_source_is_written_once_and_found_again():
     files = list(build.generated_dir().glob(f"*_rhs_{eq.name}_{eq.key()}.py"))
     assert len(files) == 1
     assert "def rhs(y, p, out)" in files[0].read_text()
+
+
+# --------------------------------------------------------------------------- Taylor series
+ORDER = 12
+
+
+def _coefficients(expand, rows: int, y: np.ndarray, p: np.ndarray) -> np.ndarray:
+    A = np.full((rows, ORDER + 1), np.nan)  # what the expansion leaves unwritten shows
+    A[: y.size, 0] = y
+    expand(A, p, ORDER)
+    return A[: y.size]
+
+
+@pytest.mark.parametrize("sys_id", sorted(EQUATIONS))
+def test_the_generated_taylor_coefficients_are_the_hand_written_ones_to_round_off(sys_id):
+    """Every state coefficient to order 12, at random states and parameters; each order is
+    compared on the scale of its largest coefficient (the orders span many decades)."""
+    eq = EQUATIONS[sys_id]()
+    expand, rows = generated_expand(eq)
+    hand, _ = taylor.EXPANDS[sys_id]
+    for y, p in _random_cases(sys_id, n=10):
+        y = 0.5 * y  # the hoop's determinant stays away from 0 (its m cos^2 < 2M + m anyway)
+        new = _coefficients(expand, rows, y, p)
+        old = _coefficients(hand, taylor.N_ROWS, y, p)
+        assert np.all(np.isfinite(new))
+        scale = np.max(np.abs(old), axis=0) + 1e-300
+        assert np.max(np.abs(new - old) / scale) < 1e-12, (y, p)
+
+
+def _run(expand, rows, sys_id, Y, p, tol):
+    order, a = taylor.order_for(tol, tol, sys_id)
+    stats, status = np.zeros((len(Y), 3), np.int64), np.zeros(3, np.int64)
+    steps = taylor.run_taylor_with(expand, rows, Y, p, 0.0, 3.0, tol, tol, order, a, stats, status)
+    assert status[0] == taylor.OK
+    return steps
+
+
+@pytest.mark.parametrize("sys_id", [HOOP, FREE_BODY])
+def test_taylor_with_generated_coefficients_runs_as_the_hand_written_method(sys_id):
+    """The driver given the hand-written expansion is the product's method bit for bit; given
+    the generated one it takes the same steps and lands on the same state to round-off."""
+    eq = EQUATIONS[sys_id]()
+    rng = np.random.default_rng(3)
+    Y0 = 0.5 * rng.uniform(-1.0, 1.0, (4, eq.dim))
+    p = rng.uniform(0.5, 2.0, len(eq.params))
+    tol = 1e-12
+    product = Y0.copy()
+    stats, status = np.zeros((4, 3), np.int64), np.zeros(3, np.int64)
+    carry = taylor.TaylorCarry(4, eq.dim)
+    n_product = taylor.run_taylor(sys_id, product, p, 0.0, 3.0, tol, tol, stats, status, carry)
+    hand_run = Y0.copy()
+    n_hand = _run(taylor.EXPANDS[sys_id][0], taylor.N_ROWS, sys_id, hand_run, p, tol)
+    np.testing.assert_array_equal(hand_run, product)
+    assert n_hand == n_product
+    new_run = Y0.copy()
+    n_new = _run(*generated_expand(eq), sys_id, new_run, p, tol)
+    assert n_new == n_hand
+    assert np.max(np.abs(new_run - hand_run)) < 1e-12 * (1.0 + np.max(np.abs(hand_run)))

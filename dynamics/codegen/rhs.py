@@ -37,7 +37,8 @@ def rhs_source(eq: Equations) -> str:
     lines += [f"    {s} = p[{j}]" for j, s in enumerate(ps) if s in used]
     lines += [f"    {s} = {pycode(e)}" for s, e in temps]
     lines += [
-        f"    out[{i}] = {pycode(sp.Float(e) if e.is_Number else e)}" for i, e in enumerate(reduced)
+        f"    out[{i}] = {repr(float(e)) if e.is_Number else pycode(e)}"
+        for i, e in enumerate(reduced)
     ]
     return "\n".join(lines) + "\n"
 

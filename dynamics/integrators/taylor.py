@@ -397,6 +397,48 @@ def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     return int(np.sum(stats[:, 1] - before))
 
 
+@njit  # takes a compiled function: never disk-cached (see mechviz.dynamics.integrators.kernels)
+def run_taylor_with(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, status):
+    """Taylor's method with a given expansion: every row of ``Y`` (N, d) from ``t0`` to ``t1``
+    in place, as :func:`run_taylor_compiled` does on a fresh start (the same step rule and
+    time sums, bitwise the same steps given the same coefficients) but with no step kept
+    between calls. ``expand(A, p, order)`` fills an array of ``rows`` rows as the hand-written
+    expansions do (a generated one: :mod:`mechviz.dynamics.codegen.series`). Returns the
+    steps taken; ``stats`` and ``status`` as :func:`run_taylor_compiled`'s."""
+    ctl = controls(rtol, atol, order, a)
+    d = Y.shape[1]
+    A = np.empty((rows, order + 1))
+    status[0] = OK
+    total = 0
+    for i in range(Y.shape[0]):
+        y = Y[i]
+        t = t0
+        c = 0.0
+        while True:
+            for j in range(d):
+                A[j, 0] = y[j]
+            expand(A, p, order)
+            h = _step_size(A, d, order, ctl)
+            stats[i, 0] += 1
+            stats[i, 1] += 1
+            total += 1
+            if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
+                report(status, NONFINITE, stats[i, 1], i)
+                return total
+            rest = (t1 - t) - c
+            if h >= rest:
+                _horner(A, d, order, rest, y)
+                break
+            _horner(A, d, order, h, y)
+            t, e = two_sum(t, h)
+            c += e
+        for j in range(d):
+            if not math.isfinite(y[j]):
+                report(status, NONFINITE, stats[i, 1], i)
+                return total
+    return total
+
+
 # the right-hand sides the expansions are written for (tests compare the two)
 EXPANDS = {
     CYCLOTRON: (charge_expand, cyclotron.rhs),
