@@ -9,9 +9,10 @@ import pytest
 from mechviz.dynamics.codegen.equations import EQUATIONS
 from mechviz.dynamics.codegen.rhs import generated_rhs
 from mechviz.dynamics.codegen.series import generated_expand
+from mechviz.dynamics.codegen.steps import generated_rk4
 from mechviz.dynamics.ids import FREE_BODY, HOOP
 from mechviz.dynamics.integrators import taylor
-from mechviz.dynamics.integrators.kernels import RHS
+from mechviz.dynamics.integrators.kernels import RHS, RK4
 
 ROUND_OFF = 1e-14  # relative to the size of the right-hand side's terms
 
@@ -103,3 +104,13 @@ def test_taylor_with_generated_coefficients_runs_as_the_hand_written_method(sys_
     n_new = _run(*generated_expand(eq), sys_id, new_run, p, tol)
     assert n_new == n_hand
     assert np.max(np.abs(new_run - hand_run)) < 1e-12 * (1.0 + np.max(np.abs(hand_run)))
+
+
+@pytest.mark.parametrize("sys_id", sorted(EQUATIONS))
+def test_the_generated_rk4_step_is_the_hand_written_one_to_round_off(sys_id):
+    eq = EQUATIONS[sys_id]()
+    step = generated_rk4(eq)
+    for y, p in _random_cases(sys_id, n=10):
+        new, old = 0.5 * y, 0.5 * y
+        assert step(new, p, 0.05) == 4 == RK4[sys_id](old, p, 0.05)
+        assert np.max(np.abs(new - old)) <= ROUND_OFF * (1.0 + np.max(np.abs(old))), (y, p)
