@@ -114,3 +114,17 @@ def test_the_generated_rk4_step_is_the_hand_written_one_to_round_off(sys_id):
         new, old = 0.5 * y, 0.5 * y
         assert step(new, p, 0.05) == 4 == RK4[sys_id](old, p, 0.05)
         assert np.max(np.abs(new - old)) <= ROUND_OFF * (1.0 + np.max(np.abs(old))), (y, p)
+
+
+@pytest.mark.slow
+def test_the_cost_benchmark_runs_both_forms_to_the_same_steps_and_states():
+    """The benchmark's pairs are the same computation: equal step counts, final states equal to
+    round-off (the adaptive methods' to far below their tolerance, 1e-10)."""
+    from mechviz.bench.generated_cost import FORMS, generated_cost, missed, report
+
+    result = generated_cost(quick=True, members=4)
+    for name, r in result.items():
+        for form in FORMS:
+            assert r[form]["same_steps"], (name, form)
+            assert r[form]["max_state_difference"] < 1e-11, (name, form, r[form])
+    assert len(report(result)) == 1 + len(result) * len(FORMS) + len(missed(result))
