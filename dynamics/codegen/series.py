@@ -35,9 +35,16 @@ from .build import load
 from .equations import Equations
 from .rhs import plain
 
+Terms = tuple[list[sp.Expr], list[tuple[sp.Expr, int]], list[tuple[sp.Expr, int, int]]]
+
 
 class _Graph:
-    """The expression graph of a system's right-hand sides: series nodes (rows) and constants."""
+    """The expression graph of a system's right-hand sides: series nodes (rows) and constants.
+
+    Sums of constants, series times constants and products of two series times constants are
+    one node, a linear combination (``"lin"``): ``c + sum c_i x_i + sum c_j (u_j v_j)``, its
+    Cauchy products summed in one loop (the free body's quaternion rates are one node each, as
+    the hand-written expansion sums them)."""
 
     def __init__(self, ys: list[sp.Symbol], ps: list[sp.Symbol]) -> None:
         self.rows: dict[sp.Expr, int] = {y: i for i, y in enumerate(ys)}
@@ -46,6 +53,7 @@ class _Graph:
         self.const_lines: list[str] = []
         self.ops: list[tuple] = []  # (kind, out row(s), operands...) in dependency order
         self.sincos: dict[sp.Expr, tuple[int, int]] = {}
+        self.depth: dict[int, int] = dict.fromkeys(range(len(ys)), 0)
 
     # ---- nodes
     def const(self, e: sp.Expr) -> str:
@@ -57,27 +65,52 @@ class _Graph:
             self.const_lines.append(f"    {name} = {value}")
         return self.consts[e]
 
-    def _row(self, e: sp.Expr, op: tuple) -> int:
-        r = len(self.rows)
+    def _row(self, e: sp.Expr, op: tuple, operands: tuple[int, ...]) -> int:
+        r = len(set(self.rows.values()))
         self.rows[e] = r
         self.ops.append((op[0], r, *op[1:]))
+        self.depth[r] = 1 + max((self.depth[a] for a in operands), default=0)
         return r
 
     def is_const(self, e: sp.Expr) -> bool:
         return e.free_symbols <= self.params
 
-    def node(self, e: sp.Expr) -> tuple[str, object]:
-        """``("c", name)`` for a constant, ``("s", row)`` for a series."""
+    def output(self, e: sp.Expr) -> str:
+        """The expression of ``f(y)^[k]`` for a right-hand side ``e``: a row, or (a linear
+        combination without products, the charge's ``Omega vy``) the combination itself, which
+        then needs no row of its own."""
+        if e in self.rows:
+            return f"A[{self.rows[e]}, k]"
         if self.is_const(e):
-            return "c", self.const(e)
-        return "s", self.series(e)
+            return f"({self.const(e)} if k == 0 else 0.0)"
+        consts, lin, prods = self.terms(e)
+        if prods:
+            return f"A[{self.series(e)}, k]"
+        parts = [_term(*self.coefficient(c), f"A[{a}, k]") for c, a in lin]
+        if consts:
+            parts.append(f"+ ({self.const(sp.Add(*consts))} if k == 0 else 0.0)")
+        return "(" + " ".join(parts).lstrip("+ ") + ")"
+
+    def coefficient(self, c: sp.Expr) -> tuple[int, str | None]:
+        """``(sign, name)`` of a constant factor; ``name`` None for a factor of 1."""
+        sign = -1 if c.could_extract_minus_sign() else 1
+        c = sign * c
+        return sign, None if c == 1 else self.const(c)
 
     def series(self, e: sp.Expr) -> int:
         """The row of the series of ``e`` (time-dependent), building its node if new."""
         if e in self.rows:
             return self.rows[e]
-        if e.is_Add:
-            return self._add(e)
+        factors = [a for a in e.args if not self.is_const(a)] if e.is_Mul else []
+        if e.is_Add or (
+            e.is_Mul
+            and not any(_is_denominator(a) for a in e.args)
+            and (len(factors) <= 2 or len(factors) < len(e.args))
+        ):
+            consts, lin, prods = self.terms(e)
+            if not consts and not prods and len(lin) == 1 and lin[0][0] == 1:
+                return self._alias(e, lin[0][1])
+            return self._lin(e, consts, lin, prods)
         if e.is_Mul:
             return self._mul(e)
         if e.is_Pow:
@@ -86,52 +119,59 @@ class _Graph:
             s, c = self._sincos(e.args[0])
             return s if isinstance(e, sp.sin) else c
         if isinstance(e, sp.exp):
-            return self._row(e, ("exp", self.series(e.args[0])))
+            a = self.series(e.args[0])
+            return self._row(e, ("exp", a), (a,))
         raise NotImplementedError(f"no Taylor rule for {type(e).__name__}: {e}")
 
-    def _add(self, e: sp.Expr) -> int:
-        consts, terms = [], []
-        for arg in e.args:
-            if self.is_const(arg):
-                consts.append(arg)
-                continue
-            coeff, rest = arg.as_coeff_Mul()
-            if coeff == -1:  # a difference, not a product by -1
-                terms.append((-1, self.series(rest)))
-            else:
-                terms.append((1, self.series(arg)))
+    def terms(self, e: sp.Expr, coeff: sp.Expr = sp.S.One) -> Terms:
+        """``coeff e`` as constants, constants times series and constants times products of two
+        series: ``(consts, [(c, row)], [(c, row, row)])``."""
+        if self.is_const(e):
+            return [coeff * e], [], []
+        if e.is_Add:
+            out: Terms = ([], [], [])
+            for a in e.args:
+                for whole, part in zip(out, self.terms(a, coeff), strict=True):
+                    whole.extend(part)
+            return out
+        if e.is_Mul and not any(_is_denominator(a) for a in e.args):
+            c = sp.Mul(*[a for a in e.args if self.is_const(a)])
+            rest = [a for a in e.args if not self.is_const(a)]
+            if len(rest) == 1:
+                return self.terms(rest[0], coeff * c)
+            if len(rest) == 2:
+                return [], [], [(coeff * c, self.series(rest[0]), self.series(rest[1]))]
+            return [], [(coeff * c, self.series(sp.Mul(*rest)))], []
+        if e.is_Mul:  # a quotient: its own node, times its constant factor
+            c = sp.Mul(*[a for a in e.args if self.is_const(a)])
+            rest = sp.Mul(*[a for a in e.args if not self.is_const(a)])
+            return [], [(coeff * c, self.series(rest))], []
+        return [], [(coeff, self.series(e))], []
+
+    def _lin(self, e: sp.Expr, consts, lin, prods) -> int:
         c = self.const(sp.Add(*consts)) if consts else None
-        return self._row(e, ("add", tuple(terms), c))
+        lin = tuple((*self.coefficient(k), a) for k, a in lin)
+        prods = tuple((*self.coefficient(k), a, b) for k, a, b in prods)
+        operands = tuple(x[-1] for x in lin) + tuple(y for x in prods for y in x[-2:])
+        return self._row(e, ("lin", c, lin, prods), operands)
 
     def _mul(self, e: sp.Expr) -> int:
-        consts, num, den = [], [], []
-        for arg in e.args:
-            if self.is_const(arg):
-                consts.append(arg)
-            elif arg.is_Pow and arg.exp.is_Integer and arg.exp < 0:
-                den.append(arg.base ** (-arg.exp))
-            else:
-                num.append(arg)
-        row = None
-        if len(num) == 1 and not consts and not den:
-            return self.series(num[0])
-        for part in num:  # a chain of Cauchy products, each partial product a node
-            r = self.series(part)
-            if row is None:
-                row, acc = r, part
-            else:
-                acc = acc * part
-                row = self.rows.get(acc) or self._row(acc, ("mul", row, r))
-        if den:
-            d = sp.Mul(*den)
-            top = ("c", self.const(sp.Mul(*consts))) if row is None else ("s", row)
-            quotient = (acc if row is not None else sp.Mul(*consts)) / d
-            row = self.rows.get(quotient) or self._row(quotient, ("div", top, self.series(d)))
-            if row is not None and top[0] == "c":
-                return self._alias(e, row)
+        """A product of three or more series, or a quotient (times constants)."""
+        consts = [a for a in e.args if self.is_const(a)]
         if consts:
-            return self._row(e, ("scale", self.const(sp.Mul(*consts)), row))
-        return self._alias(e, row)
+            rest = sp.Mul(*[a for a in e.args if not self.is_const(a)])
+            return self._lin(e, [], [(sp.Mul(*consts), self.series(rest))], [])
+        num = [a for a in e.args if not _is_denominator(a)]
+        den = [a.base ** (-a.exp) for a in e.args if _is_denominator(a)]
+        if not den:  # a chain of Cauchy products, each partial product a node
+            head = sp.Mul(*num[:-1])
+            a, b = self.series(head), self.series(num[-1])
+            return self._row(e, ("lin", None, (), ((1, None, a, b),)), (a, b))
+        d = self.series(sp.Mul(*den))
+        if num:
+            a = self.series(sp.Mul(*num))
+            return self._row(e, ("div", ("s", a), d), (a, d))
+        return self._row(e, ("div", ("c", self.const(sp.Integer(1))), d), (d,))
 
     def _alias(self, e: sp.Expr, row: int) -> int:
         self.rows[e] = row
@@ -142,50 +182,72 @@ class _Graph:
         if not self.is_const(n):
             raise NotImplementedError(f"no Taylor rule for a variable exponent: {e}")
         if n == 2:
-            return self._row(e, ("square", self.series(base)))
+            a = self.series(base)
+            return self._row(e, ("square", a), (a,))
         if n.is_Integer and n > 2:  # by squaring and multiplying
-            half = self.series(base ** (n // 2))
-            sq = self.rows.get(base ** (2 * (n // 2))) or self._row(
-                base ** (2 * (n // 2)), ("square", half)
-            )
-            return sq if n % 2 == 0 else self._row(e, ("mul", sq, self.series(base)))
+            half = base ** (n // 2)
+            sq = self.series(half**2)
+            if n % 2 == 0:
+                return sq
+            a = self.series(base)
+            return self._row(e, ("lin", None, (), ((1, None, sq, a),)), (sq, a))
         if n.is_Integer and n < 0:
-            return self._row(e, ("div", ("c", self.const(sp.Integer(1))), self.series(base**-n)))
+            d = self.series(base**-n)
+            return self._row(e, ("div", ("c", self.const(sp.Integer(1))), d), (d,))
+        a = self.series(base)
         if n == sp.Rational(1, 2):
-            return self._row(e, ("sqrt", self.series(base)))
-        return self._row(e, ("pow", self.series(base), self.const(n)))
+            return self._row(e, ("sqrt", a), (a,))
+        return self._row(e, ("pow", a, self.const(n)), (a,))
 
     def _sincos(self, u: sp.Expr) -> tuple[int, int]:
         if u not in self.sincos:
             a = self.series(u)
-            s = len(self.rows)
+            s = len(set(self.rows.values()))
             self.rows[sp.sin(u)] = s
             self.rows[sp.cos(u)] = s + 1
             self.ops.append(("sincos", (s, s + 1), a))
+            self.depth[s] = self.depth[s + 1] = self.depth[a] + 1
             self.sincos[u] = (s, s + 1)
         return self.sincos[u]
+
+
+def _is_denominator(e: sp.Expr) -> bool:
+    return e.is_Pow and e.exp.is_Integer and e.exp < 0
+
+
+def _term(sign: int, name: str | None, value: str) -> str:
+    return f"{'-' if sign < 0 else '+'} {value if name is None else f'{name} * {value}'}"
+
+
+def _lin_group(ops: list[tuple]) -> list[str]:
+    """Order ``k`` of independent linear combinations, their Cauchy products in one loop (one
+    accumulator per node and coefficient: a sum is a chain of dependent additions, several of
+    them interleaved keep the floating-point units busy)."""
+    out, loop, finish = [], [], []
+    for _, r, c, lin, prods in ops:
+        accs: dict[str | None, list[str]] = {}
+        for sign, name, a, b in prods:
+            accs.setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, j] * A[{b}, i]")
+        parts = []
+        for n, (name, terms) in enumerate(accs.items()):
+            acc = f"s{r}_{n}"
+            out.append(f"{acc} = 0.0")
+            loop.append(f"    {acc} += {' '.join(terms).lstrip('+ ')}")
+            parts.append(_term(1, name, acc))
+        parts += [_term(sign, name, f"A[{a}, k]") for sign, name, a in lin]
+        finish.append(f"A[{r}, k] = {' '.join(parts).lstrip('+ ') or '0.0'}")
+        if c is not None:
+            finish += ["if k == 0:", f"    A[{r}, 0] += {c}"]
+    if loop:
+        out += ["for j in range(k + 1):", "    i = k - j", *loop]
+    return out + finish
 
 
 def _emit(op: tuple) -> list[str]:
     """The statements computing order ``k`` of one node (inside the loop over ``k``)."""
     kind, r = op[0], op[1]
-    if kind == "add":
-        terms, c = op[2], op[3]
-        text = " ".join(f"{'-' if s < 0 else '+'} A[{a}, k]" for s, a in terms).lstrip("+ ")
-        out = [f"A[{r}, k] = {text}"]
-        if c is not None:
-            out += ["if k == 0:", f"    A[{r}, 0] += {c}"]
-        return out
-    if kind == "scale":
-        return [f"A[{r}, k] = {op[2]} * A[{op[3]}, k]"]
-    if kind == "mul":
-        a, b = op[2], op[3]
-        return [
-            "s = 0.0",
-            "for j in range(k + 1):",
-            f"    s += A[{a}, j] * A[{b}, k - j]",
-            f"A[{r}, k] = s",
-        ]
+    if kind == "lin":
+        return _lin_group([op])
     if kind == "square":
         a = op[2]
         return [
@@ -262,13 +324,22 @@ def series_source(eq: Equations) -> str:
     """The generated module's body: ``ROWS`` and ``expand(A, p, order)``."""
     ys, ps, exprs = plain(eq)
     g = _Graph(ys, ps)
-    outs = [g.node(e) for e in exprs]  # the right-hand sides' nodes, in the state's order
-    body = [line for op in g.ops for line in _emit(op)]
-    for i, (kind, x) in enumerate(outs):
-        if kind == "s":
-            body.append(f"A[{i}, k + 1] = A[{x}, k] * inv")
+    outs = [g.output(e) for e in exprs]  # f(y)^[k], in the state's order
+    body = []
+    # By depth in the graph (nodes of one depth are independent), the linear combinations of
+    # one depth summed in one loop.
+    ops = sorted(g.ops, key=lambda op: g.depth[op[1][0] if op[0] == "sincos" else op[1]])
+    group: list[tuple] = []
+    for op in ops:
+        if group and (op[0] != "lin" or g.depth[op[1]] != g.depth[group[0][1]]):
+            body += _lin_group(group)
+            group = []
+        if op[0] == "lin":
+            group.append(op)
         else:
-            body.append(f"A[{i}, k + 1] = ({x} if k == 0 else 0.0) * inv")
+            body += _emit(op)
+    body += _lin_group(group) if group else []
+    body += [f"A[{i}, k + 1] = {x} * inv" for i, x in enumerate(outs)]
     lines = [
         f"ROWS = {len(set(g.rows.values()))}",
         "",
