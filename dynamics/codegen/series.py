@@ -76,20 +76,22 @@ class _Graph:
         return e.free_symbols <= self.params
 
     def output(self, e: sp.Expr) -> str:
-        """The expression of ``f(y)^[k]`` for a right-hand side ``e``: a row, or (a linear
+        """The expression of ``f(y)^[k] / (k + 1)`` (``inv`` is ``1/(k + 1)``) for a right-hand
+        side ``e``: a row, or (a linear
         combination without products, the charge's ``Omega vy``) the combination itself, which
         then needs no row of its own."""
         if e in self.rows:
-            return f"A[{self.rows[e]}, k]"
+            return f"A[{self.rows[e]}, k] * inv"
         if self.is_const(e):
-            return f"({self.const(e)} if k == 0 else 0.0)"
+            return f"({self.const(e)} * inv if k == 0 else 0.0)"
         consts, lin, prods = self.terms(e)
         if prods:
-            return f"A[{self.series(e)}, k]"
-        parts = [_term(*self.coefficient(c), f"A[{a}, k]") for c, a in lin]
+            return f"A[{self.series(e)}, k] * inv"
+        # a coefficient times 1/(k + 1) first: one multiplication on the chain from order k
+        parts = [_term(*self.coefficient(c), f"A[{a}, k]", scale="inv") for c, a in lin]
         if consts:
-            parts.append(f"+ ({self.const(sp.Add(*consts))} if k == 0 else 0.0)")
-        return "(" + " ".join(parts).lstrip("+ ") + ")"
+            parts.append(f"+ ({self.const(sp.Add(*consts))} * inv if k == 0 else 0.0)")
+        return " ".join(parts).lstrip("+ ")
 
     def coefficient(self, c: sp.Expr) -> tuple[int, str | None]:
         """``(sign, name)`` of a constant factor; ``name`` None for a factor of 1."""
@@ -215,8 +217,12 @@ def _is_denominator(e: sp.Expr) -> bool:
     return e.is_Pow and e.exp.is_Integer and e.exp < 0
 
 
-def _term(sign: int, name: str | None, value: str) -> str:
-    return f"{'-' if sign < 0 else '+'} {value if name is None else f'{name} * {value}'}"
+def _term(sign: int, name: str | None, value: str, scale: str | None = None) -> str:
+    """``+ name * value`` (``- ...`` for a negative sign), the factor ``(name * scale)``."""
+    factor = name if scale is None else (scale if name is None else f"({name} * {scale})")
+    if factor is None:
+        return f"{'-' if sign < 0 else '+'} {value}"
+    return f"{'-' if sign < 0 else '+'} {factor} * {value}"
 
 
 def _lin_group(ops: list[tuple]) -> list[str]:
@@ -339,7 +345,7 @@ def series_source(eq: Equations) -> str:
         else:
             body += _emit(op)
     body += _lin_group(group) if group else []
-    body += [f"A[{i}, k + 1] = {x} * inv" for i, x in enumerate(outs)]
+    body += [f"A[{i}, k + 1] = {x}" for i, x in enumerate(outs)]
     lines = [
         f"ROWS = {len(set(g.rows.values()))}",
         "",
