@@ -38,19 +38,27 @@ def generated_dir() -> Path:
 
 def load(eq: Equations, kind: str, make: Callable[[Equations], str]) -> ModuleType:
     """The generated module ``kind`` of ``eq``: imported from its file if it is there, else
-    ``make(eq)`` (the module's body, below :data:`HEADER`) is written first. The file is written
-    to a temporary name and renamed, so a process never imports a half-written file."""
+    ``make(eq)`` (the module's body, below :data:`HEADER`) is written first."""
     key = eq.key()
-    modname = f"mechviz_generated_{kind}_{eq.name}_{key}"
+    return load_named(
+        f"mechviz_generated_{kind}_{eq.name}_{key}",
+        lambda: HEADER.format(name=eq.name, key=key) + make(eq),
+    )
+
+
+def load_named(modname: str, text: Callable[[], str]) -> ModuleType:
+    """The generated module ``modname``, imported from its file, written first (``text()``) if
+    it is not there. The file is written to a temporary name and renamed, so a process never
+    imports a half-written file."""
     if modname in sys.modules:
         return sys.modules[modname]
     path = generated_dir() / f"{modname}.py"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
-        text = HEADER.format(name=eq.name, key=key) + make(eq)
+        body = text()
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+            f.write(body)
         os.replace(tmp, path)
     spec = importlib.util.spec_from_file_location(modname, path)
     module = importlib.util.module_from_spec(spec)
