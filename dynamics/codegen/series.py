@@ -35,6 +35,8 @@ from .build import load
 from .equations import Equations
 from .rhs import plain
 
+#: An expression as ``(constants, [(c, row)], [(c, row, row)])``: constants, constants times
+#: series, constants times products of two series (:meth:`_Graph.terms`).
 Terms = tuple[list[sp.Expr], list[tuple[sp.Expr, int]], list[tuple[sp.Expr, int, int]]]
 
 
