@@ -43,6 +43,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from numba import types
+from numba.extending import overload, register_jitable
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
@@ -138,11 +140,14 @@ def _rms(x):
     return math.sqrt(np.sum(x * x) / x.size)
 
 
-@njit(cache=True)
 def _rhs(sys_id, y, p, out):
-    """The right-hand side of system ``sys_id`` (:mod:`.kernels`' ids). Called with a constant
-    ``sys_id``, the compiled loop keeps only its branch."""
-    if sys_id == CYCLOTRON:
+    """The right-hand side of system ``sys_id``: one of :mod:`.kernels`' ids, or a compiled
+    ``rhs(y, p, out)`` itself (a system known only by its equations: a generated right-hand
+    side, :mod:`mechviz.dynamics.codegen.rhs`). Compiled by :func:`_rhs_compiled`; this is the
+    interpreter's version (a helper below called from Python)."""
+    if callable(sys_id):
+        sys_id(y, p, out)
+    elif sys_id == CYCLOTRON:
         cyclotron.rhs(y, p, out)
     elif sys_id == HOOP:
         hoop.rhs(y, p, out)
@@ -150,7 +155,31 @@ def _rhs(sys_id, y, p, out):
         disk.free_rhs(y, p, out)
 
 
-@njit(cache=True)
+@overload(_rhs, jit_options={"error_model": "numpy"})
+def _rhs_compiled(sys_id, y, p, out):
+    """:func:`_rhs` in compiled code, chosen by the type of ``sys_id``. Called with a constant
+    id, the compiled loop keeps only its branch. An overload rather than a jitted function: it
+    is compiled into each caller, so a loop given a right-hand side (whose type names a
+    function object of this process) leaves no entry in a disk cache of its own."""
+    if isinstance(sys_id, types.Integer):
+
+        def by_id(sys_id, y, p, out):
+            if sys_id == CYCLOTRON:
+                cyclotron.rhs(y, p, out)
+            elif sys_id == HOOP:
+                hoop.rhs(y, p, out)
+            else:
+                disk.free_rhs(y, p, out)
+
+        return by_id
+
+    def given(sys_id, y, p, out):
+        sys_id(y, p, out)
+
+    return given
+
+
+@register_jitable(error_model="numpy")  # compiled into the runner (see _rhs_compiled)
 def _initial_step(sys_id, y0, f0, p, interval, rtol, atol, tmp, f1, error_order):
     """scipy's ``select_initial_step`` (one extra evaluation)."""
     d = y0.size
@@ -193,7 +222,7 @@ def interpolate(Q, y0, x, out, hairer):
         out[j] = v + y0[j]
 
 
-@njit(cache=True)
+@register_jitable(error_model="numpy")  # compiled into the runner (see _rhs_compiled)
 def dense_coefficients(sys_id, p, y0, y1, K, h, Q, tmp, kout, A, P, n_stages, hairer):
     """The interpolant of the step ``y0 -> y1`` of length ``h`` whose stages are
     ``K[0 ... n_stages]``: the extra stages into ``K[n_stages + 1:]``, the coefficients into
@@ -233,16 +262,17 @@ def dense_coefficients(sys_id, p, y0, y1, K, h, Q, tmp, kout, A, P, n_stages, ha
 
 @functools.cache
 def _runner(
-    sys_id: int, d: int, n_stages: int, n_all: int, blended: bool, hairer: bool, error_order: int
+    sys_id, d: int, n_stages: int, n_all: int, blended: bool, hairer: bool, error_order: int
 ):
-    """The loop compiled for system ``sys_id``, states of ``d`` components and a pair of this
-    shape (see :func:`run_rk`). Every argument is a constant of the machine code (the closure
-    holds it, and numba keys its disk cache on it); the tableau's numbers are arguments, as a
-    global array over about 1 kB is neither baked in nor disk-cached."""
+    """The loop compiled for system ``sys_id`` (an id, or a compiled right-hand side:
+    :func:`_rhs`), states of ``d`` components and a pair of this shape (see :func:`run_rk`).
+    Every argument is a constant of the machine code (the closure holds it, and numba keys its
+    disk cache on it); the tableau's numbers are arguments, as a global array over about 1 kB
+    is neither baked in nor disk-cached. A loop given a right-hand side is compiled once per
+    process and right-hand side, not cached on disk."""
     exponent = -1.0 / (error_order + 1.0)
     dense_extra = n_all - n_stages - 1
 
-    @njit(cache=True)
     def run(
         Y,
         p,
@@ -451,7 +481,9 @@ def _runner(
                 report(status, NONFINITE, stats[i, 1], i)
                 return
 
-    return run
+    if callable(sys_id):  # a given right-hand side: its type is this process's (never cached)
+        return njit(run)
+    return njit(cache=True)(run)
 
 
 class RKCarry:
@@ -482,10 +514,11 @@ def _arrays(pair: Pair) -> tuple:
     return pair.arrays()
 
 
-def runner_for(pair: Pair, sys_id: int, d: int):
-    """The compiled loop of ``pair`` for system ``sys_id`` and states of ``d`` components."""
+def runner_for(pair: Pair, sys_id, d: int):
+    """The compiled loop of ``pair`` for system ``sys_id`` (an id, or a compiled
+    ``rhs(y, p, out)``) and states of ``d`` components."""
     return _runner(
-        int(sys_id),
+        sys_id if callable(sys_id) else int(sys_id),
         int(d),
         pair.n_stages,
         pair.n_all,
@@ -497,7 +530,7 @@ def runner_for(pair: Pair, sys_id: int, d: int):
 
 def run_rk(
     pair: Pair,
-    sys_id: int,
+    sys_id,
     Y,
     p,
     t0,
@@ -521,6 +554,8 @@ def run_rk(
     (1.5-3 s), and with ``d`` read from the array every per-component loop would have an unknown
     length (DOP853 took 63 instead of 44 ns per evaluation on the hoop, 48 instead of 35 on the
     disk and 38 instead of 27 on the charge, over 500 members at ``rtol = atol = 1e-10``).
+    ``sys_id`` may also be a compiled ``rhs(y, p, out)`` (a system known only by its equations,
+    :mod:`mechviz.dynamics.codegen.rhs`): its loop is compiled once per process.
     """
     runner_for(pair, sys_id, Y.shape[1])(
         Y,

@@ -8,6 +8,9 @@ component are generated from ``y^[0] = y(t)`` by the recurrences of automatic di
 ``S^[k] = (1/k) sum_j j u^[j] C^[k-j]``, ``C^[k] = -(1/k) sum_j j u^[j] S^[k-j]``. Each system
 has its own expansion (``*_expand``), written for its right-hand side: the charge's is linear,
 the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solve per order.
+The free body's in use is generated from its equations (:mod:`mechviz.dynamics.codegen.series`,
+as fast); the one written here is its check. A system known only by its equations runs with
+its generated expansion through :func:`run_taylor_with`.
 
 Step size as Jorba and Zou's (and heyoka's): ``h = rho e^-a exp(-0.7 / (p - 1))`` with ``rho``
 the smaller of ``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and
@@ -35,6 +38,7 @@ from numba import prange
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
+from ..codegen.product import product_module
 from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     ENTIRE,
     MAX_ORDER,
@@ -213,6 +217,17 @@ def hoop_expand(A, p, order):
         A[3, k + 1] = a2 * inv
 
 
+# The free body's expansion in use is generated from its equations (:mod:`..codegen.series`):
+# per step it costs what free_body_expand above does (``mechviz bench --generated-cost``), which
+# stays as its check (the tests compare the two to round-off). The hoop's and the charge's stay
+# hand-written: the hoop's (a 2x2 solve per order) costs less than half the generated one's
+# quotients, and the charge's steps are taken in closed form (:mod:`.taylor_linear`).
+_GENERATED = product_module(FREE_BODY, "series")
+if _GENERATED.ROWS > N_ROWS:
+    raise ImportError(f"the generated expansion needs {_GENERATED.ROWS} rows, N_ROWS is {N_ROWS}")
+free_body_generated = _GENERATED.expand
+
+
 @njit(cache=True)
 def _expand(sys_id, A, p, order):
     if sys_id == CYCLOTRON:
@@ -220,7 +235,7 @@ def _expand(sys_id, A, p, order):
     elif sys_id == HOOP:
         hoop_expand(A, p, order)
     else:
-        free_body_expand(A, p, order)
+        free_body_generated(A, p, order)
 
 
 # --------------------------------------------------------------------------- the loop
@@ -397,7 +412,50 @@ def run_taylor_parallel(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, statu
     return int(np.sum(stats[:, 1] - before))
 
 
-# the right-hand sides the expansions are written for (tests compare the two)
+@njit  # takes a compiled function: never disk-cached (see mechviz.dynamics.integrators.kernels)
+def run_taylor_with(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, status):
+    """Taylor's method with a given expansion: every row of ``Y`` (N, d) from ``t0`` to ``t1``
+    in place, as :func:`run_taylor_compiled` does on a fresh start (the same step rule and
+    time sums, bitwise the same steps given the same coefficients) but with no step kept
+    between calls. ``expand(A, p, order)`` fills an array of ``rows`` rows as the hand-written
+    expansions do (a generated one: :mod:`mechviz.dynamics.codegen.series`). Returns the
+    steps taken; ``stats`` and ``status`` as :func:`run_taylor_compiled`'s."""
+    ctl = controls(rtol, atol, order, a)
+    d = Y.shape[1]
+    A = np.empty((rows, order + 1))
+    status[0] = OK
+    total = 0
+    for i in range(Y.shape[0]):
+        y = Y[i]
+        t = t0
+        c = 0.0
+        while True:
+            for j in range(d):
+                A[j, 0] = y[j]
+            expand(A, p, order)
+            h = _step_size(A, d, order, ctl)
+            stats[i, 0] += 1
+            stats[i, 1] += 1
+            total += 1
+            if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
+                report(status, NONFINITE, stats[i, 1], i)
+                return total
+            rest = (t1 - t) - c
+            if h >= rest:
+                _horner(A, d, order, rest, y)
+                break
+            _horner(A, d, order, h, y)
+            t, e = two_sum(t, h)
+            c += e
+        for j in range(d):
+            if not math.isfinite(y[j]):
+                report(status, NONFINITE, stats[i, 1], i)
+                return total
+    return total
+
+
+# the right-hand sides the hand-written expansions are written for (tests compare the two; the
+# generated expansions are compared with these)
 EXPANDS = {
     CYCLOTRON: (charge_expand, cyclotron.rhs),
     HOOP: (hoop_expand, hoop.rhs),

@@ -128,6 +128,15 @@ def _tableau_cost(args: argparse.Namespace) -> int:
     return 1 if lost else 0
 
 
+def _generated_cost(args: argparse.Namespace) -> int:
+    """Generated compiled forms against the hand-written ones, per step on each system."""
+    from mechviz.bench.generated_cost import generated_cost, missed, report
+
+    result = generated_cost(quick=args.quick)
+    print(json.dumps(result, indent=1) if args.json else "\n".join(report(result)))
+    return 1 if missed(result) else 0
+
+
 def _whole(flag: str, text: str, lo: int, hi: int) -> int:
     from .errors import CliError
 
@@ -157,6 +166,8 @@ def _run(args: argparse.Namespace) -> int:
         return _video(args)
     if args.tableau_cost:
         return _tableau_cost(args)
+    if args.generated_cost:
+        return _generated_cost(args)
     from mechviz.bench import PROBLEMS, peers, run_bench, summary
 
     from ..interrupts import ctrl_c_within_a_second
@@ -315,6 +326,13 @@ def add_commands(sub) -> None:
         action="store_true",
         help="run only the cost per step of DOP853 through the generic Runge-Kutta runner against "
         "its own loop, side by side on each system; exit status 1 if above 1.05",
+    )
+    p.add_argument(
+        "--generated-cost",
+        action="store_true",
+        help="run only the cost per step of the compiled forms generated from the equations "
+        "(right-hand side, RK4, Taylor's recurrences) against the hand-written ones, side by side "
+        "on each system; exit status 1 if one is above 1.05",
     )
     p.add_argument(
         "--clients",

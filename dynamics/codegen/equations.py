@@ -1,0 +1,109 @@
+"""Each system's equations, written once: ``y' = f(t, y; p)`` as sympy expressions.
+
+An :class:`Equations` holds the state's symbols (in the order of the state vector), the
+parameters' symbols (in the order of the float64 array ``p`` the compiled code reads, the
+system's ``kernel_params()``) and one expression per component of ``y'``. Every compiled form
+the code generator makes (:mod:`.rhs`, the right-hand side; :mod:`.series`, the Taylor
+coefficients' recurrences) is derived from these expressions; a system defined anywhere else
+(a test's, say) is an :class:`Equations` too.
+
+Units: SI, as each system's module documents (:mod:`mechviz.dynamics.cyclotron`,
+:mod:`mechviz.dynamics.hoop`, :mod:`mechviz.dynamics.disk`). The equations are autonomous (no
+``t``), as every system here is; a driven system would carry its phase as a state component.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ..ids import CYCLOTRON, FREE_BODY, HOOP
+
+
+@dataclass(frozen=True)
+class Equations:
+    """``y' = f(y; p)``: ``state`` and ``params`` symbols, ``rhs`` one expression per state
+    component. ``name`` is an identifier (it names the generated module on disk)."""
+
+    name: str
+    state: tuple[sp.Symbol, ...]
+    params: tuple[sp.Symbol, ...]
+    rhs: tuple[sp.Expr, ...]
+
+    def __post_init__(self) -> None:
+        if not self.name.isidentifier():
+            raise ValueError(f"the name {self.name!r} must be an identifier")
+        if len(self.rhs) != len(self.state):
+            raise ValueError(f"{self.name}: one right-hand side per state component")
+        known = set(self.state) | set(self.params)
+        for e in self.rhs:
+            stray = sp.sympify(e).free_symbols - known
+            if stray:
+                raise ValueError(f"{self.name}: unknown symbols {sorted(map(str, stray))}")
+        object.__setattr__(self, "rhs", tuple(sp.sympify(e) for e in self.rhs))
+
+    @property
+    def dim(self) -> int:
+        """The state's dimension."""
+        return len(self.state)
+
+    def key(self) -> str:
+        """A digest of the equations (their exact expression trees): names the generated code,
+        so an edited equation never runs stale code."""
+        text = repr((self.name, self.state, self.params, [sp.srepr(e) for e in self.rhs]))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def charge() -> Equations:
+    """A charge in a uniform field along z: ``r' = v``, ``v' = Omega (vy, -vx, 0)``, with
+    ``p = [Omega]`` (the signed gyrofrequency ``qB/m`` [rad/s])."""
+    x, y, z, vx, vy, vz = sp.symbols("x y z vx vy vz", real=True)
+    w = sp.Symbol("Omega", real=True)
+    return Equations("charge", (x, y, z, vx, vy, vz), (w,), (vx, vy, vz, w * vy, -w * vx, 0))
+
+
+def hoop() -> Equations:
+    """The hoop and bead (:mod:`mechviz.dynamics.hoop`): the Euler-Lagrange equations solved for
+    the accelerations (Cramer's rule on the 2x2 mass matrix), ``p = [M, m, a, g]``."""
+    th1, th2, w1, w2 = sp.symbols("theta1 theta2 omega1 omega2", real=True)
+    M, m, a, g = sp.symbols("M m a g", positive=True)
+    ga = g / a
+    s, c = sp.sin(th1 - th2), sp.cos(th1 - th2)
+    r1 = -m * s * w2**2 - (M + m) * ga * sp.sin(th1)
+    r2 = s * w1**2 - ga * sp.sin(th2)
+    m11 = 2 * M + m
+    det = m11 - m * c**2
+    return Equations(
+        "hoop",
+        (th1, th2, w1, w2),
+        (M, m, a, g),
+        (w1, w2, (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det),
+    )
+
+
+def free_body() -> Equations:
+    """The free rigid body in its principal frame: Euler's equations for ``w`` [rad/s] and the
+    attitude quaternion's ``q' = q (0, w) / 2``, with ``p = [I1, I2, I3]`` [kg m^2]."""
+    w1, w2, w3, q0, q1, q2, q3 = sp.symbols("w1 w2 w3 q0 q1 q2 q3", real=True)
+    i1, i2, i3 = sp.symbols("I1 I2 I3", positive=True)
+    half = sp.Rational(1, 2)
+    return Equations(
+        "free_body",
+        (w1, w2, w3, q0, q1, q2, q3),
+        (i1, i2, i3),
+        (
+            (i2 - i3) / i1 * w2 * w3,
+            (i3 - i1) / i2 * w3 * w1,
+            (i1 - i2) / i3 * w1 * w2,
+            half * (-q1 * w1 - q2 * w2 - q3 * w3),
+            half * (q0 * w1 + q2 * w3 - q3 * w2),
+            half * (q0 * w2 + q3 * w1 - q1 * w3),
+            half * (q0 * w3 + q1 * w2 - q2 * w1),
+        ),
+    )
+
+
+#: The product's systems' equations by their compiled id (:mod:`mechviz.dynamics.ids`).
+EQUATIONS = {CYCLOTRON: charge, HOOP: hoop, FREE_BODY: free_body}

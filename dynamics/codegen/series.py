@@ -1,0 +1,370 @@
+"""The Taylor coefficients' recurrences generated from :class:`.Equations` (automatic
+differentiation of the expression graph, as Jorba and Zou's ``taylor`` program and heyoka do).
+
+The right-hand sides are decomposed into elementary operations, each a series (a row of the
+coefficient array) or a constant (a scalar of the parameters, computed once per expansion). A
+subexpression met twice is one node (sympy's expressions are compared by structure). With
+``u^[k]`` the order-k coefficient of ``u`` (``u^(k)(t) / k!``), the rules are (Jorba & Zou,
+*Exp. Math.* 14 (2005) 99-117, section 3; heyoka's ``taylor_decompose`` / ``taylor_diff``):
+
+- sum ``u + v``: ``u^[k] + v^[k]``; constant times series ``c u``: ``c u^[k]``;
+- product (Cauchy) ``(uv)^[k] = sum_{j<=k} u^[j] v^[k-j]``, the square over half the terms;
+- quotient ``q = u / v``: ``q^[k] = (u^[k] - sum_{1<=j<=k} v^[j] q^[k-j]) / v^[0]``;
+- ``s, c = sin u, cos u`` (a pair, whichever of them the equations use):
+  ``s^[k] = (1/k) sum_{1<=j<=k} j u^[j] c^[k-j]``, ``c^[k] = -(1/k) sum j u^[j] s^[k-j]``;
+- ``e = exp u``: ``e^[k] = (1/k) sum_{1<=j<=k} j u^[j] e^[k-j]``;
+- ``w = sqrt u``: ``w^[k] = (u^[k] - sum_{1<=j<k} w^[j] w^[k-j]) / (2 w^[0])``;
+- ``w = u^a`` (constant ``a``): ``w^[k] = sum_{0<=j<k} (a (k-j) - j) u^[k-j] w^[j] / (k u^[0])``.
+
+The state's coefficients follow from ``y^[k+1] = f(y)^[k] / (k + 1)``. The generated
+``expand(A, p, order)`` has the calling convention of the hand-written expansions
+(:func:`mechviz.dynamics.integrators.taylor.hoop_expand`): ``A`` (rows, >= order + 1) with the
+state's order-0 coefficients in ``A[:d, 0]``; it fills orders 1 ... ``order`` of the state's
+rows and orders 0 ... ``order - 1`` of the auxiliary rows after them (:data:`ROWS` in the
+generated module: the rows ``A`` must have).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import sympy as sp
+from sympy.printing.pycode import pycode
+
+from .build import load
+from .equations import Equations
+from .rhs import plain
+
+#: An expression as ``(constants, [(c, row)], [(c, row, row)])``: constants, constants times
+#: series, constants times products of two series (:meth:`_Graph.terms`).
+Terms = tuple[list[sp.Expr], list[tuple[sp.Expr, int]], list[tuple[sp.Expr, int, int]]]
+
+
+class _Graph:
+    """The expression graph of a system's right-hand sides: series nodes (rows) and constants.
+
+    Sums of constants, series times constants and products of two series times constants are
+    one node, a linear combination (``"lin"``): ``c + sum c_i x_i + sum c_j (u_j v_j)``, its
+    Cauchy products summed in one loop (the free body's quaternion rates are one node each, as
+    the hand-written expansion sums them)."""
+
+    def __init__(self, ys: list[sp.Symbol], ps: list[sp.Symbol]) -> None:
+        self.rows: dict[sp.Expr, int] = {y: i for i, y in enumerate(ys)}
+        self.params = set(ps)
+        self.consts: dict[sp.Expr, str] = {}
+        self.const_lines: list[str] = []
+        self.ops: list[tuple] = []  # (kind, out row(s), operands...) in dependency order
+        self.sincos: dict[sp.Expr, tuple[int, int]] = {}
+        self.depth: dict[int, int] = dict.fromkeys(range(len(ys)), 0)
+
+    # ---- nodes
+    def const(self, e: sp.Expr) -> str:
+        """The scalar holding the constant ``e`` (parameters and numbers only)."""
+        if e not in self.consts:
+            name = f"c{len(self.consts)}"
+            self.consts[e] = name
+            value = repr(float(e)) if e.is_Number else pycode(e)  # every digit of a number
+            self.const_lines.append(f"    {name} = {value}")
+        return self.consts[e]
+
+    def _row(self, e: sp.Expr, op: tuple, operands: tuple[int, ...]) -> int:
+        r = len(set(self.rows.values()))
+        self.rows[e] = r
+        self.ops.append((op[0], r, *op[1:]))
+        self.depth[r] = 1 + max((self.depth[a] for a in operands), default=0)
+        return r
+
+    def is_const(self, e: sp.Expr) -> bool:
+        return e.free_symbols <= self.params
+
+    def output(self, e: sp.Expr) -> str:
+        """The expression of ``f(y)^[k] / (k + 1)`` (``inv`` is ``1/(k + 1)``) for a right-hand
+        side ``e``: a row, or (a linear
+        combination without products, the charge's ``Omega vy``) the combination itself, which
+        then needs no row of its own."""
+        if e in self.rows:
+            return f"A[{self.rows[e]}, k] * inv"
+        if self.is_const(e):
+            return f"({self.const(e)} * inv if k == 0 else 0.0)"
+        consts, lin, prods = self.terms(e)
+        if prods:
+            return f"A[{self.series(e)}, k] * inv"
+        # a coefficient times 1/(k + 1) first: one multiplication on the chain from order k
+        parts = [_term(*self.coefficient(c), f"A[{a}, k]", scale="inv") for c, a in lin]
+        if consts:
+            parts.append(f"+ ({self.const(sp.Add(*consts))} * inv if k == 0 else 0.0)")
+        return " ".join(parts).lstrip("+ ")
+
+    def coefficient(self, c: sp.Expr) -> tuple[int, str | None]:
+        """``(sign, name)`` of a constant factor; ``name`` None for a factor of 1."""
+        sign = -1 if c.could_extract_minus_sign() else 1
+        c = sign * c
+        return sign, None if c == 1 else self.const(c)
+
+    def series(self, e: sp.Expr) -> int:
+        """The row of the series of ``e`` (time-dependent), building its node if new."""
+        if e in self.rows:
+            return self.rows[e]
+        factors = [a for a in e.args if not self.is_const(a)] if e.is_Mul else []
+        if e.is_Add or (
+            e.is_Mul
+            and not any(_is_denominator(a) for a in e.args)
+            and (len(factors) <= 2 or len(factors) < len(e.args))
+        ):
+            consts, lin, prods = self.terms(e)
+            if not consts and not prods and len(lin) == 1 and lin[0][0] == 1:
+                return self._alias(e, lin[0][1])
+            return self._lin(e, consts, lin, prods)
+        if e.is_Mul:
+            return self._mul(e)
+        if e.is_Pow:
+            return self._pow(e)
+        if isinstance(e, (sp.sin, sp.cos)):
+            s, c = self._sincos(e.args[0])
+            return s if isinstance(e, sp.sin) else c
+        if isinstance(e, sp.exp):
+            a = self.series(e.args[0])
+            return self._row(e, ("exp", a), (a,))
+        raise NotImplementedError(f"no Taylor rule for {type(e).__name__}: {e}")
+
+    def terms(self, e: sp.Expr, coeff: sp.Expr = sp.S.One) -> Terms:
+        """``coeff e`` as constants, constants times series and constants times products of two
+        series: ``(consts, [(c, row)], [(c, row, row)])``."""
+        if self.is_const(e):
+            return [coeff * e], [], []
+        if e.is_Add:
+            out: Terms = ([], [], [])
+            for a in e.args:
+                for whole, part in zip(out, self.terms(a, coeff), strict=True):
+                    whole.extend(part)
+            return out
+        if e.is_Mul and not any(_is_denominator(a) for a in e.args):
+            c = sp.Mul(*[a for a in e.args if self.is_const(a)])
+            rest = [a for a in e.args if not self.is_const(a)]
+            if len(rest) == 1:
+                return self.terms(rest[0], coeff * c)
+            if len(rest) == 2:
+                return [], [], [(coeff * c, self.series(rest[0]), self.series(rest[1]))]
+            return [], [(coeff * c, self.series(sp.Mul(*rest)))], []
+        if e.is_Mul:  # a quotient: its own node, times its constant factor
+            c = sp.Mul(*[a for a in e.args if self.is_const(a)])
+            rest = sp.Mul(*[a for a in e.args if not self.is_const(a)])
+            return [], [(coeff * c, self.series(rest))], []
+        return [], [(coeff, self.series(e))], []
+
+    def _lin(self, e: sp.Expr, consts, lin, prods) -> int:
+        c = self.const(sp.Add(*consts)) if consts else None
+        lin = tuple((*self.coefficient(k), a) for k, a in lin)
+        prods = tuple((*self.coefficient(k), a, b) for k, a, b in prods)
+        operands = tuple(x[-1] for x in lin) + tuple(y for x in prods for y in x[-2:])
+        return self._row(e, ("lin", c, lin, prods), operands)
+
+    def _mul(self, e: sp.Expr) -> int:
+        """A product of three or more series, or a quotient (times constants)."""
+        consts = [a for a in e.args if self.is_const(a)]
+        if consts:
+            rest = sp.Mul(*[a for a in e.args if not self.is_const(a)])
+            return self._lin(e, [], [(sp.Mul(*consts), self.series(rest))], [])
+        num = [a for a in e.args if not _is_denominator(a)]
+        den = [a.base ** (-a.exp) for a in e.args if _is_denominator(a)]
+        if not den:  # a chain of Cauchy products, each partial product a node
+            head = sp.Mul(*num[:-1])
+            a, b = self.series(head), self.series(num[-1])
+            return self._row(e, ("lin", None, (), ((1, None, a, b),)), (a, b))
+        d = self.series(sp.Mul(*den))
+        if num:
+            a = self.series(sp.Mul(*num))
+            return self._row(e, ("div", ("s", a), d), (a, d))
+        return self._row(e, ("div", ("c", self.const(sp.Integer(1))), d), (d,))
+
+    def _alias(self, e: sp.Expr, row: int) -> int:
+        self.rows[e] = row
+        return row
+
+    def _pow(self, e: sp.Expr) -> int:
+        base, n = e.base, e.exp
+        if not self.is_const(n):
+            raise NotImplementedError(f"no Taylor rule for a variable exponent: {e}")
+        if n == 2:
+            a = self.series(base)
+            return self._row(e, ("square", a), (a,))
+        if n.is_Integer and n > 2:  # by squaring and multiplying
+            half = base ** (n // 2)
+            sq = self.series(half**2)
+            if n % 2 == 0:
+                return sq
+            a = self.series(base)
+            return self._row(e, ("lin", None, (), ((1, None, sq, a),)), (sq, a))
+        if n.is_Integer and n < 0:
+            d = self.series(base**-n)
+            return self._row(e, ("div", ("c", self.const(sp.Integer(1))), d), (d,))
+        a = self.series(base)
+        if n == sp.Rational(1, 2):
+            return self._row(e, ("sqrt", a), (a,))
+        return self._row(e, ("pow", a, self.const(n)), (a,))
+
+    def _sincos(self, u: sp.Expr) -> tuple[int, int]:
+        if u not in self.sincos:
+            a = self.series(u)
+            s = len(set(self.rows.values()))
+            self.rows[sp.sin(u)] = s
+            self.rows[sp.cos(u)] = s + 1
+            self.ops.append(("sincos", (s, s + 1), a))
+            self.depth[s] = self.depth[s + 1] = self.depth[a] + 1
+            self.sincos[u] = (s, s + 1)
+        return self.sincos[u]
+
+
+def _is_denominator(e: sp.Expr) -> bool:
+    return e.is_Pow and e.exp.is_Integer and e.exp < 0
+
+
+def _term(sign: int, name: str | None, value: str, scale: str | None = None) -> str:
+    """``+ name * value`` (``- ...`` for a negative sign), the factor ``(name * scale)``."""
+    factor = name if scale is None else (scale if name is None else f"({name} * {scale})")
+    if factor is None:
+        return f"{'-' if sign < 0 else '+'} {value}"
+    return f"{'-' if sign < 0 else '+'} {factor} * {value}"
+
+
+def _lin_group(ops: list[tuple]) -> list[str]:
+    """Order ``k`` of independent linear combinations, their Cauchy products in one loop (one
+    accumulator per node and coefficient: a sum is a chain of dependent additions, several of
+    them interleaved keep the floating-point units busy)."""
+    out, loop, finish = [], [], []
+    for _, r, c, lin, prods in ops:
+        accs: dict[str | None, list[str]] = {}
+        for sign, name, a, b in prods:
+            accs.setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, j] * A[{b}, i]")
+        parts = []
+        for n, (name, terms) in enumerate(accs.items()):
+            acc = f"s{r}_{n}"
+            out.append(f"{acc} = 0.0")
+            loop.append(f"    {acc} += {' '.join(terms).lstrip('+ ')}")
+            parts.append(_term(1, name, acc))
+        parts += [_term(sign, name, f"A[{a}, k]") for sign, name, a in lin]
+        finish.append(f"A[{r}, k] = {' '.join(parts).lstrip('+ ') or '0.0'}")
+        if c is not None:
+            finish += ["if k == 0:", f"    A[{r}, 0] += {c}"]
+    if loop:
+        out += ["for j in range(k + 1):", "    i = k - j", *loop]
+    return out + finish
+
+
+def _emit(op: tuple) -> list[str]:
+    """The statements computing order ``k`` of one node (inside the loop over ``k``)."""
+    kind, r = op[0], op[1]
+    if kind == "lin":
+        return _lin_group([op])
+    if kind == "square":
+        a = op[2]
+        return [
+            "s = 0.0",
+            "for j in range((k + 1) // 2):",
+            f"    s += A[{a}, j] * A[{a}, k - j]",
+            "s *= 2.0",
+            "if k % 2 == 0:",
+            f"    s += A[{a}, k // 2] * A[{a}, k // 2]",
+            f"A[{r}, k] = s",
+        ]
+    if kind == "div":
+        (tk, top), b = op[2], op[3]
+        first = f"A[{top}, k]" if tk == "s" else f"{top} if k == 0 else 0.0"
+        return [
+            f"s = {first}",
+            "for j in range(1, k + 1):",
+            f"    s -= A[{b}, j] * A[{r}, k - j]",
+            f"A[{r}, k] = s / A[{b}, 0]",
+        ]
+    if kind == "sincos":
+        (s_, c_), a = r, op[2]
+        return [
+            "if k == 0:",
+            f"    A[{s_}, 0] = math.sin(A[{a}, 0])",
+            f"    A[{c_}, 0] = math.cos(A[{a}, 0])",
+            "else:",
+            "    s = 0.0",
+            "    c = 0.0",
+            "    for j in range(1, k + 1):",
+            f"        t = j * A[{a}, j]",
+            f"        s += t * A[{c_}, k - j]",
+            f"        c += t * A[{s_}, k - j]",
+            f"    A[{s_}, k] = s / k",
+            f"    A[{c_}, k] = -c / k",
+        ]
+    if kind == "exp":
+        a = op[2]
+        return [
+            "if k == 0:",
+            f"    A[{r}, 0] = math.exp(A[{a}, 0])",
+            "else:",
+            "    s = 0.0",
+            "    for j in range(1, k + 1):",
+            f"        s += j * A[{a}, j] * A[{r}, k - j]",
+            f"    A[{r}, k] = s / k",
+        ]
+    if kind == "sqrt":
+        a = op[2]
+        return [
+            "if k == 0:",
+            f"    A[{r}, 0] = math.sqrt(A[{a}, 0])",
+            "else:",
+            f"    s = A[{a}, k]",
+            "    for j in range(1, k):",
+            f"        s -= A[{r}, j] * A[{r}, k - j]",
+            f"    A[{r}, k] = s / (2.0 * A[{r}, 0])",
+        ]
+    if kind == "pow":
+        a, n = op[2], op[3]
+        return [
+            "if k == 0:",
+            f"    A[{r}, 0] = A[{a}, 0] ** {n}",
+            "else:",
+            "    s = 0.0",
+            "    for j in range(k):",
+            f"        s += ({n} * (k - j) - j) * A[{a}, k - j] * A[{r}, j]",
+            f"    A[{r}, k] = s / (k * A[{a}, 0])",
+        ]
+    raise AssertionError(kind)
+
+
+def series_source(eq: Equations) -> str:
+    """The generated module's body: ``ROWS`` and ``expand(A, p, order)``."""
+    ys, ps, exprs = plain(eq)
+    g = _Graph(ys, ps)
+    outs = [g.output(e) for e in exprs]  # f(y)^[k], in the state's order
+    body = []
+    # By depth in the graph (nodes of one depth are independent), the linear combinations of
+    # one depth summed in one loop.
+    ops = sorted(g.ops, key=lambda op: g.depth[op[1][0] if op[0] == "sincos" else op[1]])
+    group: list[tuple] = []
+    for op in ops:
+        if group and (op[0] != "lin" or g.depth[op[1]] != g.depth[group[0][1]]):
+            body += _lin_group(group)
+            group = []
+        if op[0] == "lin":
+            group.append(op)
+        else:
+            body += _emit(op)
+    body += _lin_group(group) if group else []
+    body += [f"A[{i}, k + 1] = {x}" for i, x in enumerate(outs)]
+    lines = [
+        f"ROWS = {len(set(g.rows.values()))}",
+        "",
+        "",
+        '@njit(cache=True, fastmath={"contract", "reassoc"})',
+        "def expand(A, p, order):",
+        f'    """Orders 1 ... order of the {eq.dim} state rows of A (module docstring)."""',
+    ]
+    lines += [f"    {s} = p[{j}]" for j, s in enumerate(ps)]
+    lines += g.const_lines
+    lines += ["    for k in range(order):", "        inv = 1.0 / (k + 1)"]
+    lines += [f"        {line}" for line in body]
+    return "\n".join(lines) + "\n"
+
+
+@functools.cache
+def generated_expand(eq: Equations):
+    """``(expand, rows)``: the compiled expansion of ``eq`` and the rows its array needs."""
+    module = load(eq, "series", series_source)
+    return module.expand, module.ROWS
