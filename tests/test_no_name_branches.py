@@ -159,3 +159,39 @@ def test_the_scan_leaves_lookups_through_the_registry_and_words_that_are_not_nam
         '''
     )
     assert name_branches(source) == []
+
+
+def test_a_system_the_registry_does_not_know_raises_naming_it():
+    from mechviz.dynamics.registry import spec_named, system_named
+
+    for ask, known in ((spec_named, dynamics.SPECS), (system_named, dynamics.SYSTEMS)):
+        with pytest.raises(KeyError, match="pendulum") as err:
+            ask("pendulum")
+        assert all(name in str(err.value) for name in known)  # and says what there is
+
+
+def test_the_exhibits_are_keyed_by_the_registry_and_refuse_a_system_without_one():
+    from mechviz.viz.model import by_system
+
+    assert list(MODELS) == list(dynamics.SPECS) == list(EXHIBITS)
+    first, *rest = MODELS.values()
+    with pytest.raises(KeyError, match=first.key):
+        by_system(tuple(rest), "model")
+
+    class Stray:
+        key = "pendulum"
+
+    with pytest.raises(KeyError, match="pendulum"):
+        by_system((*MODELS.values(), Stray), "model")
+
+
+def test_a_model_that_leaves_a_hook_out_says_so_instead_of_answering_for_another():
+    from mechviz.viz.model import SystemHooks
+
+    class Bare(SystemHooks):
+        pass
+
+    with pytest.raises(NotImplementedError, match="Bare"):
+        Bare.shortest_period(None, {})
+    with pytest.raises(NotImplementedError, match="Bare"):
+        Bare.draw_motion_chart(None, None, None, None)
