@@ -1,8 +1,9 @@
-"""The compiled systems' facts, importable without numba: each one's id (the index of the
-kernels' tables) and the cost model of Taylor's method on it (:mod:`mechviz.dynamics.taylor_order`).
+"""The systems' names, written once, and the compiled systems' facts, importable without numba:
+each one's id (the index of the kernels' tables) and the cost model of Taylor's method on it
+(:mod:`mechviz.dynamics.taylor_order`).
 
-One entry per compiled system, by the driver's name; :mod:`mechviz.dynamics.systems`' adapters take
-their ids from here, so each name is written once.
+One entry per compiled system, by the driver's name; :mod:`mechviz.dynamics.systems`' adapters and
+:mod:`mechviz.dynamics.registry`'s descriptions take their names from here.
 """
 
 from __future__ import annotations
@@ -40,4 +41,7 @@ COMPILED = {
 if sorted(c.sys_id for c in COMPILED.values()) != list(range(len(COMPILED))):
     raise ValueError("the compiled ids must number the systems 0, 1, ... (the kernels' tables)")
 SYSTEM_IDS = {name: c.sys_id for name, c in COMPILED.items()}
+#: The disk as a person names it, and its driven motion (exact, no compiled kernel) as the driver
+#: does; released, it is the free body above.
+DISK_NAME, DRIVEN_DISK = "disk", "driven-disk"
 NAMES = {i: name for name, i in SYSTEM_IDS.items()}

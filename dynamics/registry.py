@@ -27,11 +27,11 @@ import numpy as np
 
 from . import cyclotron, disk, hoop
 from . import params as _v
+from .ids import DISK_NAME
 from .spec import BenchCase, Setting, SystemSpec, param
 from .systems import (
     CYCLOTRON_START,
     DISK_EXTRA_SPIN,
-    DISK_NAME,
     HOOP_MODES,
     SYSTEMS,
     Cyclotron,

@@ -26,7 +26,7 @@ from typing import ClassVar
 import numpy as np
 
 from . import cyclotron, disk, hoop, measure
-from .ids import NAMES
+from .ids import DRIVEN_DISK, NAMES
 from .integrators import kernels
 
 #: The default starts, shared by the adapters and the descriptions below: the cyclotron's
@@ -35,9 +35,6 @@ from .integrators import kernels
 CYCLOTRON_START = (1.0, (0.0, 0.0), 0.05)
 HOOP_MODES = (0.25, 0.25)
 DISK_EXTRA_SPIN = (0.0, 0.0, 0.02)
-#: The disk's name as a person uses it: its two motions' adapters (:class:`DrivenDisk`,
-#: :class:`ReleasedDisk`) have names of their own.
-DISK_NAME = "disk"
 
 
 def _period(omega: float) -> float:
@@ -390,7 +387,7 @@ class DrivenDisk(_Adapter):
     """The disk turned uniformly about its axle: exact, state ``(angle, omega)``."""
 
     params: disk.DiskParams = disk.DiskParams()
-    name = "driven-disk"
+    name = DRIVEN_DISK
     sys_id = None
     state_names = ("angle", "omega")
     state_labels: ClassVar[dict[str, str]] = {
