@@ -110,6 +110,11 @@ class CyclotronModel(ExhibitModel):
     live_fields = frozenset({"beam", "beam_size", "beam_speeds"})
     origin = (-3.95, 1.7, 0.0)
     frame_cost_compare = "boris"
+    demo_keys: ClassVar[dict[str, str]] = {
+        **{k: f"initial.{k}" for k in ("speed", "vz", "centre", "state")},
+        "beam_size": "initial.beam",
+        "beam_speeds": "initial.speeds",
+    }
 
     # ------------------------------------------------------------------ hooks (see .hooks)
     @classmethod

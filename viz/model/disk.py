@@ -71,6 +71,7 @@ class DiskModel(ExhibitModel):
     Config = DiskConfig
     view_fields = frozenset({"follow_cm"})
     origin = (0.0, 1.4, 0.0)
+    demo_keys: ClassVar[dict[str, str]] = {"extra_spin": "initial.extra_spin"}
 
     # ------------------------------------------------------------------ hooks (see .hooks)
     @classmethod

@@ -35,6 +35,9 @@ class SystemHooks:
     #: The comparison method the viewer's frame-cost benchmark adds (:mod:`mechviz.bench.frame_cost`);
     #: None: none.
     frame_cost_compare: ClassVar[str | None] = None
+    #: The demo key each of its own settings comes from when the demo calls it otherwise
+    #: (``{"beam_speeds": "initial.speeds"}``), so a refusal names the key the file wrote.
+    demo_keys: ClassVar[dict[str, str]] = {}
 
     @classmethod
     def _missing(cls, hook: str) -> NotImplementedError:

@@ -90,6 +90,7 @@ class HoopModel(ExhibitModel):
     start_fields = frozenset({"mode", "amplitude", "angles", "state"})
     origin = (2.4, -3.4, 0.0)
     frame_cost_compare = "rk4"
+    demo_keys: ClassVar[dict[str, str]] = {"state": "initial.state", "amplitude": "initial.modes"}
 
     # ------------------------------------------------------------------ hooks (see .hooks)
     @classmethod

@@ -30,7 +30,7 @@ from mechviz.dynamics.assets import asset
 
 from ..model import MODELS, ExhibitConfig
 from ..printable import has_control_characters, printable
-from .scales import CONFIG_KEYS, check_scales, in_demo_terms
+from .scales import check_scales, config_keys, in_demo_terms
 
 DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
@@ -298,7 +298,7 @@ def demo_key(d: Demo, field: str) -> str:
         return f"parameters.{field}"
     if field == "initial.motion":
         return "motion"
-    return CONFIG_KEYS.get(field, field)
+    return config_keys(d).get(field, field)
 
 
 def _finite_positive(key: str, value: float) -> None:

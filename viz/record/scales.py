@@ -184,20 +184,19 @@ def _check_start(d: Demo, cfg, span: float) -> None:
     MODELS[d.exhibit].check_recording_start(d, cfg, span)
 
 
-# The exhibit settings a demo's keys become (:meth:`.demo.Demo.config`), by the settings' names.
+# The exhibit settings every demo's keys become (:meth:`.demo.Demo.config`), by the settings'
+# names; each exhibit's own are its model's (:func:`config_keys`).
 CONFIG_KEYS = {
-    "speed": "initial.speed",
-    "vz": "initial.vz",
-    "centre": "initial.centre",
-    "state": "initial.state",
-    "beam_size": "initial.beam",
-    "beam_speeds": "initial.speeds",
-    "extra_spin": "initial.extra_spin",
-    "amplitude": "initial.modes",
     "compare_method": "compare.method",
     "compare_dt": "compare.dt",
     "compare_rtol": "compare.rtol",
 }
+
+
+def config_keys(d: Demo) -> dict[str, str]:
+    """The demo key each exhibit setting of ``d`` comes from, by the setting's name: the common
+    ones and its model's own (:attr:`mechviz.viz.model.hooks.SystemHooks.demo_keys`)."""
+    return {**CONFIG_KEYS, **MODELS[d.exhibit].demo_keys}
 
 
 def in_demo_terms(message: str, d: Demo) -> str:
@@ -208,8 +207,8 @@ def in_demo_terms(message: str, d: Demo) -> str:
     name = word.rstrip(":")
     if name in MODELS[d.exhibit].Config().params:
         key = f"parameters.{name}"
-    elif name in CONFIG_KEYS:
-        key = CONFIG_KEYS[name]
+    elif name in config_keys(d):
+        key = config_keys(d)[name]
     else:
         return message
     return f"{key}{word[len(name) :]}{sep}{rest}"
