@@ -148,7 +148,7 @@ static int cmp(const void *a, const void *b) {
 int main(int argc, char **argv) {
     long n = argc > 1 ? atol(argv[1]) : 1000000;
     int reps = argc > 2 ? atoi(argv[2]) : 5;
-    const char *names[] = {"rk4-charge", "boris", "rk4-hoop", "rk4-free-body", "splitting"};
+    const char *names[] = {"rk4-charge", "boris-charge", "rk4-hoop", "rk4-free-body", "splitting-free-body"};
     kernel ks[] = {rk4_charge, boris, rk4_hoop, rk4_free, splitting};
     double hs[] = {0.01, 0.01, 0.001, 0.001, 0.001};
     long scale[] = {1, 1, 8, 4, 8}; /* fewer steps for the expensive kernels */

@@ -58,7 +58,7 @@ def _style(m: str) -> dict:
 
     if m in PEERS:
         return PEER_STYLE
-    if m.startswith("scipy") or m == "odeint":
+    if m in METHODS and METHODS[m].backend == "scipy":
         return SCIPY_STYLE
     return OURS_STYLE
 
@@ -86,7 +86,8 @@ def work_precision(result: dict) -> dict[str, bytes]:
             n_above = f", {above[m]} above 1 not shown" if m in above else ""
             kw = dict(label=m + n_above, markersize=3.5, color=color(m), **_style(m))
             axes[0].loglog([p["seconds"] for p in pts], err, **kw)
-            if not m.startswith(("heyoka", "cyrk")) and m != "taylor":
+            # evaluations of ours only: a peer counts its own way, a series step is no evaluation
+            if m in METHODS and not METHODS[m].series:
                 axes[1].loglog([max(p["nfev"], 1) for p in pts], err, **kw)
         for m, pts in outliers.items():
             axes[0].loglog(

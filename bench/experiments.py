@@ -23,20 +23,17 @@ from pathlib import Path
 import numpy as np
 
 from mechviz.dynamics import hoop, stability
-from mechviz.dynamics.integrators import kernels
+from mechviz.dynamics.integrators import METHODS, kernels
 from mechviz.dynamics.integrators.base import IntegrationError
 from mechviz.dynamics.simulation import Simulation
-from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop
+from mechviz.dynamics.systems import Cyclotron, Hoop
 
 from .problems import PROBLEMS
 
 # ----------------------------------------------------------------------------- long runs
-LONG_RUNS = {
-    # problem: (step, methods); the step is loose on purpose: a frame-budget step.
-    "charge": (0.1, ("rk4", "boris", "yoshida4", "midpoint")),
-    HOOP.name: (0.05, ("rk4", "verlet", "yoshida4")),
-    DISK.name: (0.1, ("rk4", "splitting", "yoshida4")),
-}
+#: Each problem's long run (step, methods), as its system's description gives it
+#: (:attr:`mechviz.dynamics.BenchCase.long_run`); the step is loose on purpose: a frame-budget step.
+LONG_RUNS = {key: pb.long_run for key, pb in PROBLEMS.items() if pb.long_run is not None}
 
 
 def long_run_energy(periods: float = 1e4, samples: int = 400, progress=None) -> dict:
@@ -133,18 +130,20 @@ def hoop_mode2_factor(method: str, x: float, n_max: int = 400, a0: float = 1e-6)
     return (last / first) ** (1.0 / span), "ok"
 
 
+#: The oscillations a method's amplification is measured on, by the name its entry gives
+#: (:attr:`mechviz.dynamics.integrators.Method.stability_probe`): where it is measured, on which
+#: system, and how.
+PROBES = {
+    "gyration": ("charge", Cyclotron, _charge_factor),
+    "mode 2": ("hoop mode 2", Hoop, hoop_mode2_factor),
+}
+
+
 def stability_points(progress=None) -> dict:
     """Theory curves and measured points of the amplification factor against ``omega dt``."""
     xs = np.linspace(0.0, 4.0, 401)
-    methods = {
-        "euler": ("charge", Cyclotron, _charge_factor),
-        "rk4": ("charge", Cyclotron, _charge_factor),
-        "midpoint": ("charge", Cyclotron, _charge_factor),
-        "boris": ("charge", Cyclotron, _charge_factor),
-        "exact": ("charge", Cyclotron, _charge_factor),
-        "verlet": ("hoop mode 2", Hoop, hoop_mode2_factor),
-        "yoshida4": ("hoop mode 2", Hoop, hoop_mode2_factor),
-    }
+    # each method measured on the oscillation its entry names (Method.stability_probe)
+    methods = {m.name: PROBES[m.stability_probe] for m in METHODS.values() if m.stability_probe}
     out = {"x": xs.tolist(), "methods": {}}
     for m, (where, system, fn) in methods.items():
         theory = [stability.amplification(m, x) for x in xs]
@@ -170,26 +169,35 @@ def stability_points(progress=None) -> dict:
 # ----------------------------------------------------------------------------- per-step cost
 C_SOURCE = Path(__file__).with_name("c_steps.c")
 STEP_CASES = (
-    # name, system key, table, system id, h, steps
-    ("rk4-charge", "charge", kernels.RK4, kernels.CYCLOTRON, 0.01, 1_000_000),
-    ("boris", "charge", kernels.SYMMETRIC2, kernels.CYCLOTRON, 0.01, 1_000_000),
-    ("rk4-hoop", HOOP.name, kernels.RK4, kernels.HOOP, 0.001, 125_000),
-    ("verlet-hoop", HOOP.name, kernels.SYMMETRIC2, kernels.HOOP, 0.001, 125_000),
-    ("rk4-free-body", DISK.name, kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
-    ("splitting", DISK.name, kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
+    # name, table, system id (the problem of that system runs), h, steps
+    ("rk4-charge", kernels.RK4, kernels.CYCLOTRON, 0.01, 1_000_000),
+    ("boris-charge", kernels.SYMMETRIC2, kernels.CYCLOTRON, 0.01, 1_000_000),
+    ("rk4-hoop", kernels.RK4, kernels.HOOP, 0.001, 125_000),
+    ("verlet-hoop", kernels.SYMMETRIC2, kernels.HOOP, 0.001, 125_000),
+    ("rk4-free-body", kernels.RK4, kernels.FREE_BODY, 0.001, 250_000),
+    ("splitting-free-body", kernels.SYMMETRIC2, kernels.FREE_BODY, 0.001, 125_000),
 )
 # C -O2 per-step costs measured earlier on this machine (other load): reference figures.
 NOTES_C_NS = {
     "rk4-charge": 10.7,
-    "boris": 4.0,
+    "boris-charge": 4.0,
     "rk4-hoop": 168.0,
     "rk4-free-body": 16.0,
-    "splitting": 77.0,
+    "splitting-free-body": 77.0,
 }
 
 
-def _numba_cost(table, sys_id, key, h, n, repeats) -> tuple[float, float]:
-    pb = PROBLEMS[key]
+def problem_of(sys_id: int):
+    """The benchmark problem whose system has the compiled id ``sys_id``; ``KeyError`` naming it
+    if none has."""
+    for pb in PROBLEMS.values():
+        if pb.system.sys_id == sys_id:
+            return pb
+    raise KeyError(f"no benchmark problem of the compiled system {sys_id}")
+
+
+def _numba_cost(table, sys_id, h, n, repeats) -> tuple[float, float]:
+    pb = problem_of(sys_id)
     step = table[sys_id]
     p = pb.system.kernel_params()
     status = np.zeros(3, dtype=np.int64)
@@ -240,8 +248,8 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
     repeats = 3 if quick else 7
     scale = 4 if quick else 1
     rows = {}
-    for name, key, table, sys_id, h, n in STEP_CASES:
-        ns, comp = _numba_cost(table, sys_id, key, h, n // scale, repeats)
+    for name, table, sys_id, h, n in STEP_CASES:
+        ns, comp = _numba_cost(table, sys_id, h, n // scale, repeats)
         rows[name] = {"numba_ns": ns, "first_call_s": comp, "steps": n // scale}
         if progress:
             progress()
@@ -282,7 +290,7 @@ def ensemble_costs(quick: bool = False, progress=None) -> dict:
 
     rounds = 2 if quick else 5
     member_steps = ENSEMBLE_MEMBER_STEPS // (2 if quick else 1)
-    pb = PROBLEMS[HOOP.name]
+    pb = problem_of(kernels.HOOP)
     rng = np.random.default_rng(0)
     rows = {}
     saved = taylor.PARALLEL_MIN

@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from mechviz.viz.app import MechvizApp, warm_up
-from mechviz.viz.model import CyclotronConfig, CyclotronModel, HoopConfig, HoopModel
+from mechviz.viz.model import MODELS
 
 
 def measure_frame_cost(
@@ -24,10 +24,11 @@ def measure_frame_cost(
     [ms] and the number of trail segments drawn at the end.
     """
     configs = {}
-    if compare:
+    if compare:  # the comparison each exhibit's model names for this measurement
         configs = {
-            CyclotronModel.key: CyclotronConfig(compare_method="boris"),
-            HoopModel.key: HoopConfig(compare_method="rk4"),
+            key: cls.Config(compare_method=cls.frame_cost_compare)
+            for key, cls in MODELS.items()
+            if cls.frame_cost_compare is not None
         }
     warm_up("defaults", configs)
     app = MechvizApp(port=0, configs=configs, start_loop=False)

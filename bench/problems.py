@@ -27,22 +27,18 @@ Without heyoka the reference is mpmath's alone.
 from __future__ import annotations
 
 import json
-import math
 import platform
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from mechviz.dynamics.assets import asset
-from mechviz.dynamics.cyclotron import CyclotronParams
-from mechviz.dynamics.disk import DiskParams
 from mechviz.dynamics.files import write_json_atomically
-from mechviz.dynamics.hoop import HoopParams
 from mechviz.dynamics.integrators import METHODS
+from mechviz.dynamics.registry import SPECS
 from mechviz.dynamics.simulation import Simulation
-from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
+from mechviz.dynamics.spec import BenchCase
 
 REFERENCE_PATH = asset("bench", "references.json")
 REFERENCE_TOL = 1e-13  # the DOP853 cross-check
@@ -51,27 +47,8 @@ LONG_DOUBLE_TOL = 1e-19  # heyoka in 80-bit long double
 MPMATH_DIGITS = 25
 
 
-@dataclass(frozen=True)
-class Problem:
-    """One benchmark problem: a system, its initial state, the span and the methods to compare."""
-
-    key: str
-    title: str
-    system: object
-    state0: tuple[float, ...]
-    t_end: float
-    fixed: tuple[str, ...]  # our fixed-step methods
-    n0: int  # fewest steps in the fixed-step sweep
-    floor: float  # errors below this cannot be resolved against the reference
-    period: float  # the period used for "10^4 periods" in the long run
-    exact_reference: bool
-
-    @property
-    def y0(self) -> np.ndarray:
-        return np.array(self.state0, dtype=float)
-
-    def error(self, y: np.ndarray, ref: np.ndarray) -> float:
-        return float(np.asarray(self.system.error(np.atleast_2d(y), np.atleast_2d(ref)))[0])
+#: One benchmark problem: its system's description holds it (:attr:`mechviz.dynamics.SystemSpec.bench`).
+Problem = BenchCase
 
 
 def listed(role: str) -> tuple[str, ...]:
@@ -83,92 +60,15 @@ def listed(role: str) -> tuple[str, ...]:
 ADAPTIVE_OURS = listed("sweep")
 ADAPTIVE_SCIPY = listed("scipy")
 
-PROBLEMS: dict[str, Problem] = {
-    "charge": Problem(
-        "charge",
-        "Charge in a uniform field (100 gyro-periods)",
-        Cyclotron(),
-        (1.0, 0.0, 0.0, 0.0, 1.0, 0.1),
-        200.0 * math.pi,
-        ("rk4", "boris", "yoshida4", "midpoint", "euler"),
-        256,
-        1e-13,
-        2.0 * math.pi,
-        True,
-    ),
-    HOOP.name: Problem(
-        HOOP.name,
-        "Bead on a hoop (20 s)",
-        Hoop(),
-        (0.5, -0.3, 0.0, 0.0),
-        20.0,
-        ("rk4", "verlet", "yoshida4", "midpoint", "euler"),
-        64,
-        1e-13,
-        2.0 * math.pi / math.sqrt(9.81 / 2.0),  # the slower normal mode
-        False,
-    ),
-    DISK.name: Problem(
-        DISK.name,
-        "Released disk with bead (50 s)",
-        ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)),
-        tuple(ReleasedDisk(DiskParams(omega=1.0), extra_spin=(0.01, 0.0, 0.01)).default_state()),
-        50.0,
-        ("rk4", "splitting", "yoshida4", "midpoint", "euler"),
-        32,
-        1e-13,
-        2.0 * math.pi,  # one turn at the spin rate of 1 rad/s
-        False,
-    ),
-}
-
+#: The problems the methods were tuned on: the first of each system's benchmark cases, in the
+#: registry's order.
+PROBLEMS: dict[str, Problem] = {s.bench[0].key: s.bench[0] for s in SPECS.values() if s.bench}
 
 # Cases the methods were not tuned on: other parameters, larger amplitudes, longer spans. Their
 # references are computed when the benchmark runs (heyoka in long double when installed, else
 # DOP853 at 1e-13, good to about 1e-12 only, so that the 1e-12 figures of these cases are then
 # not resolved; the result records which, see :func:`variant_reference`); nothing is stored.
-VARIANTS: dict[str, Problem] = {
-    "charge-untuned": Problem(
-        "charge-untuned",
-        "Charge, q = -2, m = 1.5, B = 0.7, faster and off axis (1000 gyro-periods)",
-        Cyclotron(CyclotronParams(charge=-2.0, mass=1.5, field=0.7)),
-        (0.4, -1.1, 0.3, 0.9, 1.7, 0.02),
-        1000 * 2.0 * math.pi * 1.5 / 1.4,
-        ("rk4",),
-        1024,
-        1e-13,
-        2.0 * math.pi * 1.5 / 1.4,
-        True,
-    ),
-    "hoop-untuned": Problem(
-        "hoop-untuned",
-        "Hoop, M = 0.7, m = 1.3, a = 0.6, larger swing (1.2, -0.8) (60 s)",
-        Hoop(HoopParams(hoop_mass=0.7, bead_mass=1.3, radius=0.6)),
-        (1.2, -0.8, 0.5, 0.0),
-        60.0,
-        ("rk4",),
-        256,
-        1e-13,
-        1.0,
-        False,
-    ),
-    "disk-untuned": Problem(
-        "disk-untuned",
-        "Released disk, R = 0.8, bead 0.4 kg, tumbling (extra spin 0.3, 0, 0.2) (250 s)",
-        ReleasedDisk(DiskParams(radius=0.8, bead_mass=0.4, omega=1.5), extra_spin=(0.3, 0.0, 0.2)),
-        tuple(
-            ReleasedDisk(
-                DiskParams(radius=0.8, bead_mass=0.4, omega=1.5), extra_spin=(0.3, 0.0, 0.2)
-            ).default_state()
-        ),
-        250.0,
-        ("rk4",),
-        128,
-        1e-13,
-        2.0 * math.pi / 1.5,
-        False,
-    ),
-}
+VARIANTS: dict[str, Problem] = {c.key: c for s in SPECS.values() for c in s.bench[1:]}
 
 
 def versions() -> dict[str, str]:

@@ -21,19 +21,14 @@ are reported as unresolved, not as a result (:func:`reference`).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from mechviz.dynamics.cyclotron import CyclotronParams
-from mechviz.dynamics.disk import DiskParams
-from mechviz.dynamics.hoop import HoopParams
-from mechviz.dynamics.systems import DISK, HOOP, Cyclotron, Hoop, ReleasedDisk
+from mechviz.dynamics.registry import SPECS
 
 from .problems import LONG_DOUBLE_TOL, Problem
 
-KINDS = ("charge", HOOP.name, DISK.name)
 CHECK_TOL = 1e-15
 RESOLVE_FACTOR = 100.0
 
@@ -47,49 +42,9 @@ class Reference:
     resolves: float
 
 
-def _signed(rng: np.random.Generator, lo: float, hi: float) -> float:
-    return float(rng.uniform(lo, hi) * rng.choice((-1.0, 1.0)))
-
-
-def _charge(rng: np.random.Generator, key: str) -> Problem:
-    q, m, b = _signed(rng, 0.3, 3.0), float(rng.uniform(0.3, 3.0)), _signed(rng, 0.3, 3.0)
-    system = Cyclotron(CyclotronParams(charge=q, mass=m, field=b))
-    state = tuple(float(v) for v in np.concatenate([rng.uniform(-2, 2, 3), rng.uniform(-2, 2, 3)]))
-    periods = int(rng.integers(10, 301))
-    period = 2.0 * math.pi * m / abs(q * b)
-    title = f"charge q={q:.3g} m={m:.3g} B={b:.3g}, {periods} gyro-periods"
-    return Problem(key, title, system, state, periods * period, (), 0, 1e-13, period, True)
-
-
-def _hoop(rng: np.random.Generator, key: str) -> Problem:
-    M, m, a = float(rng.uniform(0.2, 3.0)), float(rng.uniform(0.1, 3.0)), float(rng.uniform(0.3, 2))
-    system = Hoop(HoopParams(hoop_mass=M, bead_mass=m, radius=a))
-    rate = math.sqrt(9.81 / a)
-    state = tuple(
-        float(v)
-        for v in np.concatenate([rng.uniform(-1.5, 1.5, 2), rate * rng.uniform(-0.5, 0.5, 2)])
-    )
-    span = float(rng.uniform(5.0, 30.0))
-    title = f"hoop M={M:.3g} m={m:.3g} a={a:.3g}, {span:.1f} s"
-    return Problem(key, title, system, state, span, (), 0, 1e-13, 2 * math.pi / rate, False)
-
-
-def _disk(rng: np.random.Generator, key: str) -> Problem:
-    M, R, m = (
-        float(rng.uniform(0.3, 3.0)),
-        float(rng.uniform(0.3, 2.0)),
-        float(rng.uniform(0.05, 3)),
-    )
-    w = _signed(rng, 0.3, 5.0)
-    extra = tuple(float(v) for v in abs(w) * rng.uniform(-0.5, 0.5, 3))
-    system = ReleasedDisk(DiskParams(disk_mass=M, radius=R, bead_mass=m, omega=w), extra_spin=extra)
-    span = float(rng.uniform(10.0, 100.0))
-    title = f"disk M={M:.3g} R={R:.3g} bead={m:.3g} spin={w:.3g}, {span:.1f} s"
-    state = tuple(float(v) for v in system.default_state())
-    return Problem(key, title, system, state, span, (), 0, 1e-13, 2 * math.pi / abs(w), False)
-
-
-_DRAW = {"charge": _charge, HOOP.name: _hoop, DISK.name: _disk}
+#: Each system's draw, by the key of its benchmark problem (the registry's order).
+_DRAW = {s.bench[0].key: s.bench_draw for s in SPECS.values() if s.bench and s.bench_draw}
+KINDS = tuple(_DRAW)
 
 
 def draw(seed: int, n: int) -> dict[str, Problem]:

@@ -2,8 +2,9 @@
 
 Modules: :mod:`.cyclotron`, :mod:`.disk`, :mod:`.hoop` (one system each: parameters, equations of
 motion, invariants, exact and analytic results); :mod:`.integrators` (methods as data, compiled
-kernels, scipy behind the same interface); :mod:`.spec` and :mod:`.systems` (each system
-described once, :data:`SPECS`, and as the driver sees it, :data:`SYSTEMS`); :mod:`.steps` (step
+kernels, scipy behind the same interface); :mod:`.registry` (the one registry of systems: each
+described once, :data:`SPECS`), :mod:`.spec` (what a description holds) and :mod:`.systems` (each
+system as the driver sees it, :data:`SYSTEMS`); :mod:`.steps` (step
 control as one value); :mod:`.params` (one error type and one rule for typed numbers);
 :mod:`.simulation` (the driver); :mod:`.measure` (estimators of sampled motion, shared by the
 viewer and the recorder).
@@ -22,9 +23,8 @@ _WHERE = {
     **dict.fromkeys(("Sample", "Simulation", "Trajectory"), ".simulation"),
     **dict.fromkeys(("Setting", "Setup", "SystemSpec"), ".spec"),
     **dict.fromkeys(("Exact", "Fixed", "Step", "Tolerance", "step_control"), ".steps"),
-    **dict.fromkeys(
-        ("SPECS", "SYSTEMS", "Cyclotron", "DrivenDisk", "Hoop", "ReleasedDisk"), ".systems"
-    ),
+    **dict.fromkeys(("SYSTEMS", "Cyclotron", "DrivenDisk", "Hoop", "ReleasedDisk"), ".systems"),
+    **dict.fromkeys(("SPECS", "BenchCase", "lookup", "spec_named", "system_named"), ".registry"),
 }
 
 
@@ -49,6 +49,7 @@ __all__ = [
     "METHODS",
     "SPECS",
     "SYSTEMS",
+    "BenchCase",
     "Cyclotron",
     "DrivenDisk",
     "Exact",
@@ -67,8 +68,11 @@ __all__ = [
     "Tolerance",
     "Trajectory",
     "get_method",
+    "lookup",
     "measure",
     "methods_for",
     "parse_number",
+    "spec_named",
     "step_control",
+    "system_named",
 ]

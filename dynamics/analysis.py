@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .params import TINY, SettingError, blamed
-from .systems import SPECS
+from .registry import SPECS
 
 # Derived quantities that are nonzero for every valid input: 0 means they underflowed.
 _NONZERO = {
@@ -92,7 +92,7 @@ def check_representable(
 
 
 def analyze(system: str, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """The analytic results of ``system`` (a name in :data:`mechviz.dynamics.systems.SPECS`) for
+    """The analytic results of ``system`` (a name in :data:`mechviz.dynamics.registry.SPECS`) for
     ``values``: its parameters by name, and the start settings its analysis takes
     (:attr:`mechviz.dynamics.spec.SystemSpec.analysis_start`; the cyclotron's ``speed`` [m/s]); the rest
     default. :class:`SettingError` names a bad or unknown setting, or those whose consequences

@@ -54,9 +54,9 @@ from . import params as _v
 from . import stability as _stability
 from .measure import Estimate, crossing_frequency, fit_circle, gyrofrequency, wobble_growth_rate
 from .params import SettingError
-from .simulation import RESOLVED_FACTOR, Simulation, reference_description
+from .registry import SPECS
+from .simulation import EXACT_FLOW, RESOLVED_FACTOR, Simulation, reference_description
 from .steps import Fixed
-from .systems import SPECS
 
 #: The systems by the names the API, the command line and the demo files use.
 SYSTEM_NAMES = tuple(SPECS)
@@ -273,7 +273,7 @@ def simulate(
     start_names = {s.name for s in spec.start}
     start = {k: v for k, v in settings.items() if k in start_names}
     params = {k: v for k, v in settings.items() if k not in start_names}
-    if reference not in ("auto", "exact", None):
+    if reference not in ("auto", EXACT_FLOW, None):
         raise SettingError(
             "reference", f"reference must be 'auto', 'exact' or None; got {reference!r}"
         )

@@ -72,9 +72,12 @@ from .results import (  # noqa: F401  (re-exported: the driver's results)
     CHECK_ATOL,
     CHECK_TOL,
     CHUNK_SECONDS,
+    EXACT_FLOW,
     MIN_COMPARED_TOL,
     REFERENCE_ACCURACY,
     REFERENCE_ATOL,
+    REFERENCE_METHOD,
+    REFERENCE_RUN,
     REFERENCE_TOL,
     RESOLVED_FACTOR,
     Sample,
@@ -274,7 +277,7 @@ class Simulation:
             raise ValueError(f"t must not go backwards: {t_target} < {self.t}")
         self.clock = t_target
         m = self.method
-        if m.backend == "exact" and (self.system.sys_id is None or self.dt is None):
+        if m.closed_form and (self.system.sys_id is None or self.dt is None):
             # Closed form evaluated at the time asked for (no compiled flow, or no step given).
             self.state = np.atleast_2d(self.system.exact(self.state0, t_target - self.t0))
             self.t = t_target
@@ -300,7 +303,7 @@ class Simulation:
                     raise IntegrationError(m.name, self.step_label(), t_target, failure)
             elif m.pair is not None:
                 self._run_rk(t_target, final)
-            elif m.kernel == "taylor":
+            elif m.series:
                 self._run_taylor(t_target)
             else:
                 raise ValueError(f"no compiled adaptive runner for method {m.name!r}")
@@ -422,7 +425,7 @@ class Simulation:
         members = len(self.state)
         with np.errstate(over="ignore", divide="ignore"):
             span = max(0.0, t_end - self.t)
-            if m.backend == "exact" and (self.system.sys_id is None or self.dt is None):
+            if m.closed_form and (self.system.sys_id is None or self.dt is None):
                 own = 0.0
             elif not m.adaptive:
                 own = math.floor(span / self.dt + 1e-9) if span / self.dt < 1e300 else math.inf
@@ -467,7 +470,7 @@ class Simulation:
         """``"exact"``, ``"reference"`` (tight DOP853) or ``None``: what ``Sample.error`` is against."""
         if not self._track_error:
             return None
-        return "exact" if self._has_exact else "reference"
+        return EXACT_FLOW if self._has_exact else REFERENCE_RUN
 
     def reference_state(self) -> np.ndarray | None:
         """The exact state at ``t`` if known, else the tight reference run's, else ``None``."""
@@ -484,7 +487,7 @@ class Simulation:
         kind = self.reference_kind
         if kind is None:
             return None
-        if kind == "exact":
+        if kind == EXACT_FLOW:
             return np.zeros(len(self.state))
         ref = self._reference
         check = None if ref is None else ref._reference
@@ -557,9 +560,14 @@ def reference_run(system: System, state: np.ndarray) -> Simulation:
     its check run (:data:`CHECK_TOL`) as its own ``_reference``: advanced, restarted and
     snapshot with it."""
     ref = Simulation(
-        system, "dop853", rtol=REFERENCE_TOL, atol=REFERENCE_ATOL, state=state, reference=None
+        system,
+        REFERENCE_METHOD,
+        rtol=REFERENCE_TOL,
+        atol=REFERENCE_ATOL,
+        state=state,
+        reference=None,
     )
     ref._reference = Simulation(
-        system, "dop853", rtol=CHECK_TOL, atol=CHECK_ATOL, state=state, reference=None
+        system, REFERENCE_METHOD, rtol=CHECK_TOL, atol=CHECK_ATOL, state=state, reference=None
     )
     return ref

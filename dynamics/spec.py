@@ -101,13 +101,56 @@ class Setup:
 
 
 @dataclass(frozen=True)
+class BenchCase:
+    """One benchmark problem of a system (its description says which: :attr:`SystemSpec.bench`):
+    the driver's system, its initial state, the span and the methods to compare.
+
+    ``fixed``: our fixed-step methods in the sweep; ``n0``: the fewest steps there (0: no
+    sweep); ``floor``: errors below it cannot be resolved against the reference; ``period``: the
+    period counted in the long run; ``exact_reference``: the system's own exact flow is the
+    reference; ``long_run``: the step [s] and the fixed-step methods of the long energy-drift
+    run (none for a case the methods were not tuned on)."""
+
+    key: str
+    title: str
+    system: Any  # a mechviz.dynamics.systems adapter
+    state0: tuple[float, ...]
+    t_end: float
+    fixed: tuple[str, ...]
+    n0: int
+    floor: float
+    period: float
+    exact_reference: bool
+    long_run: tuple[float, tuple[str, ...]] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "state0", tuple(float(x) for x in self.state0))
+        if len(self.state0) != len(self.system.state_names):
+            raise ValueError(f"{self.key}: state0 must have {len(self.system.state_names)} values")
+        if not (self.t_end > 0 and self.period > 0 and self.n0 >= 0):
+            raise ValueError(f"{self.key}: t_end and period must be positive, n0 not negative")
+        for name in self.fixed + (self.long_run[1] if self.long_run else ()):
+            get_method(name)  # an unknown method raises, naming it
+
+    @property
+    def y0(self) -> np.ndarray:
+        return np.array(self.state0, dtype=float)
+
+    def error(self, y: np.ndarray, ref: np.ndarray) -> float:
+        """The system's error metric of ``y`` against ``ref`` (one state each)."""
+        return float(np.asarray(self.system.error(np.atleast_2d(y), np.atleast_2d(ref)))[0])
+
+
+@dataclass(frozen=True)
 class SystemSpec:
     """One system as a person meets it (see the module docstring).
 
     ``build(params, start)`` returns the driver's system and the initial state for checked
     settings; ``default_method(start)`` the method a run takes when none is given (the disk's
     depends on its motion); ``analysis(params, **start)`` the seed's analytic results (a
-    JSON-ready dict), taking the start settings named in ``analysis_start``."""
+    JSON-ready dict), taking the start settings named in ``analysis_start``. ``bench``: the
+    benchmark's problems of this system, the one it was tuned on first, then the ones it was
+    not (:class:`BenchCase`)."""
 
     name: str
     title: str
@@ -122,6 +165,10 @@ class SystemSpec:
     #: State variables a command line may set one by one over the default start.
     state_overrides: tuple[str, ...] = ()
     rtol: float = 1e-9
+    bench: tuple[BenchCase, ...] = ()
+    #: A case of this system drawn at random (``(rng, key) -> BenchCase``) for the benchmark's
+    #: untuned cases; None: the system takes no part there.
+    bench_draw: Callable[[np.random.Generator, str], BenchCase] | None = None
 
     def __post_init__(self) -> None:
         names = [f.name for f in fields(self.Params)]
@@ -225,7 +272,7 @@ class SystemSpec:
                 "method",
                 f"method {m.name!r} does not apply to the {self.name} here; choose one of {names}",
             )
-        if m.backend == "exact":
+        if m.closed_form:
             step = step_control(m, dt, None, None)
         else:
             step = step_control(

@@ -100,7 +100,7 @@ def stability_limit(method_name: str, system, state: np.ndarray | None = None) -
     method = get_method(method_name)
     if not method.applies_to(system):
         raise ValueError(f"method {method_name!r} does not apply to {system.name}")
-    if method.adaptive or method.backend == "exact":
+    if method.adaptive or method.closed_form:
         return None
     x = limit_omega_dt(method_name, system)
     if x is None or x == 0.0:

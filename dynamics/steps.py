@@ -77,7 +77,7 @@ def step_control(
     if method.adaptive:
         return Tolerance(DEFAULT_RTOL if rtol is None else rtol, atol)
     if dt is None:
-        if method.backend == "exact":
+        if method.closed_form:
             return Exact()
         raise _v.SettingError("dt", f"dt is required for the fixed-step method {method.name}")
     return Fixed(dt)

@@ -26,10 +26,8 @@ from typing import ClassVar
 import numpy as np
 
 from . import cyclotron, disk, hoop, measure
-from . import params as _v
-from .ids import NAMES
+from .ids import DRIVEN_DISK, NAMES
 from .integrators import kernels
-from .spec import Setting, SystemSpec, param
 
 #: The default starts, shared by the adapters and the descriptions below: the cyclotron's
 #: (speed [m/s], centre (x, y) [m], vz [m/s]), the hoop's mode amplitudes [rad], the disk's
@@ -70,6 +68,9 @@ class _Adapter:
     #: (symplecticity in :meth:`canonical_maps`' variables) or "lie-poisson" (a free rigid body).
     method_structure: ClassVar[dict[str, tuple[tuple[str, ...], str]]] = {}
     structure_check: ClassVar[str] = "canonical"
+    #: Whether the stability atlas's chaos map (:mod:`mechviz.dynamics.atlas.grid`) covers this
+    #: system's start plane.
+    chaos_map: ClassVar[bool] = False
 
     def canonical_maps(self):
         """``(to_canonical, from_canonical)``: the state to canonical ``(q, p)`` and back."""
@@ -218,6 +219,7 @@ class Hoop(_Adapter):
         "omega2": "bead rate θ2' [rad/s]",
     }
     symmetric_step = "verlet"
+    chaos_map = True
     amplitude = ("rad", "amplitude A of each normal mode [rad]", (0.01, 1.5))
 
     def default_state(self) -> np.ndarray:
@@ -385,7 +387,7 @@ class DrivenDisk(_Adapter):
     """The disk turned uniformly about its axle: exact, state ``(angle, omega)``."""
 
     params: disk.DiskParams = disk.DiskParams()
-    name = "driven-disk"
+    name = DRIVEN_DISK
     sys_id = None
     state_names = ("angle", "omega")
     state_labels: ClassVar[dict[str, str]] = {
@@ -453,148 +455,6 @@ class DrivenDisk(_Adapter):
 
 System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk
 
-# Every system by the name the methods and the driver know it by.
+# Every system by the name the methods and the driver know it by (the one registry,
+# :mod:`mechviz.dynamics.registry`, looks them up by name).
 SYSTEMS: dict[str, type] = {s.name: s for s in (Cyclotron, Hoop, ReleasedDisk, DrivenDisk)}
-
-
-# =========================================================================== descriptions
-def _angle_pair(name: str, value) -> tuple[float, float]:
-    a = _v.numbers(name, value, 2)
-    if any(abs(x) >= 3.0 for x in a):
-        raise _v.SettingError(name, f"{name} must be angles below 3 rad, got {value!r}")
-    return a
-
-
-def _choice(*options: str):
-    def rule(name: str, value) -> str:
-        if value not in options:
-            raise _v.SettingError(
-                name, f"{name} must be one of {', '.join(options)}; got {value!r}"
-            )
-        return value
-
-    return rule
-
-
-def _build_cyclotron(p: cyclotron.CyclotronParams, start: dict) -> tuple[Cyclotron, np.ndarray]:
-    state = cyclotron.circular_orbit_state(p, start["speed"], start["centre"], start["vz"])
-    return Cyclotron(p), state
-
-
-def _build_hoop(p: hoop.HoopParams, start: dict) -> tuple[Hoop, np.ndarray]:
-    return Hoop(p), hoop.mode_state(p, start["modes"])
-
-
-def _build_disk(p: disk.DiskParams, start: dict) -> tuple[DrivenDisk | ReleasedDisk, np.ndarray]:
-    system = DrivenDisk(p) if start["motion"] == "driven" else ReleasedDisk(p, start["extra_spin"])
-    return system, system.default_state()
-
-
-# What a live exhibit takes (Setting.span): masses within six decades of 1 kg keep every motion
-# moving on screen; radii up to 2 m keep each exhibit clear of its neighbours (4.4 m apart).
-MASSES = (1e-3, 1e3)
-RADII = (0.1, 2.0)
-
-CYCLOTRON = SystemSpec(
-    name=Cyclotron.name,
-    title="Charge in a uniform magnetic field",
-    Params=cyclotron.CyclotronParams,
-    params=(
-        param("charge", "Charge q", "C", "charge q [C] (signed, nonzero)", span=(-1e3, 1e3)),
-        param("mass", "Mass m", "kg", span=MASSES),
-        param("field", "Field B", "T", "field B [T] along +z (nonzero)", span=(-1e3, 1e3)),
-    ),
-    start=(
-        Setting(
-            "speed",
-            "Speed v⊥",
-            "m/s",
-            CYCLOTRON_START[0],
-            _v.positive,
-            "speed in the plane normal to B [m/s]",
-        ),
-        Setting(
-            "centre",
-            "Centre (x, y)",
-            "m",
-            CYCLOTRON_START[1],
-            lambda n, v: _v.numbers(n, v, 2),
-            "centre of the circle (x, y) [m]",
-        ),
-        Setting("vz", "Speed along B", "m/s", CYCLOTRON_START[2], _v.finite, "speed along B [m/s]"),
-    ),
-    build=_build_cyclotron,
-    default_method=lambda start: "exact",
-    dt=0.01,
-    analysis=cyclotron.analysis,
-    analysis_start=("speed",),
-    state_overrides=cyclotron.STATE_NAMES,
-)
-
-HOOP = SystemSpec(
-    name=Hoop.name,
-    title="Bead on a hanging hoop",
-    Params=hoop.HoopParams,
-    params=(
-        param("hoop_mass", "Hoop mass M", "kg", span=MASSES),
-        param("bead_mass", "Bead mass m", "kg", span=MASSES),
-        param("radius", "Radius a", "m", "hoop radius a [m]", span=RADII),
-        param("gravity", "Gravity g", "m/s²", span=(1e-2, 1e3)),
-    ),
-    start=(
-        Setting(
-            "modes",
-            "Mode amplitudes (1, 2)",
-            "rad",
-            HOOP_MODES,
-            _angle_pair,
-            "amplitudes of mode 1 and mode 2 [rad], at rest",
-        ),
-    ),
-    build=_build_hoop,
-    default_method=lambda start: "rk4",
-    dt=1 / 60,
-    analysis=hoop.analysis,
-    state_overrides=hoop.STATE_NAMES,
-)
-
-DISK = SystemSpec(
-    name="disk",
-    title="Spinning disk with a bead",
-    Params=disk.DiskParams,
-    params=(
-        param("disk_mass", "Disk mass M", "kg", span=MASSES),
-        param("radius", "Radius R", "m", "disk radius R [m]", span=RADII),
-        param("bead_mass", "Bead mass m", "kg", span=MASSES),
-        param("omega", "Spin ω", "rad/s", "spin rate about the axle [rad/s]", span=(-50.0, 50.0)),
-    ),
-    start=(
-        Setting(
-            "motion",
-            "Motion",
-            "",
-            "driven",
-            _choice("driven", "released"),
-            "driven: uniform rotation about the axle (exact); released: the axle removed "
-            "at t = 0 (a free rigid body)",
-            choices=("driven", "released"),
-        ),
-        Setting(
-            "extra_spin",
-            "Extra spin at release",
-            "rad/s",
-            DISK_EXTRA_SPIN,
-            lambda n, v: _v.numbers(n, v, 3),
-            "spin added at release (disk-frame components) [rad/s]",
-            components=("wx", "wy", "wz"),
-            needs=("motion", "released"),
-        ),
-    ),
-    build=_build_disk,
-    default_method=lambda start: "exact" if start["motion"] == "driven" else "rk4",
-    dt=1 / 60,
-    analysis=disk.analysis,
-)
-
-#: Every system by the name a person uses (the CLI's, the API's and the demo files').
-SPECS: dict[str, SystemSpec] = {s.name: s for s in (CYCLOTRON, DISK, HOOP)}

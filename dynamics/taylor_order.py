@@ -9,21 +9,19 @@ from __future__ import annotations
 import functools
 import math
 
-from .ids import CYCLOTRON, FREE_BODY, HOOP
+from .ids import COMPILED, HOOP
 
 MAX_ORDER = 40
 
-# Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, per system: the step size and loop
-# (c0), Horner's evaluation and the linear recurrences (c1), the Cauchy products (c2). Measured
-# with the compiled pieces on a 2-core x86-64 VM; only their ratios matter. The hoop's: a
-# least-squares fit of whole steps (180-1391 ns) at orders 6-32 on the benchmark hoop.
-STEP_COST = {CYCLOTRON: (60.0, 1.0, 0.0), HOOP: (72.0, 11.8, 0.92), FREE_BODY: (55.0, 5.8, 1.0)}
+# Cost of one step [ns] as c0 + c1 p + c2 p^2 at order p, by compiled system (its entry in
+# :data:`mechviz.dynamics.ids.COMPILED` says it); a dict, so a test may vary one.
+STEP_COST = {c.sys_id: c.taylor_cost for c in COMPILED.values()}
 
 
 # Systems whose solutions are entire functions with coefficients falling as 1/k! (the charge's
 # sines and cosines): the last two coefficients put the radius of convergence at about
 # (p!)^(1/p) / |Omega|, growing with the order, so the step grows with it (:func:`order_for`).
-ENTIRE = frozenset({CYCLOTRON})
+ENTIRE = frozenset(c.sys_id for c in COMPILED.values() if c.entire)
 TIGHT_TOL = 1e-14
 TIGHT_A_MIN = 1.25
 

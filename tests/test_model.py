@@ -3,7 +3,7 @@
 
 Also the shape of the code the model split promises: no import cycle (imports inside functions
 counted), no module over 600 lines, each system named (as a string) outside its own modules in
-at most two files.
+one file at most (:mod:`mechviz.dynamics.ids`, where the names are written once).
 """
 
 from __future__ import annotations
@@ -175,7 +175,7 @@ def _string_constants(tree: ast.AST) -> set[str]:
     }
 
 
-def test_each_system_is_named_in_its_own_modules_and_at_most_two_other_files():
+def test_each_system_is_named_in_its_own_modules_and_at_most_one_other_file():
 
     own = {"dynamics", "viz/model", "viz/scene"}
     by_system: dict[str, set[str]] = {}
@@ -192,5 +192,5 @@ def test_each_system_is_named_in_its_own_modules_and_at_most_two_other_files():
             if names & _string_constants(tree):
                 by_system.setdefault(spec_name, set()).add(str(rel))
     assert by_system, "the scan found no system's name at all: it scans nothing"
-    crowded = {n: sorted(f) for n, f in by_system.items() if len(f) > 2}
+    crowded = {n: sorted(f) for n, f in by_system.items() if len(f) > 1}
     assert not crowded, crowded

@@ -54,7 +54,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .frames import FrameLog
+from .frames import FrameLog, refresh_frames
 from .live_record import add_record_toggle
 from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
@@ -63,10 +63,9 @@ from .scene.panel import Panel, parse_number
 from .views import GRIDS, HOME, OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  (re-exported)
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
-# m: where each exhibit stands, in the order of mechviz.viz.scene.EXHIBITS, left to right as the first
-# view sees them; staggered in depth so that view (views.OVERVIEW) shows them one below another
-# as well as side by side
-ORIGINS = dict(zip(EXHIBITS, ((-3.95, 1.7, 0.0), (0.0, 1.4, 0.0), (2.4, -3.4, 0.0)), strict=True))
+# m: where each exhibit stands, as its model says (mechviz.viz.model.hooks.SystemHooks.origin)
+ORIGINS = {key: cls.origin for key, cls in EXHIBITS.items()}
+
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
 # The chart window choices [s]: each chart holds at most CHART_RATE x 10 s points, spread evenly
@@ -539,8 +538,12 @@ class MechvizApp(Views):
     # so its readout reuses that sample.
     GUI_CYCLE: ClassVar[int] = 12
     STATUS_FRAMES: ClassVar[tuple[int, ...]] = (0, 6)
-    EXHIBIT_FRAMES: ClassVar[dict[str, int]] = dict(zip(EXHIBITS, (2, 4, 9), strict=True))
-    MEASURE_PHASE: ClassVar[dict[str, int]] = dict(zip(EXHIBITS, (2, 1, 0), strict=True))
+    MEASURE_PHASE: ClassVar[dict[str, int]] = {
+        key: (len(EXHIBITS) - 1 - i) % 3 for i, key in enumerate(EXHIBITS)
+    }
+    EXHIBIT_FRAMES: ClassVar[dict[str, int]] = refresh_frames(
+        MEASURE_PHASE, GUI_CYCLE, STATUS_FRAMES
+    )
 
     def _update_gui(self, force: bool = False) -> None:
         """Refresh the status line and the readouts and charts on their staggered frames (see

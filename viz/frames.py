@@ -43,3 +43,19 @@ class FrameLog:
         lo = max(int(first), n - self.capacity + 1, 0)  # slot n may be being rewritten
         idx = np.arange(lo, n) % self.capacity
         return lo, self.start[idx], self.cost_ms[idx], self.cpu_ms[idx]
+
+
+def refresh_frames(phases: dict[str, int], cycle: int, taken: tuple[int, ...]) -> dict[str, int]:
+    """Each exhibit's refresh frame in a GUI cycle of ``cycle`` frames: the first after the
+    previous exhibit's (in order) where it was just measured (``frame % 3`` its phase) and the
+    status line is not pushed (``taken``), so the refreshes spread over the cycle; any free frame
+    of its phase once the cycle is used up."""
+    out: dict[str, int] = {}
+    last = -1
+    for key, phase in phases.items():
+        free = [k for k in range(cycle) if k % 3 == phase and k not in taken]
+        if not free:
+            raise ValueError(f"no frame of phase {phase} in a GUI cycle of {cycle} for {key}")
+        out[key] = next((k for k in free if k > last), free[0])
+        last = out[key]
+    return out

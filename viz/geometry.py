@@ -71,7 +71,7 @@ TRAIL = (235, 95, 40)
 CENTRE = (160, 92, 225)  # guiding centre, centre of mass, pivot, the predicted circle
 AXES_RGB = ((230, 60, 60), (30, 160, 50), (60, 110, 240))
 PALETTE = {
-    "charge": CHARGE,
+    "charge ball": CHARGE,
     "compare": COMPARE,
     "beam slow": BEAM[0],
     "beam fast": BEAM[1],

@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from .model.base import LOG_FLOOR
-from .scene import EXHIBITS, CyclotronExhibit, framing
+from .scene import EXHIBITS, framing
 
 LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1, any page)
 TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
@@ -176,7 +176,8 @@ class Views:
                 corners, direction, width, height, fill=OVERVIEW_FILL, panel_px=panel_px
             )
         if view == "Top":  # on the exhibit on stage (at home: the cyclotron's orbit)
-            lo, hi = self.exhibits[self.stage or CyclotronExhibit.key].bounds
+            # at home: the first exhibit's (in the registry's order)
+            lo, hi = self.exhibits[self.stage or next(iter(self.exhibits))].bounds
             return framing.frame(
                 lo, hi, (0.0, 0.01, -1.0), width, height, fill=FILL, panel_px=panel_px
             )

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from mechviz import dynamics
+from mechviz.dynamics.results import REFERENCE_METHOD
 
 from .model import MODELS
 
@@ -220,8 +221,9 @@ def warm_up(
         systems = {cls.Config.system_name for cls in MODELS.values()}
         return warm_all(every_method(sorted(systems)), should_stop)
     cfg = configs or {}
-    # the tight DOP853 reference runs of the systems without an exact solution everywhere
-    needed = [(s.name, "dop853") for s in (dynamics.Hoop, dynamics.ReleasedDisk)]
+    # the tight reference runs of the systems without an exact solution everywhere (the
+    # registry's adapters say which)
+    needed = dynamics.registry.reference_runs(REFERENCE_METHOD)
     for key, cls in MODELS.items():
         c = cfg.get(key) or cls.Config()
         needed.append((c.system_name, c.method))

@@ -32,7 +32,7 @@ import numpy as np
 
 from .. import params as _v
 from ..integrators import get_method, methods_for
-from ..systems import SYSTEMS, Hoop
+from ..systems import SYSTEMS
 
 Kind = Literal["stability", "chaos", "accuracy"]
 #: The chaos map's sections by name: (y, x) axes. ``rest``: both angles, at rest; ``theta1``:
@@ -46,10 +46,16 @@ CHAOS_SECTIONS = {
 #: Where each coordinate sits in the hoop's state.
 HOOP_COORDINATES = {"theta1": 0, "theta2": 1, "omega1": 2, "omega2": 3}
 KINDS: tuple[str, ...] = ("stability", "chaos", "accuracy")
-#: The systems an atlas can map: those with a compiled right-hand side, the hoop first.
+#: The systems an atlas can map: those with a compiled right-hand side, those with a chaos map
+#: (the adapter's ``chaos_map``) first.
 SYSTEM_NAMES = tuple(
-    sorted((n for n, s in SYSTEMS.items() if s.sys_id is not None), key=lambda n: n != Hoop.name)
+    sorted(
+        (n for n, s in SYSTEMS.items() if s.sys_id is not None),
+        key=lambda n: not SYSTEMS[n].chaos_map,
+    )
 )
+#: The systems whose start plane the chaos map covers (:attr:`_Adapter.chaos_map`).
+CHAOS_SYSTEMS = tuple(n for n in SYSTEM_NAMES if SYSTEMS[n].chaos_map)
 
 #: The tightest tolerance an accuracy map takes (``simulate``'s ``MIN_COMPARED_TOL``).
 MIN_RTOL = 1e-12
@@ -129,8 +135,10 @@ class AtlasSpec:
             raise ValueError(
                 f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}"
             )
-        if self.kind == "chaos" and self.system != Hoop.name:
-            raise ValueError("system: the chaos map is of the hoop's start plane (system hoop)")
+        if self.kind == "chaos" and self.system not in CHAOS_SYSTEMS:
+            raise ValueError(
+                f"system: the chaos map is of the start plane of {', '.join(CHAOS_SYSTEMS)} only"
+            )
         object.__setattr__(
             self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params))
         )

@@ -93,10 +93,25 @@ class Method:
     step_cost_ns: float = 2000.0
     #: The benchmark's lists this method is in: ``"sweep"`` (our adaptive methods in the
     #: work-precision sweeps), ``"scipy"`` (the scipy side of the speed ratios), ``"fastest"``
-    #: (ours against the peers in their fastest forms).
+    #: (ours against the peers in their fastest forms), ``"first-answer"`` (timed from a fresh
+    #: process).
     bench: tuple[str, ...] = ()
     #: Its colour in the benchmark's charts (a matplotlib colour).
     chart_color: str | None = None
+    #: The oscillation the benchmark measures its amplification on (``"gyration"``: the charge's
+    #: transverse speed; ``"mode 2"``: the hoop's faster normal mode; :mod:`mechviz.bench.experiments`);
+    #: None: not measured.
+    stability_probe: str | None = None
+
+    @property
+    def closed_form(self) -> bool:
+        """Whether it evaluates the system's exact flow (no step, no truncation error)."""
+        return self.backend == "exact"
+
+    @property
+    def series(self) -> bool:
+        """Whether its steps are Taylor series (:mod:`.taylor`: the order follows the tolerance)."""
+        return self.kernel == "taylor"
 
     def structure_on(self, system: Any) -> tuple[Structure, ...]:
         """The structure this method keeps on ``system`` (an adapter or its class): its own,
@@ -230,6 +245,7 @@ METHODS: dict[str, Method] = {
             "closed-form",
             "exact",
             kernel="exact",
+            stability_probe="gyration",
             stability="exact for any step",
             counts="nothing (the closed form costs no evaluation)",
             amplification=_lim.unit,
@@ -247,6 +263,7 @@ METHODS: dict[str, Method] = {
             "rhs",
             "numba",
             kernel="euler",
+            stability_probe="gyration",
             stability="on an oscillation |R(i w h)|^2 = 1 + (w h)^2 > 1: unstable at every step",
             amplification=_lim.euler,
             limit_omega_dt=0.0,
@@ -264,6 +281,7 @@ METHODS: dict[str, Method] = {
             "rhs",
             "numba",
             kernel="rk4",
+            stability_probe="gyration",
             stability="oscillation bounded (slowly damped) for w h < 2 sqrt(2)",
             amplification=_lim.rk4,
             limit_omega_dt=_lim.SQRT8,
@@ -281,6 +299,7 @@ METHODS: dict[str, Method] = {
             "rhs",
             "numba",
             kernel="midpoint",
+            stability_probe="gyration",
             stability="A-stable; fixed-point solve needs roughly L h < 1",
             counts="right-hand-side evaluations (one per fixed-point iteration)",
             amplification=_lim.unit,
@@ -302,6 +321,7 @@ METHODS: dict[str, Method] = {
             "boris",
             "numba",
             kernel="symmetric2",
+            stability_probe="gyration",
             stability="unconditionally stable; phase lags by w h - 2 atan(w h / 2) per step",
             counts="force evaluations (one per step)",
             amplification=_lim.unit,
@@ -320,6 +340,7 @@ METHODS: dict[str, Method] = {
             "verlet",
             "numba",
             kernel="symmetric2",
+            stability_probe="mode 2",
             stability="linear stability w_max h < 2",
             counts=(
                 "partial evaluations: the fixed-point sweeps of the implicit half kick (each a "
@@ -360,6 +381,7 @@ METHODS: dict[str, Method] = {
             "symmetric",
             "numba",
             kernel="yoshida4",
+            stability_probe="mode 2",
             stability="composition of Boris / Stormer-Verlet / splitting",
             counts="its base steps' units (forces, fixed-point sweeps or rotations)",
             amplification=_lim.yoshida4,
@@ -381,7 +403,7 @@ METHODS: dict[str, Method] = {
             counts="right-hand-side evaluations (the dense output's included)",
             pair="dop853",
             step_cost_ns=2000.0,
-            bench=("sweep", "fastest"),
+            bench=("sweep", "fastest", "first-answer"),
             chart_color="tab:orange",
         ),
         _verner(6, 1500.0, ("sweep",), "goldenrod"),
@@ -402,7 +424,7 @@ METHODS: dict[str, Method] = {
             variable_order=True,
             counts="series expansions (one per step)",
             step_cost_ns=2000.0,
-            bench=("sweep", "fastest"),
+            bench=("sweep", "fastest", "first-answer"),
             chart_color="magenta",
         ),
         Method(

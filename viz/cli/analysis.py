@@ -30,8 +30,11 @@ from mechviz.dynamics import analysis
 from mechviz.dynamics.files import json_safe
 from mechviz.dynamics.integrators import METHODS, IntegrationError
 from mechviz.dynamics.params import TINY, SettingError, blamed
+from mechviz.dynamics.registry import SPECS
 from mechviz.dynamics.simulation import (
+    EXACT_FLOW,
     MIN_COMPARED_TOL,
+    REFERENCE_RUN,
     REFERENCE_TOL,
     RESOLVED_FACTOR,
     Simulation,
@@ -39,7 +42,7 @@ from mechviz.dynamics.simulation import (
 )
 from mechviz.dynamics.spec import Setup, SystemSpec, checked_state
 from mechviz.dynamics.steps import Fixed
-from mechviz.dynamics.systems import SPECS, SYSTEMS
+from mechviz.dynamics.systems import SYSTEMS
 from mechviz.viz.interrupts import ctrl_c_within_a_second
 
 from ..progress import add_option as add_progress_option
@@ -312,10 +315,10 @@ def simulate(system: str, args: argparse.Namespace) -> dict[str, Any]:
         "members": int(traj.states.shape[1]),
     }
     if traj.error is not None:
-        key = "error_vs_exact" if sim.reference_kind == "exact" else "error_vs_reference"
+        key = "error_vs_exact" if sim.reference_kind == EXACT_FLOW else "error_vs_reference"
         out[key] = float(traj.error[-1, 0])
         out["reference"] = reference_description(sim.reference_kind)
-        if sim.reference_kind == "reference" and traj.reference_error is not None:
+        if sim.reference_kind == REFERENCE_RUN and traj.reference_error is not None:
             bar = float(traj.reference_error[-1, 0])
             out["reference_error"] = bar
             out["error_resolved"] = out[key] >= RESOLVED_FACTOR * bar

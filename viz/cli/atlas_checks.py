@@ -151,11 +151,13 @@ def check_flags_apply(args: argparse.Namespace) -> None:
         if getattr(args, name, None) is None or args.kind in kinds:
             continue
         if name == "system" and args.kind == "chaos":
-            from mechviz.dynamics import Hoop
+            from mechviz.dynamics.atlas.grid import CHAOS_SYSTEMS
 
-            if args.system == Hoop.name:
+            if args.system in CHAOS_SYSTEMS:
                 continue
-            raise ValueError(f"system {args.system}: the chaos map is of the {Hoop.name} only")
+            raise ValueError(
+                f"system {args.system}: the chaos map is of the {', '.join(CHAOS_SYSTEMS)} only"
+            )
         which = " and ".join(kinds)
         raise ValueError(f"{name}: the {which} map's flag; the {args.kind} map takes none")
     if args.kind == "accuracy" and args.dt is not None and args.rtol is not None:
@@ -164,12 +166,15 @@ def check_flags_apply(args: argparse.Namespace) -> None:
 
 def build_spec(args: argparse.Namespace):
     """The :class:`mechviz.dynamics.atlas.AtlasSpec` the flags describe (``ValueError`` naming the flag)."""
-    from mechviz.dynamics import SYSTEMS, Hoop, methods_for
-    from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
+    from mechviz.dynamics import SYSTEMS, methods_for
+    from mechviz.dynamics.atlas.grid import CHAOS_SYSTEMS, AtlasSpec, Axis
     from mechviz.dynamics.atlas.theory import make_system, start_states
 
     check_flags_apply(args)
-    system_name = Hoop.name if args.kind == "chaos" else (args.system or SYSTEM_NAMES[0])
+    if args.kind == "chaos":
+        system_name = args.system or CHAOS_SYSTEMS[0]
+    else:
+        system_name = args.system or SYSTEM_NAMES[0]
     params = dict(args.param or ())
     for name, value in params.items():
         if not math.isfinite(value):

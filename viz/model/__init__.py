@@ -7,12 +7,12 @@ alone; :mod:`mechviz.viz.scene` draws them.
 from .base import ExhibitConfig, ExhibitModel
 from .cyclotron import CyclotronConfig, CyclotronModel
 from .disk import DiskConfig, DiskModel
+from .hooks import SystemHooks, by_system
 from .hoop import HoopConfig, HoopModel
 
-#: Every exhibit's model by its key, in the order the viewer lays the exhibits out.
-MODELS: dict[str, type[ExhibitModel]] = {
-    cls.key: cls for cls in (CyclotronModel, DiskModel, HoopModel)
-}
+#: Every exhibit's model by its system's key, in the registry's order (the order the viewer lays
+#: the exhibits out); each system of :data:`mechviz.dynamics.SPECS` has one, or this raises.
+MODELS: dict[str, type[ExhibitModel]] = by_system((CyclotronModel, DiskModel, HoopModel), "model")
 
 __all__ = [
     "MODELS",
@@ -24,4 +24,5 @@ __all__ = [
     "ExhibitModel",
     "HoopConfig",
     "HoopModel",
+    "SystemHooks",
 ]

@@ -37,6 +37,7 @@ from mechviz import dynamics
 from mechviz.dynamics import params as _v
 
 from .history import History, LongHistory, Motion, Ring  # noqa: F401  (re-exported)
+from .hooks import SystemHooks
 from .plot import Curve, Samples, Variable, common_variables
 from .rewind import Rewinding
 
@@ -119,7 +120,7 @@ class ExhibitConfig:
 
 
 # =========================================================================== the exhibit
-class ExhibitModel(Rewinding):
+class ExhibitModel(Rewinding, SystemHooks):
     """Base class: subclasses define ``Config`` (``key`` and ``chart_series`` follow from it),
     ``title``, ``name`` and the hooks
     ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
@@ -367,7 +368,7 @@ class ExhibitModel(Rewinding):
         m = sim.method
         if m.adaptive:
             return f"<small>{m.name}: adaptive, the step follows rtol; no fixed limit</small>"
-        if m.backend == "exact":
+        if m.closed_form:
             return "<small>exact flow: any step</small>"
         limit = stability.stability_limit(m.name, sim.system, self.state)
         reason = m.limit_reason
@@ -533,8 +534,7 @@ class ExhibitModel(Rewinding):
     @classmethod
     def default_plot(cls, config) -> tuple[str, str]:
         """The pair the panel's plot shows first: the first picture (else energy against t)."""
-        pictures = cls.pictures(config)
-        return pictures[0] if pictures else ("t", "energy")
+        return (cls.pictures(config) or (("t", "energy"),))[0]
 
     def plot_samples(self) -> Samples:
         """The main run's samples over the chart window (member 0 of an ensemble)."""

@@ -20,10 +20,11 @@ import numpy as np
 from mechviz import dynamics
 from mechviz.dynamics import cyclotron as cy
 from mechviz.dynamics import measure
-from mechviz.dynamics.systems import CYCLOTRON
+from mechviz.dynamics.registry import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
 from .figures import figure, keep
+from .hooks import CHART_COLOURS, demo_value, mark_periods
 from .plot import Curve, well_axes
 from .traces import Traces
 
@@ -107,6 +108,107 @@ class CyclotronModel(ExhibitModel):
     Config = CyclotronConfig
     view_fields = frozenset({"kick"})  # the strength of the next kick: nothing moves yet
     live_fields = frozenset({"beam", "beam_size", "beam_speeds"})
+    origin = (-3.95, 1.7, 0.0)
+    frame_cost_compare = "boris"
+    demo_keys: ClassVar[dict[str, str]] = {
+        **{k: f"initial.{k}" for k in ("speed", "vz", "centre", "state")},
+        "beam_size": "initial.beam",
+        "beam_speeds": "initial.speeds",
+    }
+
+    # ------------------------------------------------------------------ hooks (see .hooks)
+    @classmethod
+    def demo_settings(cls, initial: dict[str, Any], demo: Any, params: dict[str, Any]) -> dict:
+        kw: dict[str, Any] = {k: initial[k] for k in ("speed", "vz", "centre") if k in initial}
+        if "state" in initial:
+            kw["state"] = tuple(initial["state"])
+        if "beam" in initial:
+            kw["beam"], kw["beam_size"] = True, initial["beam"]
+        if "speeds" in initial:
+            kw["beam_speeds"] = initial["speeds"]
+        return kw
+
+    @classmethod
+    def shortest_period(cls, demo: Any, result: dict, extra_spin: bool = True) -> float | None:
+        return result["period"]
+
+    @classmethod
+    def check_recording_start(cls, demo: Any, config: Any, span: float) -> None:
+        """The kinetic energy, the orbit radius and the distance covered in the recording, the
+        scripted kicks' speeds added, all finite; else the keys whose speed makes it so."""
+        p = config.physics()
+        speeds = _demo_speeds(demo, config)
+
+        def bad(v: dict[str, float]) -> str | None:
+            total = sum(v.values())
+            with np.errstate(all="ignore"):
+                checks = {
+                    "the kinetic energy": 0.5 * p.mass * total * total,
+                    "the orbit radius": p.mass * total / abs(p.charge * p.field),
+                    "the distance covered": total * span,
+                }
+            return next((name for name, x in checks.items() if not math.isfinite(x)), None)
+
+        what = bad(speeds)
+        if what is None:
+            return
+        keys = [k for k in speeds if "." in k or "[" in k]
+        blamed = [k for k in keys if bad({**speeds, k: 1.0}) is None] or keys
+        shown = ", ".join(f"{k} = {demo_value(demo, k)}" for k in blamed) or "the start"
+        raise ValueError(f"{shown}: {what} would be beyond the largest double")
+
+    @classmethod
+    def draw_motion_chart(cls, ax: Any, demo: Any, tr: Any, params: Any) -> None:
+        """x against time for each run, the predicted period and each kick's predicted x range."""
+        t = tr.times[tr.main]
+        for lbl, c in zip(tr.states, CHART_COLOURS, strict=False):
+            X = tr.states[lbl]
+            for j in range(X.shape[1]):
+                ax.plot(
+                    tr.times[lbl],
+                    X[:, j, 0],
+                    color=c,
+                    lw=1,
+                    alpha=0.8 if X.shape[1] == 1 else 0.5,
+                    label=f"x, {lbl}" if j == 0 else None,
+                )
+        mark_periods(ax, cy.period(params), t[-1], "predicted period 2 pi m / |qB|")
+        for entry in tr.event_log:
+            ax.axvline(
+                entry["t"], color="k", lw=1.5, label=f"{entry['action']} (dv = {entry['dv']:g} m/s)"
+            )
+            eff = entry["effects"][tr.main]
+            cx = eff["predicted_centre"][0][0]
+            r = eff["predicted_radius"][0]
+            for yv in (cx - r, cx + r):
+                ax.hlines(
+                    yv,
+                    entry["t"],
+                    t[-1],
+                    colors="tab:orange",
+                    linestyles=":",
+                    label="predicted x range after the kick" if yv == cx - r else None,
+                )
+        ax.set_ylabel("x [m]")
+
+    @classmethod
+    def screen_case(cls) -> tuple[str, dict[str, Any]]:
+        """On screen: the distance between the computed and the exact position [m]; size: the
+        orbit's diameter ``2 v / omega``."""
+        c = CyclotronConfig()
+        system, s0 = dynamics.Cyclotron(c.physics()), c.initial_state()
+
+        def error(y: np.ndarray, ref: np.ndarray) -> float:
+            return float(np.linalg.norm(y[:3] - ref[:3]))
+
+        return cls.key, {
+            "system": system,
+            "state": s0,
+            "state_note": f"speed {c.speed:g} m/s, vz {c.vz:g} m/s (the viewer's default)",
+            "size": 2.0 * cy.larmor_radius(system.params, np.asarray(s0, float)),
+            "error": error,
+            "methods": ("exact", "boris", "rk4", "yoshida4"),
+        }
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:
@@ -433,3 +535,20 @@ def well(p: cy.CyclotronParams, st: np.ndarray) -> dict:
         "r_max": r_max,
         "p_phi": p_phi,
     }
+
+
+def _demo_speeds(demo: Any, config: CyclotronConfig) -> dict[str, float]:
+    """The speeds by the demo key that sets them [m/s]: each one adds to the fastest charge's
+    speed (an upper bound, kicks included)."""
+    out: dict[str, float] = {}
+    ini = demo.initial
+    if ini.state is not None:
+        out["initial.state"] = math.hypot(*ini.state[3:6])
+    else:
+        out["initial.speed" if ini.speed is not None else "speed"] = abs(config.speed)
+        out["initial.vz" if ini.vz is not None else "vz"] = abs(config.vz)
+    if ini.speeds is not None:
+        out["initial.speeds"] = max(abs(v) for v in ini.speeds)
+    for i, e in enumerate(demo.events):
+        out[f"events[{i}].dv"] = abs(e.dv)
+    return out

@@ -19,7 +19,7 @@ import numpy as np
 from mechviz import dynamics
 from mechviz.dynamics import disk as dk
 from mechviz.dynamics import measure
-from mechviz.dynamics.systems import DISK
+from mechviz.dynamics.registry import DISK
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
@@ -70,6 +70,75 @@ class DiskModel(ExhibitModel):
     name = "Disk"
     Config = DiskConfig
     view_fields = frozenset({"follow_cm"})
+    origin = (0.0, 1.4, 0.0)
+    demo_keys: ClassVar[dict[str, str]] = {"extra_spin": "initial.extra_spin"}
+
+    # ------------------------------------------------------------------ hooks (see .hooks)
+    @classmethod
+    def demo_settings(cls, initial: dict[str, Any], demo: Any, params: dict[str, Any]) -> dict:
+        kw: dict[str, Any] = {"mode": demo.motion}
+        if "extra_spin" in initial:
+            kw["extra_spin"] = initial["extra_spin"]
+        return kw
+
+    @classmethod
+    def shortest_period(cls, demo: Any, result: dict, extra_spin: bool = True) -> float | None:
+        """One turn at the spin, or at the fastest extra spin at release if that is faster."""
+        spin = abs(result["parameters"]["omega"])
+        if extra_spin and demo.motion == "released" and demo.initial.extra_spin is not None:
+            spin = max(spin, max(abs(x) for x in demo.initial.extra_spin))
+        return 2 * math.pi / spin if spin else None
+
+    @classmethod
+    def draw_motion_chart(cls, ax: Any, demo: Any, tr: Any, params: Any) -> None:
+        """Driven: the bearing force from dL/dt and its predicted amplitude. Released: the
+        wobble's angular velocity and its predicted growth."""
+        t, S = tr.times[tr.main], tr.states[tr.main]
+        if demo.motion == "driven":
+            F = measure.bearing_force(params, t, S[:, 0, 0], S[:, 0, 1])
+            ax.plot(t, F[:, 0], color="tab:blue", label="F_B,x (from dL/dt)")
+            ax.plot(t, F[:, 2], color="tab:red", label="F_B,z (from dL/dt)")
+            amp = dk.axle_force_amplitude(params)
+            for yv in (amp, -amp):
+                label = "predicted amplitude 5/8 M R omega^2" if yv > 0 else None
+                ax.axhline(yv, color="k", ls="--", lw=1, label=label)
+            ax.set_ylabel("bearing force at B [N]")
+            return
+        w = S[:, 0, :3]
+        perp = np.hypot(w[:, 0], w[:, 2])
+        ax.semilogy(t, np.maximum(perp, 1e-16), color="tab:blue", label="|w_perp| (wobble)")
+        ax.semilogy(t, np.abs(w[:, 1]), color="tab:green", label="|w_2| (about the axle)")
+        lam = measure.wobble_growth_rate_theory(dk.free_kernel_params(params), S[0, 0, :3])
+        grow = perp[0] * np.exp(lam * t)
+        keep = grow < 3 * abs(w[0, 1])
+        ax.semilogy(t[keep], grow[keep], "k--", lw=1, label=f"predicted growth exp({lam:.3f} t)")
+        ax.set_ylabel("angular velocity [rad/s]")
+
+    @classmethod
+    def screen_case(cls) -> tuple[str, dict[str, Any]]:
+        """The released disk. On screen: the rotation error times the farthest body point's
+        distance from the centre of mass (which itself moves exactly); size: ``2 R``."""
+        c = DiskConfig()
+        p = c.physics()
+        released = dynamics.ReleasedDisk(p, tuple(c.extra_spin))
+        rim = np.array([[0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+        reach = float(np.max(np.linalg.norm(rim * p.radius - dk.centre_of_mass(p), axis=1)))
+        _, frame = dk._principal_frame_cm(p)
+
+        def error(y: np.ndarray, ref: np.ndarray) -> float:
+            r1 = dk.quaternion_to_matrix(y[3:7]) @ frame.T
+            r2 = dk.quaternion_to_matrix(ref[3:7]) @ frame.T
+            return float(np.linalg.norm(r1 - r2, 2) * reach)
+
+        note = f"omega {p.omega:g} rad/s, extra spin {c.extra_spin} rad/s (the viewer's default)"
+        return f"{cls.key}-released", {
+            "system": released,
+            "state": released.default_state(),
+            "state_note": note,
+            "size": 2.0 * p.radius,
+            "error": error,
+            "methods": ("splitting", "rk4", "yoshida4"),
+        }
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:

@@ -18,10 +18,12 @@ import numpy as np
 from mechviz import dynamics
 from mechviz.dynamics import hoop as hp
 from mechviz.dynamics import measure
-from mechviz.dynamics.systems import HOOP, HOOP_MODES
+from mechviz.dynamics.registry import HOOP
+from mechviz.dynamics.systems import HOOP_MODES
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers
 from .figures import figure, keep
+from .hooks import CHART_COLOURS, mark_periods
 from .plot import Curve
 from .traces import Traces
 
@@ -86,6 +88,108 @@ class HoopModel(ExhibitModel):
     name = "Hoop"
     Config = HoopConfig
     start_fields = frozenset({"mode", "amplitude", "angles", "state"})
+    origin = (2.4, -3.4, 0.0)
+    frame_cost_compare = "rk4"
+    demo_keys: ClassVar[dict[str, str]] = {"state": "initial.state", "amplitude": "initial.modes"}
+
+    # ------------------------------------------------------------------ hooks (see .hooks)
+    @classmethod
+    def demo_settings(cls, initial: dict[str, Any], demo: Any, params: dict[str, Any]) -> dict:
+        """The linear ghost, and the start: a state as given, else the mode amplitudes as the
+        panel's modes where they are one (a single mode, or both equal), else as a state."""
+        kw: dict[str, Any] = {"ghost": demo.ghost == "linear"}
+        if "state" in initial:
+            kw.update(mode="custom", state=tuple(initial["state"]))
+        elif "modes" in initial:
+            a1, a2 = initial["modes"]
+            if a2 == 0.0:
+                kw.update(mode="mode 1", amplitude=a1)
+            elif a1 == 0.0:
+                kw.update(mode="mode 2", amplitude=a2)
+            elif a1 == a2:
+                kw.update(mode="mix", amplitude=2 * a1)
+            else:
+                p = hp.HoopParams(**params)
+                kw.update(mode="custom", state=tuple(hp.mode_state(p, (a1, a2)).tolist()))
+        return kw
+
+    @classmethod
+    def shortest_period(cls, demo: Any, result: dict, extra_spin: bool = True) -> float | None:
+        return min(result["mode_periods"])
+
+    @classmethod
+    def check_recording_start(cls, demo: Any, config: Any, span: float) -> None:
+        """Mode amplitudes below 3 rad (small swings, as the exhibit's own amplitude) and a
+        start state of finite energy."""
+        ini = demo.initial
+        if ini.modes is not None:
+            for i, a in enumerate(ini.modes):
+                if not abs(a) < 3.0:
+                    raise ValueError(f"initial.modes[{i}] must be an angle below 3 rad, got {a!r}")
+        if ini.state is not None:
+            with np.errstate(all="ignore"):
+                energy = dynamics.Hoop(config.physics()).energy(np.asarray(ini.state))
+            if not math.isfinite(float(np.ravel(energy)[0])):
+                raise ValueError(
+                    f"initial.state = {list(ini.state)}: the initial energy would be beyond "
+                    "the largest double"
+                )
+
+    @classmethod
+    def draw_motion_chart(cls, ax: Any, demo: Any, tr: Any, params: Any) -> None:
+        """Two methods: the energy drift is the point. One: both angles against time, the linear
+        ghost and the predicted period of the mode the start is mostly in."""
+        if len(tr.states) > 1:
+            for lbl, c in zip(tr.states, CHART_COLOURS, strict=False):
+                ax.plot(tr.times[lbl], 100 * tr.energy_error[lbl][:, 0], color=c, lw=1, label=lbl)
+            ax.axhline(0.0, color="k", ls="--", lw=0.8, label="exact: energy conserved")
+            ax.set_ylabel("relative energy error [%]")
+            return
+        t = tr.times[tr.main]
+        freqs, shapes = hp.normal_modes(params)
+        for lbl, c in zip(tr.states, CHART_COLOURS, strict=False):
+            X = tr.states[lbl]
+            ax.plot(tr.times[lbl], X[:, 0, 0], color=c, lw=1, label=f"theta1 (hoop), {lbl}")
+            ax.plot(
+                tr.times[lbl], X[:, 0, 1], color=c, lw=1, ls="-.", label=f"theta2 (bead), {lbl}"
+            )
+        if tr.ghost is not None:
+            ax.plot(tr.t, tr.ghost[:, 0, 0], color="0.5", lw=1, ls="--", label="linear theory")
+        amps = measure.modal_coordinates(tr.states[tr.main][0, 0, :2], shapes)
+        k = int(np.argmax(np.abs(amps)))
+        label = f"predicted period of mode {k + 1} (linear)"
+        mark_periods(ax, 2 * math.pi / freqs[k], t[-1], label)
+        if k == 0 and abs(amps[1]) < 1e-12 and abs(amps[0]) > 0.2:
+            mark_periods(
+                ax,
+                hp.mode1_period(params, abs(float(amps[0]))),
+                t[-1],
+                "predicted period, exact (finite amplitude)",
+                color="tab:purple",
+            )
+        ax.set_ylabel("angle [rad]")
+
+    @classmethod
+    def screen_case(cls) -> tuple[str, dict[str, Any]]:
+        """On screen: the larger of the errors of the hoop's centre and of the bead [m]; size:
+        the hoop's diameter ``2 a``."""
+        c = HoopConfig()
+        p = c.physics()
+
+        def error(y: np.ndarray, ref: np.ndarray) -> float:
+            c1, b1 = hp.positions(p, y)
+            c2, b2 = hp.positions(p, ref)
+            return float(max(np.linalg.norm(c1 - c2), np.linalg.norm(b1 - b2)))
+
+        note = f"mode {c.mode!r}, amplitude {c.amplitude:g} rad (the viewer's default)"
+        return cls.key, {
+            "system": dynamics.Hoop(p),
+            "state": c.initial_state(),
+            "state_note": note,
+            "size": 2.0 * p.radius,
+            "error": error,
+            "methods": ("verlet", "rk4", "yoshida4"),
+        }
 
     # ------------------------------------------------------------------ simulations
     def _start(self) -> None:

@@ -26,12 +26,11 @@ from typing import Any, Literal
 import msgspec
 
 from mechviz import dynamics
-from mechviz.dynamics import hoop
 from mechviz.dynamics.assets import asset
 
-from ..model import MODELS, CyclotronConfig, DiskConfig, ExhibitConfig, HoopConfig
+from ..model import MODELS, ExhibitConfig
 from ..printable import has_control_characters, printable
-from .scales import CONFIG_KEYS, check_scales, in_demo_terms
+from .scales import check_scales, config_keys, in_demo_terms
 
 DEMO_DIR = asset("demos")
 MAX_FRAMES = 100_000
@@ -164,33 +163,8 @@ class Demo(_Struct):
             kw["compare_rtol"] = self.compare.rtol
         ini = {f: getattr(self.initial, f) for f in self.initial.__struct_fields__}
         ini = {k: v for k, v in ini.items() if v is not None}
-        if cls is CyclotronConfig:
-            kw.update({k: ini[k] for k in ("speed", "vz", "centre") if k in ini})
-            if "state" in ini:
-                kw["state"] = tuple(ini["state"])
-            if "beam" in ini:
-                kw["beam"], kw["beam_size"] = True, ini["beam"]
-            if "speeds" in ini:
-                kw["beam_speeds"] = ini["speeds"]
-        elif cls is DiskConfig:
-            kw["mode"] = self.motion
-            if "extra_spin" in ini:
-                kw["extra_spin"] = ini["extra_spin"]
-        elif cls is HoopConfig:
-            kw["ghost"] = self.ghost == "linear"
-            if "state" in ini:
-                kw.update(mode="custom", state=tuple(ini["state"]))
-            elif "modes" in ini:
-                a1, a2 = ini["modes"]
-                if a2 == 0.0:
-                    kw.update(mode="mode 1", amplitude=a1)
-                elif a1 == 0.0:
-                    kw.update(mode="mode 2", amplitude=a2)
-                elif a1 == a2:
-                    kw.update(mode="mix", amplitude=2 * a1)
-                else:
-                    p = hoop.HoopParams(**kw["params"])
-                    kw.update(mode="custom", state=tuple(hoop.mode_state(p, (a1, a2)).tolist()))
+        # the system's own settings from the rest of the file: its model says which (.model.hooks)
+        kw.update(MODELS[self.exhibit].demo_settings(ini, self, kw["params"]))
         return dataclasses.replace(base, **kw)
 
 
@@ -324,7 +298,7 @@ def demo_key(d: Demo, field: str) -> str:
         return f"parameters.{field}"
     if field == "initial.motion":
         return "motion"
-    return CONFIG_KEYS.get(field, field)
+    return config_keys(d).get(field, field)
 
 
 def _finite_positive(key: str, value: float) -> None:

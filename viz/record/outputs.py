@@ -19,7 +19,6 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-import math
 import platform
 import re
 import time
@@ -30,11 +29,11 @@ import msgspec
 import numpy as np
 
 from mechviz import dynamics
-from mechviz.dynamics import cyclotron, disk, hoop, measure
 from mechviz.dynamics.simulation import RESOLVED_FACTOR
-from mechviz.dynamics.systems import CYCLOTRON, DISK
 
 from ..model import MODELS
+from ..model.hooks import CHART_COLOURS, MAX_PERIOD_MARKS  # noqa: F401  (re-exported)
+from ..model.hooks import mark_periods as _mark_periods  # noqa: F401  (re-exported)
 from ..model.plot import Curve, Samples, draw_xy
 from . import charts
 from .demo import Demo
@@ -201,8 +200,6 @@ def chart_figure(d: Demo, tr: Traces, figs: list[dict[str, Any]]):
     from matplotlib.figure import Figure
 
     p = d.config().physics()
-    main = tr.main
-    t = tr.times[main]
     pictures = MODELS[d.exhibit].pictures(d.config())
     fig = Figure(figsize=(9, 9.5 + 4.0 * bool(pictures)), dpi=100, layout="constrained")
     top, bottom = fig.subfigures(2, 1, height_ratios=(9.5, 4.0)) if pictures else (fig, None)
@@ -212,92 +209,9 @@ def chart_figure(d: Demo, tr: Traces, figs: list[dict[str, Any]]):
     ax2.sharex(ax1)
     ax3.sharex(ax1)
     ax4.axis("off")
-    S = tr.states[main]
-    colours = ["tab:blue", "tab:red", "tab:green"]
-    if d.exhibit == CYCLOTRON.name:
-        T = cyclotron.period(p)
-        for lbl, c in zip(tr.states, colours, strict=False):
-            X = tr.states[lbl]
-            for j in range(X.shape[1]):
-                ax1.plot(
-                    tr.times[lbl],
-                    X[:, j, 0],
-                    color=c,
-                    lw=1,
-                    alpha=0.8 if X.shape[1] == 1 else 0.5,
-                    label=f"x, {lbl}" if j == 0 else None,
-                )
-        _mark_periods(ax1, T, t[-1], "predicted period 2 pi m / |qB|")
-        for entry in tr.event_log:
-            ax1.axvline(
-                entry["t"], color="k", lw=1.5, label=f"{entry['action']} (dv = {entry['dv']:g} m/s)"
-            )
-            eff = entry["effects"][main]
-            cx = eff["predicted_centre"][0][0]
-            r = eff["predicted_radius"][0]
-            for yv in (cx - r, cx + r):
-                ax1.hlines(
-                    yv,
-                    entry["t"],
-                    t[-1],
-                    colors="tab:orange",
-                    linestyles=":",
-                    label="predicted x range after the kick" if yv == cx - r else None,
-                )
-        ax1.set_ylabel("x [m]")
-    elif d.exhibit == DISK.name and d.motion == "driven":
-        F = measure.bearing_force(p, t, S[:, 0, 0], S[:, 0, 1])
-        ax1.plot(t, F[:, 0], color="tab:blue", label="F_B,x (from dL/dt)")
-        ax1.plot(t, F[:, 2], color="tab:red", label="F_B,z (from dL/dt)")
-        amp = disk.axle_force_amplitude(p)
-        for yv in (amp, -amp):
-            ax1.axhline(
-                yv,
-                color="k",
-                ls="--",
-                lw=1,
-                label="predicted amplitude 5/8 M R omega^2" if yv > 0 else None,
-            )
-        ax1.set_ylabel("bearing force at B [N]")
-    elif d.exhibit == DISK.name:
-        w = S[:, 0, :3]
-        perp = np.hypot(w[:, 0], w[:, 2])
-        ax1.semilogy(t, np.maximum(perp, 1e-16), color="tab:blue", label="|w_perp| (wobble)")
-        ax1.semilogy(t, np.abs(w[:, 1]), color="tab:green", label="|w_2| (about the axle)")
-        lam = measure.wobble_growth_rate_theory(disk.free_kernel_params(p), S[0, 0, :3])
-        grow = perp[0] * np.exp(lam * t)
-        keep = grow < 3 * abs(w[0, 1])
-        ax1.semilogy(t[keep], grow[keep], "k--", lw=1, label=f"predicted growth exp({lam:.3f} t)")
-        ax1.set_ylabel("angular velocity [rad/s]")
-    elif len(tr.states) > 1:  # hoop, two methods: the energy drift is the point
-        for lbl, c in zip(tr.states, colours, strict=False):
-            ax1.plot(tr.times[lbl], 100 * tr.energy_error[lbl][:, 0], color=c, lw=1, label=lbl)
-        ax1.axhline(0.0, color="k", ls="--", lw=0.8, label="exact: energy conserved")
-        ax1.set_ylabel("relative energy error [%]")
-    else:
-        freqs, _shapes = hoop.normal_modes(p)
-        for lbl, c in zip(tr.states, colours, strict=False):
-            X = tr.states[lbl]
-            ax1.plot(tr.times[lbl], X[:, 0, 0], color=c, lw=1, label=f"theta1 (hoop), {lbl}")
-            ax1.plot(
-                tr.times[lbl], X[:, 0, 1], color=c, lw=1, ls="-.", label=f"theta2 (bead), {lbl}"
-            )
-        if tr.ghost is not None:
-            ax1.plot(tr.t, tr.ghost[:, 0, 0], color="0.5", lw=1, ls="--", label="linear theory")
-        amps = measure.modal_coordinates(S[0, 0, :2], _shapes)
-        k = int(np.argmax(np.abs(amps)))
-        _mark_periods(
-            ax1, 2 * math.pi / freqs[k], t[-1], f"predicted period of mode {k + 1} (linear)"
-        )
-        if k == 0 and abs(amps[1]) < 1e-12 and abs(amps[0]) > 0.2:
-            _mark_periods(
-                ax1,
-                hoop.mode1_period(p, abs(float(amps[0]))),
-                t[-1],
-                "predicted period, exact (finite amplitude)",
-                color="tab:purple",
-            )
-        ax1.set_ylabel("angle [rad]")
+    colours = CHART_COLOURS
+    # the first panel is the system's own: its model draws it (.model.hooks)
+    MODELS[d.exhibit].draw_motion_chart(ax1, d, tr, p)
     ax1.legend(fontsize=7, loc="upper right")
     for lbl, c in zip(tr.states, colours, strict=False):
         E = np.abs(tr.energy_error[lbl]).max(axis=1)
@@ -352,33 +266,6 @@ def chart_figure(d: Demo, tr: Traces, figs: list[dict[str, Any]]):
             family="monospace",
         )
     return fig
-
-
-#: Period marks drawn at most on the chart: a recording that spans more periods marks every
-#: k-th, so the chart's work stays bounded whatever the demo's speed.
-MAX_PERIOD_MARKS = 200
-
-
-def _mark_periods(ax, T, t_end, label, color="k"):
-    ratio = t_end / T if T > 0 else math.nan
-    n = math.floor(ratio + 1e-9) if math.isfinite(ratio) else 0
-    if n < 1:
-        return
-    every = max(1, math.ceil(n / MAX_PERIOD_MARKS))
-    if every > 1:
-        label = f"{label}, every {every}th"
-    marks = T * np.arange(every, n + 1, every, dtype=float)
-    ax.vlines(
-        marks,
-        0,
-        1,
-        transform=ax.get_xaxis_transform(),
-        colors=color,
-        linestyles="--",
-        lw=0.8,
-        alpha=0.6,
-        label=label,
-    )
 
 
 def step_text(tr: Traces) -> str:

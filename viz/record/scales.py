@@ -28,7 +28,6 @@ import numpy as np
 from mechviz import dynamics
 from mechviz.dynamics import analysis
 from mechviz.dynamics.params import blamed
-from mechviz.dynamics.systems import CYCLOTRON, HOOP
 
 from ..model import MODELS
 
@@ -89,16 +88,9 @@ def _blamed(d: Demo, params: dict, defaults: dict, bad) -> list[str]:
 
 
 def _shortest_period(d: Demo, result: dict, extra_spin: bool = True) -> float | None:
-    """The motion's shortest period [s] from the analytic results, None if nothing moves;
-    ``extra_spin``: count the disk's extra spin at release (else leave it out)."""
-    if d.exhibit == CYCLOTRON.name:
-        return result["period"]
-    if d.exhibit == HOOP.name:
-        return min(result["mode_periods"])
-    spin = abs(result["parameters"]["omega"])
-    if extra_spin and d.motion == "released" and d.initial.extra_spin is not None:
-        spin = max(spin, max(abs(x) for x in d.initial.extra_spin))
-    return 2 * math.pi / spin if spin else None
+    """The motion's shortest period [s] from the analytic results, None if nothing moves
+    (the exhibit's model says how: :meth:`mechviz.viz.model.hooks.SystemHooks.shortest_period`)."""
+    return MODELS[d.exhibit].shortest_period(d, result, extra_spin)
 
 
 def check_scales(d: Demo) -> None:
@@ -114,7 +106,8 @@ def check_scales(d: Demo) -> None:
     cfg = d.config()
     defaults = MODELS[d.exhibit].Config().params
     params = dict(cfg.params)
-    speed = d.initial.speed if d.exhibit == CYCLOTRON.name else None
+    # the start settings the system's analysis takes (its description names them), as given
+    speed = _analysis_speed(d)
     problem = _problem(d.exhibit, params, speed)
     if problem is not None:
         names = _blamed(d, params, defaults, lambda p: _problem(d.exhibit, p, speed) is not None)
@@ -178,82 +171,32 @@ def _check_steps(d: Demo, span: float) -> None:
             )
 
 
-def _speeds(d: Demo, cfg) -> dict[str, float]:
-    """The cyclotron's speeds by the key that sets them [m/s]: each one adds to the fastest
-    charge's speed (an upper bound, kicks included)."""
-    out: dict[str, float] = {}
-    ini = d.initial
-    if ini.state is not None:
-        out["initial.state"] = math.hypot(*ini.state[3:6])
-    else:
-        out["initial.speed" if ini.speed is not None else "speed"] = abs(cfg.speed)
-        out["initial.vz" if ini.vz is not None else "vz"] = abs(cfg.vz)
-    if ini.speeds is not None:
-        out["initial.speeds"] = max(abs(v) for v in ini.speeds)
-    for i, e in enumerate(d.events):
-        out[f"events[{i}].dv"] = abs(e.dv)
-    return out
+def _analysis_speed(d: Demo) -> float | None:
+    """The demo's start speed where the system's analysis takes one
+    (:attr:`mechviz.dynamics.SystemSpec.analysis_start`), else None."""
+    takes = "speed" in dynamics.spec_named(d.exhibit).analysis_start
+    return getattr(d.initial, "speed", None) if takes else None
 
 
 def _check_start(d: Demo, cfg, span: float) -> None:
-    """The start and what the scripted kicks add: energy, orbit radius and distance covered in
-    the recording all finite (the cyclotron), the initial energy finite (the hoop)."""
-    p = cfg.physics()
-    if d.exhibit == CYCLOTRON.name:
-        speeds = _speeds(d, cfg)
-
-        def bad(v: dict[str, float]) -> str | None:
-            total = sum(v.values())
-            with np.errstate(all="ignore"):
-                checks = {
-                    "the kinetic energy": 0.5 * p.mass * total * total,
-                    "the orbit radius": p.mass * total / abs(p.charge * p.field),
-                    "the distance covered": total * span,
-                }
-            return next((name for name, x in checks.items() if not math.isfinite(x)), None)
-
-        what = bad(speeds)
-        if what is None:
-            return
-        keys = [k for k in speeds if "." in k or "[" in k]
-        blamed = [k for k in keys if bad({**speeds, k: 1.0}) is None] or keys
-        shown = ", ".join(f"{k} = {_value(d, k)}" for k in blamed) or "the start"
-        raise ValueError(f"{shown}: {what} would be beyond the largest double")
-    if d.exhibit == HOOP.name and d.initial.modes is not None:
-        for i, a in enumerate(d.initial.modes):
-            if not abs(a) < 3.0:  # as the exhibit's own amplitude: the modes are small swings
-                raise ValueError(f"initial.modes[{i}] must be an angle below 3 rad, got {a!r}")
-    if d.exhibit == HOOP.name and d.initial.state is not None:
-        with np.errstate(all="ignore"):
-            energy = float(np.ravel(dynamics.Hoop(p).energy(np.asarray(d.initial.state)))[0])
-        if not math.isfinite(energy):
-            raise ValueError(
-                f"initial.state = {list(d.initial.state)}: the initial energy would be beyond "
-                "the largest double"
-            )
+    """The start and what the scripted kicks add, checked by the exhibit's model
+    (:meth:`mechviz.viz.model.hooks.SystemHooks.check_recording_start`)."""
+    MODELS[d.exhibit].check_recording_start(d, cfg, span)
 
 
-def _value(d: Demo, key: str) -> str:
-    if key.startswith("events["):
-        return f"{d.events[int(key[7 : key.index(']')])].dv:g}"
-    value = getattr(d.initial, key.split(".")[1])
-    return f"{value:g}" if isinstance(value, float) else str(list(value))
-
-
-# The exhibit settings a demo's keys become (:meth:`.demo.Demo.config`), by the settings' names.
+# The exhibit settings every demo's keys become (:meth:`.demo.Demo.config`), by the settings'
+# names; each exhibit's own are its model's (:func:`config_keys`).
 CONFIG_KEYS = {
-    "speed": "initial.speed",
-    "vz": "initial.vz",
-    "centre": "initial.centre",
-    "state": "initial.state",
-    "beam_size": "initial.beam",
-    "beam_speeds": "initial.speeds",
-    "extra_spin": "initial.extra_spin",
-    "amplitude": "initial.modes",
     "compare_method": "compare.method",
     "compare_dt": "compare.dt",
     "compare_rtol": "compare.rtol",
 }
+
+
+def config_keys(d: Demo) -> dict[str, str]:
+    """The demo key each exhibit setting of ``d`` comes from, by the setting's name: the common
+    ones and its model's own (:attr:`mechviz.viz.model.hooks.SystemHooks.demo_keys`)."""
+    return {**CONFIG_KEYS, **MODELS[d.exhibit].demo_keys}
 
 
 def in_demo_terms(message: str, d: Demo) -> str:
@@ -264,8 +207,8 @@ def in_demo_terms(message: str, d: Demo) -> str:
     name = word.rstrip(":")
     if name in MODELS[d.exhibit].Config().params:
         key = f"parameters.{name}"
-    elif name in CONFIG_KEYS:
-        key = CONFIG_KEYS[name]
+    elif name in config_keys(d):
+        key = config_keys(d)[name]
     else:
         return message
     return f"{key}{word[len(name) :]}{sep}{rest}"

@@ -18,6 +18,7 @@ import numpy as np
 
 from mechviz.dynamics import floquet
 from mechviz.dynamics import hoop as hp
+from mechviz.dynamics.results import EXACT_FLOW
 
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
@@ -318,7 +319,7 @@ class HoopExhibit(HoopModel, Exhibit):
         kind = self.sim.reference_kind or "—"
         lines += [
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
-            f"| error vs {'exact (mode 1)' if kind == 'exact' else 'DOP853 reference'} | 0 "
+            f"| error vs {'exact (mode 1)' if kind == EXACT_FLOW else 'DOP853 reference'} | 0 "
             f"| {error_text(smp)} |",
             "",
             "Grey ghost: linear theory from the same start." if c.ghost else "",

@@ -67,7 +67,7 @@ def parse_number(
 
 def method_text(name: str) -> str:
     m = dynamics.get_method(name)
-    if m.backend == "exact":
+    if m.closed_form:
         return f"<small>{m.title}: the closed-form solution, exact at any time; no step</small>"
     text = m.describe(dynamics.SYSTEMS.values())
     if m.stability:
@@ -276,7 +276,7 @@ class Panel:
                 f"({2 * math.pi / omega:.3g} s): the exhibit would stand still between steps",
             )
         m = sim.method
-        if m.adaptive or m.backend == "exact":
+        if m.adaptive or m.closed_form:
             return None
         limit = stability.stability_limit(m.name, sim.system, self.exhibit.state)
         if limit is not None and dt > limit:
@@ -488,6 +488,6 @@ class Panel:
         m = self.exhibit.sim.method
         dt, rtol = self.fields.get("dt"), self.w.get(f"{self.key}.rtol")
         if dt is not None:
-            dt.visible = not m.adaptive and m.backend != "exact"
+            dt.visible = not m.adaptive and not m.closed_form
         if rtol is not None:
             rtol.visible = m.adaptive
