@@ -43,7 +43,7 @@ def test_the_generated_source_is_written_once_and_found_again():
 
     eq = EQUATIONS[min(EQUATIONS)]()
     generated_rhs(eq)
-    files = list(build.generated_dir().glob(f"*_rhs_{eq.name}_{eq.key()}.py"))
+    files = list(build.generated_dir().glob(f"*_rhs_{eq.name.replace('-', '_')}_{eq.key()}.py"))
     assert len(files) == 1
     assert "def rhs(y, p, out)" in files[0].read_text()
 

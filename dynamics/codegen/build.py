@@ -41,7 +41,7 @@ def load(eq: Equations, kind: str, make: Callable[[Equations], str]) -> ModuleTy
     ``make(eq)`` (the module's body, below :data:`HEADER`) is written first."""
     key = eq.key()
     return load_named(
-        f"mechviz_generated_{kind}_{eq.name}_{key}",
+        f"mechviz_generated_{kind}_{eq.name.replace('-', '_')}_{key}",
         lambda: HEADER.format(name=eq.name, key=key) + make(eq),
     )
 

@@ -19,13 +19,14 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..ids import CYCLOTRON, FREE_BODY, HOOP
+from ..ids import CYCLOTRON, FREE_BODY, HOOP, NAMES
 
 
 @dataclass(frozen=True)
 class Equations:
     """``y' = f(y; p)``: ``state`` and ``params`` symbols, ``rhs`` one expression per state
-    component. ``name`` is an identifier (it names the generated module on disk)."""
+    component. ``name`` is a system's name, letters, digits, ``_`` and ``-`` (it names the
+    generated module on disk, with ``-`` as ``_``)."""
 
     name: str
     state: tuple[sp.Symbol, ...]
@@ -33,8 +34,8 @@ class Equations:
     rhs: tuple[sp.Expr, ...]
 
     def __post_init__(self) -> None:
-        if not self.name.isidentifier():
-            raise ValueError(f"the name {self.name!r} must be an identifier")
+        if not self.name.replace("-", "_").isidentifier():
+            raise ValueError(f"the name {self.name!r}: letters, digits, _ and - only")
         if len(self.rhs) != len(self.state):
             raise ValueError(f"{self.name}: one right-hand side per state component")
         known = set(self.state) | set(self.params)
@@ -61,7 +62,9 @@ def charge() -> Equations:
     ``p = [Omega]`` (the signed gyrofrequency ``qB/m`` [rad/s])."""
     x, y, z, vx, vy, vz = sp.symbols("x y z vx vy vz", real=True)
     w = sp.Symbol("Omega", real=True)
-    return Equations("charge", (x, y, z, vx, vy, vz), (w,), (vx, vy, vz, w * vy, -w * vx, 0))
+    return Equations(
+        NAMES[CYCLOTRON], (x, y, z, vx, vy, vz), (w,), (vx, vy, vz, w * vy, -w * vx, 0)
+    )
 
 
 def hoop() -> Equations:
@@ -76,7 +79,7 @@ def hoop() -> Equations:
     m11 = 2 * M + m
     det = m11 - m * c**2
     return Equations(
-        "hoop",
+        NAMES[HOOP],
         (th1, th2, w1, w2),
         (M, m, a, g),
         (w1, w2, (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det),
@@ -90,7 +93,7 @@ def free_body() -> Equations:
     i1, i2, i3 = sp.symbols("I1 I2 I3", positive=True)
     half = sp.Rational(1, 2)
     return Equations(
-        "free_body",
+        NAMES[FREE_BODY],
         (w1, w2, w3, q0, q1, q2, q3),
         (i1, i2, i3),
         (

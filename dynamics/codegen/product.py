@@ -18,7 +18,7 @@ from .build import HEADER, load_named
 
 
 def product_module(sys_id: int, kind: str) -> ModuleType:
-    """The generated module ``kind`` (``"series"``: :mod:`.series`; ``"rk4"``: :mod:`.steps`;
+    """The generated module ``kind`` (``"series"``: :mod:`.series`; ``"step"``: :mod:`.steps`' RK4 step;
     ``"rhs"``: :mod:`.rhs`) of the product's system ``sys_id``."""
 
     def text() -> str:
@@ -27,7 +27,7 @@ def product_module(sys_id: int, kind: str) -> ModuleType:
         eq = equations.EQUATIONS[sys_id]()
         make: dict[str, Callable] = {
             "series": series.series_source,
-            "rk4": steps.rk4_source,
+            "step": steps.rk4_source,
             "rhs": rhs.rhs_source,
         }
         return HEADER.format(name=eq.name, key="the package's sources") + make[kind](eq)
