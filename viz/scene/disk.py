@@ -36,7 +36,7 @@ NAMES = "Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpo
 STAGE_NAMES = "Poinsot: ellipsoid rolls\non the plane ⊥ L"  # short: large on the stage
 # Poinsot's picture on the disk's stage, in disk radii
 STAGE_DISTANCE = 1.0  # the plane's distance from the ellipsoid's centre (half its height)
-STAGE_GAP = 0.15
+STAGE_GAP = 1.2  # clear of the disk's box in perspective (the arrows reach its edges)
 # On the stage the picture is turned about the camera's horizontal, L tipped towards the hall:
 # with L up, the plane is seen edge on and the picture is as flat as the plane's distance
 # (the ellipsoid lies along the plane); tipped, its long axis shows in the height too.
@@ -87,10 +87,12 @@ class PoinsotPicture:
 
     def beside(self, radius: float) -> np.ndarray:
         """The staged picture's centre (relative to the exhibit origin) [m]: right of the
-        disk's box, its lowest point half a radius above the disk's lowest (its names hang
-        there, inside the exhibit's box)."""
-        hx, _, hz = self.half
-        return np.array([1.4 * radius + STAGE_GAP * radius + hx, 0.0, LIFT[2] + 0.5 * radius + hz])
+        disk's box, its back level with the box's back (nearer the hall, so larger), its
+        lowest point half a radius above the disk's lowest (its names hang there, inside the
+        exhibit's box)."""
+        hx, hy, hz = self.half
+        x = 1.4 * radius + STAGE_GAP * radius + hx
+        return np.array([x, 1.4 * radius - hy, LIFT[2] + 0.5 * radius + hz])
 
     def stage(self, staged: bool) -> None:
         """Large beside the disk on its stage, small at the centre of mass elsewhere (the
