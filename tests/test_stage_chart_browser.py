@@ -110,9 +110,8 @@ def test_each_stage_shows_its_chart_beside_the_exhibit_readable_and_up_to_date(
     print(f"  paused at {t_paused:.2f} s, rewound to {ex.t:.2f} s: the chart ends there")
     app.enqueue("app", "play")
     wait_until(lambda: app.playing, 15, "play")
-    if width == 1920:
-        wait_until(lambda: _last_time(chart) > ex.t - 0.2, 15, "the chart going on")
-        _shot(page, f"stage-{key}-{width}x{height}.png", tmp_path)
+    wait_until(lambda: _last_time(chart) > ex.t - 0.2, 15, "the chart going on")
+    _shot(page, f"stage-{key}-{width}x{height}.png", tmp_path)
 
 
 def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tmp_path):
@@ -146,9 +145,8 @@ def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tm
         assert -1 <= px0 and px1 <= free + 1 and -1 <= py0 and py1 <= height + 1
         share, bx0, bx1, *_ = framing.share(*ex.bounds, position, target, width, height, fov)
         assert share >= 0.75 or bx1 - bx0 >= 0.9 * free, f"{share:.0%} of the height"
-        if width == 1920:
-            wait_until(lambda: ex.poinsot.polhode.n_segments > 20, 30, "the polhode drawn")
-            _shot(page, f"stage-disk-released-{width}x{height}.png", tmp_path)
+        wait_until(lambda: ex.poinsot.polhode.n_segments > 20, 30, "the polhode drawn")
+        _shot(page, f"stage-disk-released-{width}x{height}.png", tmp_path)
     finally:
         app.enqueue("disk", {"op": "set", "mode": "driven"})
         wait_until(lambda: ex.config.mode == "driven", 15, "driven again")

@@ -44,9 +44,9 @@ STAGE_SHARE = 0.76  # of the page's height an exhibit on stage should fill (75 %
 STAGE_WIDTH = 0.91  # or of the width the panel leaves, when its shape is wide
 # the places of the stage's words and chart, in the order of preference ("words-chart"): a
 # band above the exhibit and the chart right of it, a column right of the exhibit with the
-# chart under the words, the words and the chart side by side above the exhibit, a band above
-# and the chart below; with the caption, then without it (the panel's readout explains more)
-LAYOUTS = ("band-right", "column-under", "split-top", "band-below")
+# chart under the words, a band above and the chart below, the words and the chart side by
+# side above the exhibit; with the caption, then without it (the panel's readout explains more)
+LAYOUTS = ("band-right", "column-under", "band-below", "split-top")
 LAYOUTS = (*LAYOUTS, *(f"{layout}-short" for layout in LAYOUTS))
 CHART_MIN = (300, 170)  # CSS px: the least the chart takes (its labels are the stage's size)
 BAR_PX = 60  # CSS px: the height of a minimized panel's title bar, at the page's top right
@@ -232,12 +232,17 @@ class Views:
         direction = np.subtract(target, position)
         free = float(max(width - panel_px, 1))
         across = float(max(width - (panel_px if bar_px is None else bar_px), 1))  # the words' width
-        cw, ch = CHART_MIN[0] * px, CHART_MIN[1] * px
+        # a low chart (above or below the exhibit) at least as wide as its y axis's title on
+        # one line: two lines would leave its plot no height
+        title = label_px(ex.stage_plot()[0], STAGE_TEXT)[0] + 2 * GAP_PX
+        ch = CHART_MIN[1] * px
         gap, H = GAP_PX * px, float(height)
         best = None
         for layout in LAYOUTS:
             words_at, chart_at = layout.split("-")[:2]
             short = layout.endswith("-short")
+            low = chart_at in ("top", "below")
+            cw = max(CHART_MIN[0], title if low else 0.0) * px
             m = 4.0 * px  # the page's edge kept clear
             if words_at == "split":  # the words left, the chart right, above the exhibit
                 words_w = min(across - m, free - cw - gap)
@@ -256,7 +261,7 @@ class Views:
                 top = min(max(h, chart_top + ch) + gap / 2, 0.5 * H)
                 region = (0.0, top, free, H)
             elif chart_at == "right":
-                region = (0.0, top, max(free - max(cw, 0.3 * free) - gap, 0.3 * free), H)
+                region = (0.0, top, max(free - cw - gap, 0.3 * free), H)
             else:  # the chart below the exhibit
                 region = (0.0, top, free, max(H - max(ch, 0.25 * H) - gap, top + 0.3 * H))
             pos, look = framing.frame(
@@ -269,7 +274,8 @@ class Views:
                 chart = (wx, max(y0, 4.0) + h + gap, free - m, H - m)
             elif words_at == "split":
                 words = (text, (m, 4.0), "top-left")
-                chart = (m + w + gap / 2, chart_top, free - m, top - gap / 2)
+                # down to the exhibit's picture (a wide one leaves room under the words)
+                chart = (m + w + gap / 2, chart_top, free - m, max(top, y0) - gap / 2)
             elif chart_at == "right":
                 words = (text, (across / 2, 4.0), "top-center")
                 chart = (x1 + gap, top, free - m, H - m)

@@ -172,7 +172,7 @@ class PoinsotPicture:
         self.plane_frame.position = cm_world + offset
         # under the ellipsoid, reaching left (the hoop's labels stand to the right)
         self.names[0].position = cm_world + (
-            (0.0, 0.0, -self.half[2])
+            (0.0, -self.half[1], -self.half[2])  # the box's near lower edge: under it all
             if self.staged
             else (0.3 * self.radius, 0.0, -0.65 * self.radius)
         )
@@ -491,9 +491,7 @@ class DiskExhibit(DiskModel, Exhibit):
         if self.config.mode == "driven":  # L's tip circles the axle: what the bearings turn
             return "L_x about A [kg m²/s]", (("Lx", geo.MOMENTUM),)
         # in the principal axes' colours: the intermediate one's (green) flips in a tumble
-        return "body ω₁ ω₂ ω₃ [rad/s] (red, green, blue)", tuple(
-            (f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3)
-        )
+        return "body ω₁ ω₂ ω₃ [rad/s]", tuple((f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3))
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:

@@ -126,7 +126,7 @@ class HoopExhibit(HoopModel, Exhibit):
 
     def stage_plot(self):
         # in the colours of the hoop and the bead, the two bodies the angles turn
-        return "θ1 hoop, θ2 bead [rad]", (("theta1", geo.HOOP), ("theta2", geo.BEAD))
+        return "θ1, θ2 [rad]", (("theta1", geo.HOOP), ("theta2", geo.BEAD))
 
     def _build(self) -> None:
         s, r = self.scene, self.root

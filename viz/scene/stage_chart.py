@@ -58,12 +58,12 @@ def nice_range(lo: float, hi: float) -> tuple[float, float, float]:
 
 
 def tick_text(v: float, step: float) -> str:
-    """A tick's value with as many decimals as the step needs (no "-0")."""
+    """A tick's value with as many decimals as the step needs (no "-0.0")."""
     decimals = max(0, -math.floor(math.log10(step) + 1e-9)) if step < 1 else 0
     if step * 10**decimals % 1 > 1e-6:  # a step of 2.5 x 10^k needs one more
         decimals += 1
     text = f"{v:.{decimals}f}"
-    return "0" if float(text) == 0.0 else text
+    return text.lstrip("-") if float(text) == 0.0 else text
 
 
 class StageChart:
@@ -144,7 +144,14 @@ class StageChart:
         verts = np.array([(-hw, -hh, z), (hw, -hh, z), (hw, hh, z), (-hw, hh, z)], np.float32)
         faces = np.array([(0, 1, 2), (0, 2, 3)], np.uint32)
         self.panel = self.exhibit.scene.add_mesh_simple(
-            f"{self.root}/panel", verts, faces, color=PANEL, opacity=0.92, side="double"
+            f"{self.root}/panel",
+            verts,
+            faces,
+            color=PANEL,
+            material="toon3",  # flat: a sheet of paper, not a lit surface
+            side="double",
+            cast_shadow=False,
+            receive_shadow=False,
         )
 
     def _layout(self, px: float) -> None:
@@ -157,7 +164,8 @@ class StageChart:
         chars = max(int((width / k - 6) / CHAR_PX), 8)
         self.y_title.text = "\n".join(textwrap.wrap(label, chars))
         lines = len(self.y_title.text.splitlines())
-        top = LINE_PX * k * lines + PAD_PX * k
+        # the title's lines, and half a line for the top value's label (centred on its tick)
+        top = LINE_PX * k * (lines + 0.5) + PAD_PX * k
         bottom = LINE_PX * k + PAD_PX * k
         left = (CHAR_PX * 6 + 6) * k + PAD_PX * k  # values of up to six characters
         right = 0.5 * CHAR_PX * 3 * k + PAD_PX * k  # the last time's label, centred-ish
@@ -168,6 +176,13 @@ class StageChart:
         self.x_ticks[0].position = (ax0, ay0 - PAD_PX * k / 2, 0.0)
         self.x_ticks[1].position = (ax1 + right - PAD_PX * k, ay0 - PAD_PX * k / 2, 0.0)
         self.x_title.text = "t [s]"
+        # a narrow plot: the window's start is left out (it is the end less the window) and
+        # the title takes its place, so the labels under the axis never run into each other
+        wide = (ax1 - ax0) >= (CHAR_PX * 14 + 18) * k
+        self.x_ticks[0].visible = wide
+        self.x_title.anchor = "top-center" if wide else "top-left"
+        if not wide:
+            self.x_title.position = (ax0, ay0 - PAD_PX * k / 2, 0.0)
         self.axes.points = np.array(
             [[(ax0, ay0, 0), (ax1, ay0, 0)], [(ax0, ay0, 0), (ax0, ay1, 0)]], np.float32
         )
@@ -241,7 +256,7 @@ class StageChart:
             f"{self.root}/data",
             np.zeros((k * (n - 1), 2, 3), np.float32),
             np.ascontiguousarray(cols),
-            3.0,
+            4.0,
         )
         self._capacity, self._colours = n, colours
 
