@@ -28,7 +28,7 @@ import numpy as np
 
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, CyclotronExhibit, framing
-from .scene.stage_chart import StageChart
+from .scene.stage_chart import StageChart, min_width
 
 LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1, any page)
 TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
@@ -234,7 +234,7 @@ class Views:
         across = float(max(width - (panel_px if bar_px is None else bar_px), 1))  # the words' width
         # a low chart (above or below the exhibit) at least as wide as its y axis's title on
         # one line: two lines would leave its plot no height
-        title = label_px(ex.stage_plot()[0], STAGE_TEXT)[0] + 2 * GAP_PX
+        title = min_width(ex.stage_plot()[0], STAGE_TEXT)
         ch = CHART_MIN[1] * px
         gap, H = GAP_PX * px, float(height)
         best = None
@@ -273,9 +273,15 @@ class Views:
                 words = (text, (wx, max(y0, 4.0)), "top-left")
                 chart = (wx, max(y0, 4.0) + h + gap, free - m, H - m)
             elif words_at == "split":
-                words = (text, (m, 4.0), "top-left")
                 # down to the exhibit's picture (a wide one leaves room under the words)
-                chart = (m + w + gap / 2, chart_top, free - m, max(top, y0) - gap / 2)
+                bottom = max(top, y0) - gap / 2
+                if chart_top < BAR_PX * px:  # the panel open: the chart left, the words right
+                    # (text runs on to the right, where the panel's edge is, never into the chart)
+                    words = (text, (free - m - w, 4.0), "top-left")
+                    chart = (m, chart_top, free - m - w - gap / 2, bottom)
+                else:  # the words left, the chart right, under the minimized panel's bar
+                    words = (text, (m, 4.0), "top-left")
+                    chart = (m + w + gap / 2, chart_top, free - m, bottom)
             elif chart_at == "right":
                 words = (text, (across / 2, 4.0), "top-center")
                 chart = (x1 + gap, top, free - m, H - m)

@@ -76,7 +76,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     def stage_plot(self):
         # x swings at the gyrofrequency: its period is the figure the stage measures
-        return "the charge's x [m]", (("x", geo.CHARGE),)
+        return "charge's x [m]", (("x", geo.CHARGE),)
 
     # ------------------------------------------------------------------ scene (built once)
     def _build(self) -> None:

@@ -489,9 +489,9 @@ class DiskExhibit(DiskModel, Exhibit):
 
     def stage_plot(self):
         if self.config.mode == "driven":  # L's tip circles the axle: what the bearings turn
-            return "L_x about A [kg m²/s]", (("Lx", geo.MOMENTUM),)
+            return "L_x [kg m²/s]", (("Lx", geo.MOMENTUM),)
         # in the principal axes' colours: the intermediate one's (green) flips in a tumble
-        return "body ω₁ ω₂ ω₃ [rad/s]", tuple((f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3))
+        return "ω₁,₂,₃ [rad/s]", tuple((f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3))
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:

@@ -27,10 +27,13 @@ from .. import geometry as geo
 from ..model.plot import Samples
 from . import framing
 
-CHAR_PX = 5.6  # px a character of a label takes per unit of scale (as mechviz.viz.views)
-LINE_PX = 14.5  # px a line of a label takes per unit of scale
+# px a character and a line of a label take per unit of scale, with room to spare (viser's
+# own are 5.35 and 14.2): the labels of the chart never run into each other
+CHAR_PX = 6.5
+LINE_PX = 16.0
 PAD_PX = 6  # px between the panel's edge, the labels and the plot area
 MAX_TICKS = 4  # value labels on the y axis at most
+VALUE_CHARS = 4  # characters a value's label takes at most ("-0.5")
 INK = (40, 40, 48)  # axes: dark on the light panel, whatever the page's theme
 GRID = (200, 200, 205)
 PANEL = (250, 250, 250)
@@ -38,11 +41,18 @@ NEAR = 0.6  # of the distance to the point looked at: where the panel stands (in
 # exhibit's middle, so the floor, seen from above, does not cut its lower edge)
 
 
+def min_width(title: str, scale: float) -> float:
+    """CSS px a chart must be wide for ``title`` on one line right of its values' column, at
+    label ``scale``."""
+    return scale * (CHAR_PX * (VALUE_CHARS + len(title)) + 12 + 3 * PAD_PX)
+
+
 def nice_step(span: float) -> float:
-    """A step of 1, 2, 2.5 or 5 times a power of ten, about ``span`` / 3 (ticks on a range)."""
+    """A step of 1, 2 or 5 times a power of ten, about ``span`` / 3 (ticks on a range; no 2.5:
+    its values take a digit more)."""
     raw = max(span, 1e-12) / 3.0
     p = 10.0 ** math.floor(math.log10(raw))
-    return next(m * p for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * p >= raw)
+    return next(m * p for m in (1.0, 2.0, 5.0, 10.0) if m * p >= raw)
 
 
 def nice_range(lo: float, hi: float) -> tuple[float, float, float]:
@@ -161,17 +171,17 @@ class StageChart:
         self._label_m = k
         width, height = self.size
         label, _, _ = self.series()
-        chars = max(int((width / k - 6) / CHAR_PX), 8)
+        left = (CHAR_PX * VALUE_CHARS + 6) * k + PAD_PX * k  # the values' labels
+        right = 0.5 * CHAR_PX * 3 * k + PAD_PX * k  # the last time's label, centred-ish
+        # the title right of the values' column, on the row the top value stands in
+        chars = max(int(((width - left) / k - 6 - PAD_PX) / CHAR_PX), 8)
         self.y_title.text = "\n".join(textwrap.wrap(label, chars))
         lines = len(self.y_title.text.splitlines())
-        # the title's lines, and half a line for the top value's label (centred on its tick)
-        top = LINE_PX * k * (lines + 0.5) + PAD_PX * k
+        top = LINE_PX * k * lines + PAD_PX * k
         bottom = LINE_PX * k + PAD_PX * k
-        left = (CHAR_PX * 6 + 6) * k + PAD_PX * k  # values of up to six characters
-        right = 0.5 * CHAR_PX * 3 * k + PAD_PX * k  # the last time's label, centred-ish
         self.area = (-width / 2 + left, -height / 2 + bottom, width / 2 - right, height / 2 - top)
         ax0, ay0, ax1, ay1 = self.area
-        self.y_title.position = (-width / 2 + PAD_PX * k, ay1 + PAD_PX * k / 2, 0.0)
+        self.y_title.position = (ax0 + PAD_PX * k, ay1 + PAD_PX * k / 2, 0.0)
         self.x_title.position = ((ax0 + ax1) / 2, ay0 - PAD_PX * k / 2, 0.0)
         self.x_ticks[0].position = (ax0, ay0 - PAD_PX * k / 2, 0.0)
         self.x_ticks[1].position = (ax1 + right - PAD_PX * k, ay0 - PAD_PX * k / 2, 0.0)
@@ -276,17 +286,26 @@ class StageChart:
         r0, r1, step = self.y_range
         ticks = np.arange(r0, r1 + step / 2, step)
         ax0, ay0, ax1, ay1 = self.area
-        # the values' labels a line and a third apart at least, ends kept
-        most = max(2, int((ay1 - ay0) / (1.3 * LINE_PX * self._label_m)) + 1)
-        while len(ticks) > min(most, MAX_TICKS + 1):
-            ticks = ticks[::2] if len(ticks) % 2 else ticks[[0, -1]]
         ty = ay0 + (ticks - r0) / (r1 - r0) * (ay1 - ay0)
+        line, pad = LINE_PX * self._label_m, PAD_PX * self._label_m
+        # the least value on the time's row and the largest on the title's (a low plot shows
+        # both); those between, centred on their ticks, where they clear both rows and each other
+        keep = [0]
+        for j in range(1, len(ticks) - 1):
+            clear = ty[j] - line / 2 >= ay0 and ty[j] + line / 2 <= ay1
+            if clear and ty[j] - ty[keep[-1]] >= 1.1 * line and ay1 - ty[j] >= 0.6 * line:
+                keep.append(j)
+        keep.append(len(ticks) - 1)
+        places = {0: (ay0 - pad / 2, "top-right"), len(ticks) - 1: (ay1 + pad / 2, "bottom-right")}
         for k, h in enumerate(self.y_ticks):
-            shown = k < len(ticks)
+            shown = k < len(keep)
             h.visible = shown
             if shown:
-                h.text = tick_text(float(ticks[k]), step)
-                h.position = (ax0 - PAD_PX * self.m_per_px, float(ty[k]), 0.0)
+                j = keep[k]
+                y, anchor = places.get(j, (float(ty[j]), "center-right"))
+                h.text = tick_text(float(ticks[j]), step)
+                h.anchor = anchor
+                h.position = (ax0 - pad, y, 0.0)
         grid = [[(ax0, y, 0), (ax1, y, 0)] for y in ty]
         self.grid.points = np.array(grid, np.float32)
 
