@@ -308,6 +308,9 @@ class Views:
         figures = []
         for name, value in ex.key_figures():
             shown, _, theory = value.partition(" (theory ")
+            # a figure not measured yet: short, so the words keep their lines (the panel's
+            # readout says "not resolved")
+            shown = "…" if shown == "not resolved" else shown
             figures.append((f"{name} {shown}", f"  theory {theory[:-1]}" if theory else ""))
         headline = ex.title if layout.endswith("-short") else f"{ex.title}: {ex.caption}"
         if layout.startswith("column"):
