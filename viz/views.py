@@ -242,6 +242,8 @@ class Views:
             words_at, chart_at = layout.split("-")[:2]
             short = layout.endswith("-short")
             low = chart_at in ("top", "below")
+            # under words and chart side by side the region's top has its margin: all of it
+            fill = 1.0 if words_at == "split" else STAGE_FILL
             cw = max(CHART_MIN[0], title if low else 0.0) * px
             m = 4.0 * px  # the page's edge kept clear
             if words_at == "split":  # the words left, the chart right, above the exhibit
@@ -258,15 +260,14 @@ class Views:
             elif words_at == "split":  # the chart from the page's top edge down (below a
                 # minimized panel's title bar, if it reaches under it)
                 chart_top = 2.0 if free - m <= across + 1 else BAR_PX * px
-                top = min(max(h, chart_top + ch) + gap / 2, 0.5 * H)
+                # the words' height as the layout checks take it (a line 16 px a unit)
+                top = min(max(h * 16.0 / LINE_PX, chart_top + ch) + gap / 2, 0.5 * H)
                 region = (0.0, top, free, H)
             elif chart_at == "right":
                 region = (0.0, top, max(free - cw - gap, 0.3 * free), H)
             else:  # the chart below the exhibit
                 region = (0.0, top, free, max(H - max(ch, 0.25 * H) - gap, top + 0.3 * H))
-            pos, look = framing.frame(
-                lo, hi, direction, width, height, fill=STAGE_FILL, region=region
-            )
+            pos, look = framing.frame(lo, hi, direction, width, height, fill=fill, region=region)
             share, x0, x1, y0, y1 = framing.share(lo, hi, pos, look, width, height)
             if words_at == "column":
                 wx = min(x1 + gap, region[2] + gap)
