@@ -119,7 +119,8 @@ def test_each_stage_shows_its_exhibit_alone_large_with_words_for_a_hall(viewer, 
     left, right = 0, int(free)
     if xy[:, 1].min() < height / 2:
         cx0, cx1 = xy[:, 0].min(), xy[:, 0].max()
-        left, right = (0, int(cx0)) if cx0 > free / 2 else (int(cx1), int(free))
+        # the chart at the page's left edge has the words right of it, else left
+        left, right = (0, int(cx0)) if cx0 > 0.1 * free else (int(cx1), int(free))
 
     def drawn():
         img = browser.screenshot_array(page)
