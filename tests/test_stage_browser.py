@@ -114,10 +114,18 @@ def test_each_stage_shows_its_exhibit_alone_large_with_words_for_a_hall(viewer, 
     words = app.stage_label.text
     assert app.stage_label.visible and app.exhibits[key].title in words
 
+    # the words' columns: beside the stage's chart where it stands beside them
+    xy = framing.project(app.charts[key].world_corners(), position, target, width, height, fov)
+    left, right = 0, int(free)
+    if xy[:, 1].min() < height / 2:
+        cx0, cx1 = xy[:, 0].min(), xy[:, 0].max()
+        # the chart at the page's left edge has the words right of it, else left
+        left, right = (0, int(cx0)) if cx0 > 0.1 * free else (int(cx1), int(free))
+
     def drawn():
         img = browser.screenshot_array(page)
         # runs of ink a line of text tall (the exhibit's own dark parts run taller)
-        heights = [h for h in _ink_lines(img[: height // 2, : int(free)]) if h < 0.07 * height]
+        heights = [h for h in _ink_lines(img[: height // 2, left:right]) if h < 0.07 * height]
         lines = min(len(words.splitlines()), 3)
         return len(heights) >= lines and max(heights) >= 0.03 * height and heights
 

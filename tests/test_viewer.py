@@ -307,15 +307,17 @@ def test_the_first_view_a_page_gets_is_the_all_preset_with_everything_in_it(app)
 
 
 def test_each_stage_frames_its_exhibit_to_three_quarters_of_the_height_or_the_free_width(app):
-    """Below (or beside) the stage's words, left of the panel: 75 % of the page's height, or
-    90 % of the width the panel leaves when the exhibit is wide."""
+    """Below (or beside) the stage's words and chart, left of the panel: 75 % of the page's
+    height, or 90 % of the width the panel leaves when the exhibit is wide; the words, the
+    chart and the exhibit's box apart."""
     from mechviz.viz.scene import framing
-    from mechviz.viz.views import STAGE_TEXT, label_px
+    from mechviz.viz.views import CHART_MIN, STAGE_TEXT, label_px
 
     for size in ((1280, 800), (1440, 900), (1920, 1080)):
         free = size[0] - framing.PANEL_PX
         for view, key in (("Cyclotron", "cyclotron"), ("Disk", "disk"), ("Hoop", "hoop")):
-            position, target, (text, (x, y), anchor, _) = app.stage_view(key, *size)
+            position, target, words, chart = app.stage_view(key, *size)
+            text, (x, y), anchor, *_ = words
             share, x0, x1, y0, y1 = framing.share(
                 *app.exhibits[key].bounds, position, target, *size
             )
@@ -324,8 +326,16 @@ def test_each_stage_frames_its_exhibit_to_three_quarters_of_the_height_or_the_fr
             w, h = label_px(text, STAGE_TEXT)
             if anchor == "top-center":  # a band above the exhibit
                 assert y + h <= y0 and x - w / 2 >= 0 and x + w / 2 <= free, (view, size)
-            else:  # a column right of it
-                assert x >= x1 and x + w <= free, (view, size)
+                box = (x - w / 2, y, x + w / 2, y + h)
+            else:  # a column right of it, or the left of a band above it
+                assert (x >= x1 or y + h <= y0) and x + w <= free, (view, size)
+                box = (x, y, x + w, y + h)
+            c0, cy0, c1, cy1 = chart
+            assert c1 - c0 >= CHART_MIN[0] - 1 and cy1 - cy0 >= CHART_MIN[1] - 1, (view, size)
+            assert 0 <= c0 and c1 <= free and 0 <= cy0 and cy1 <= size[1], (view, size, chart)
+            for other in ((x0, y0, x1, y1), box):  # the chart clear of the exhibit and words
+                apart = c1 <= other[0] or other[2] <= c0 or cy1 <= other[1] or other[3] <= cy0
+                assert apart, (view, size, chart, other)
     position, target = app.camera_preset("Top")  # straight down on the orbit
     down = np.subtract(target, position)
     assert down[2] < 0 and np.hypot(*down[:2]) < 0.02 * abs(down[2])

@@ -384,6 +384,7 @@ class MechvizApp(Views):
             if self._drawn.get(key) != ex.revision:
                 ex.draw()
                 self._drawn[key] = ex.revision
+        self._draw_stage_chart()
 
     def _loop(self) -> None:
         next_t = time.perf_counter()

@@ -160,6 +160,18 @@ def quat_from_matrix(r: np.ndarray) -> np.ndarray:
     return np.array([q[0] / n, q[1] / n, q[2] / n, q[3] / n])
 
 
+def matrix_from_quat(wxyz) -> np.ndarray:
+    """The rotation matrix of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = (float(c) for c in wxyz)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
 def quat_about_axis(axis, angle: float) -> np.ndarray:
     axis = np.asarray(axis, float)
     axis = axis / np.linalg.norm(axis)

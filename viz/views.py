@@ -28,6 +28,7 @@ import numpy as np
 
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, framing
+from .scene.stage_chart import StageChart, min_width
 
 LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1, any page)
 TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
@@ -41,9 +42,15 @@ GAP_PX = 16  # px between the exhibit and its figures
 STAGE_FILL = 0.98  # of the height the figures leave, the exhibit's box at most
 STAGE_SHARE = 0.76  # of the page's height an exhibit on stage should fill (75 % and a margin),
 STAGE_WIDTH = 0.91  # or of the width the panel leaves, when its shape is wide
-# the places of the stage's words, in the order of preference: a band above the exhibit or a
-# column right of it, with the caption, then without it (the panel's readout explains more)
-LAYOUTS = ("band", "column", "band-short", "column-short")
+# the places of the stage's words and chart, in the order of preference ("words-chart"): a
+# band above the exhibit and the chart right of it, a column right of the exhibit with the
+# chart under the words, a band above and the chart below, the words and the chart side by
+# side above the exhibit; with the caption, then without it (the panel's readout explains more)
+LAYOUTS = ("band-right", "column-under", "band-below", "split-top")
+LAYOUTS = (*LAYOUTS, *(f"{layout}-short" for layout in LAYOUTS))
+CHART_MIN = (300, 170)  # CSS px: the least the chart takes (its labels are the stage's size)
+BAR_PX = 60  # CSS px: the height of a minimized panel's title bar, at the page's top right
+CHART_ASPECT = (0.3, 1.8)  # height / width of the chart's rectangle, least and most
 NARROW = 0.6  # a page whose panel would leave less than this share of its width free has the
 # panel minimized on stage (the panel's button opens it over the scene)
 PANEL_PX = framing.PANEL_PX  # px of the page's right edge the GUI panel covers
@@ -99,6 +106,19 @@ def css_scale(client) -> float:
     except AssertionError:  # not reported yet
         return 1.0
     return 800.0 / min(max(float(h or 800), 800.0), 1080.0)
+
+
+def _tidy(rect, middle: float) -> tuple[float, float, float, float]:
+    """``rect`` ``(x0, y0, x1, y1)`` [px] no taller than :data:`CHART_ASPECT` allows (centred
+    on ``middle``, the exhibit's, as far as it can be) and no wider (kept at its left)."""
+    x0, y0, x1, y1 = rect
+    w, h = x1 - x0, y1 - y0
+    if h > CHART_ASPECT[1] * w:
+        c = min(max(middle, y0 + CHART_ASPECT[1] * w / 2), y1 - CHART_ASPECT[1] * w / 2)
+        y0, y1 = c - CHART_ASPECT[1] * w / 2, c + CHART_ASPECT[1] * w / 2
+    if h < CHART_ASPECT[0] * w:
+        x1 = x0 + h / CHART_ASPECT[0]
+    return (float(x0), float(y0), float(x1), float(y1))
 
 
 def wrap(parts: list[str], chars: int) -> list[str]:
@@ -181,7 +201,7 @@ class Views:
             return framing.frame(
                 lo, hi, (0.0, 0.01, -1.0), width, height, fill=FILL, panel_px=panel_px
             )
-        position, target, _ = self.stage_view(VIEWS[view], width, height, panel_px)
+        position, target, *_ = self.stage_view(VIEWS[view], width, height, panel_px)
         return position, target
 
     def stage_view(
@@ -193,45 +213,94 @@ class Views:
         px: float = 1.0,
         bar_px: float | None = None,
     ):
-        """``(position, look_at, words)`` of ``key``'s stage on a page of ``width`` x
+        """``(position, look_at, words, chart)`` of ``key``'s stage on a page of ``width`` x
         ``height`` px whose right ``panel_px`` the panel covers. ``words`` places the label of
-        the title, figures and caption: ``(text, page point (x, y) [px], anchor)``. Two layouts
-        are tried, the words in a column right of the exhibit or in a band above it, and the
-        one where the exhibit's box is larger on the page is taken. ``px``: page pixels per
-        CSS pixel of the labels (:func:`css_scale`); ``bar_px``: page pixels on the right the
-        words keep clear of (the panel's width by default: a minimized panel keeps its title
-        bar at the top right, where the band of words runs)."""
+        the title, figures and caption: ``(text, page point (x, y) [px], anchor, layout,
+        width [CSS px] its lines may take)``; ``chart`` is the page rectangle ``(x0, y0, x1,
+        y1)`` [px] of the exhibit's chart (:mod:`mechviz.viz.scene.stage_chart`). The words go
+        in a band above the exhibit, a column right of it, or the left of a band whose right
+        holds the chart; the chart right of the exhibit, below it, or below the words'
+        column (:data:`LAYOUTS`). The first layout in which the exhibit fills
+        :data:`STAGE_SHARE` of the height or :data:`STAGE_WIDTH` of the free width, the chart
+        at least :data:`CHART_MIN` CSS px, is taken; failing that, the one where the exhibit
+        is largest. ``px``: page pixels per CSS pixel of the labels (:func:`css_scale`);
+        ``bar_px``: page pixels on the right the words keep clear of (the panel's width by
+        default: a minimized panel keeps its title bar at the top right, where the band of
+        words runs)."""
         ex = self.exhibits[key]
         lo, hi = ex.bounds
         position, target = ex.camera
         direction = np.subtract(target, position)
-        free = max(width - panel_px, 1)
-        across = max(width - (panel_px if bar_px is None else bar_px), 1)  # the words' width
+        free = float(max(width - panel_px, 1))
+        across = float(max(width - (panel_px if bar_px is None else bar_px), 1))  # the words' width
+        # a low chart (above or below the exhibit) at least as wide as its y axis's title on
+        # one line: two lines would leave its plot no height
+        title = min_width(ex.stage_plot()[0], STAGE_TEXT)
+        ch = CHART_MIN[1] * px
+        gap, H = GAP_PX * px, float(height)
         best = None
         for layout in LAYOUTS:
-            text = self._stage_text(key, layout, across / px)
-            w, h = (px * v for v in label_px(text, STAGE_TEXT))
-            if layout.startswith("column"):
-                region = (0.0, 0.0, max(free - w - GAP_PX, 0.3 * free), float(height))
+            words_at, chart_at = layout.split("-")[:2]
+            short = layout.endswith("-short")
+            low = chart_at in ("top", "below")
+            # under words and chart side by side the region's top has its margin: all of it
+            fill = 1.0 if words_at == "split" else STAGE_FILL
+            cw = max(CHART_MIN[0], title if low else 0.0) * px
+            m = 4.0 * px  # the page's edge kept clear
+            if words_at == "split":  # the words left, the chart right, above the exhibit
+                words_w = min(across - m, free - cw - gap)
+                free_css = words_w / px
             else:
-                region = (0.0, min(h + GAP_PX * px, 0.5 * height), float(free), float(height))
-            pos, look = framing.frame(
-                lo, hi, direction, width, height, fill=STAGE_FILL, region=region
-            )
-            share, x0, x1, y0, _ = framing.share(lo, hi, pos, look, width, height)
-            if layout.startswith("column"):
-                words = (text, (min(x1 + GAP_PX, region[2] + GAP_PX), max(y0, 4.0)), "top-left")
+                free_css = across / px
+            text = self._stage_text(key, words_at + ("-short" if short else ""), free_css)
+            w, h = (px * v for v in label_px(text, STAGE_TEXT))
+            top = min(h + gap, 0.5 * H)
+            if words_at == "column":
+                col = max(w, cw)
+                region = (0.0, 0.0, max(free - col - gap, 0.3 * free), H)
+            elif words_at == "split":  # the chart from the page's top edge down (below a
+                # minimized panel's title bar, if it reaches under it)
+                chart_top = 2.0 if free - m <= across + 1 else BAR_PX * px
+                # the words' height as the layout checks take it (a line 16 px a unit)
+                top = min(max(h * 16.0 / LINE_PX, chart_top + ch) + gap / 2, 0.5 * H)
+                region = (0.0, top, free, H)
+            elif chart_at == "right":
+                region = (0.0, top, max(free - cw - gap, 0.3 * free), H)
+            else:  # the chart below the exhibit
+                region = (0.0, top, free, max(H - max(ch, 0.25 * H) - gap, top + 0.3 * H))
+            pos, look = framing.frame(lo, hi, direction, width, height, fill=fill, region=region)
+            share, x0, x1, y0, y1 = framing.share(lo, hi, pos, look, width, height)
+            if words_at == "column":
+                wx = min(x1 + gap, region[2] + gap)
+                words = (text, (wx, max(y0, 4.0)), "top-left")
+                chart = (wx, max(y0, 4.0) + h + gap, free - m, H - m)
+            elif words_at == "split":
+                # down to the exhibit's picture (a wide one leaves room under the words)
+                bottom = max(top, y0) - gap / 2
+                if chart_top < BAR_PX * px:  # the panel open: the chart left, the words right
+                    # (text runs on to the right, where the panel's edge is, never into the chart)
+                    words = (text, (free - m - w, 4.0), "top-left")
+                    chart = (m, chart_top, free - m - w - gap / 2, bottom)
+                else:  # the words left, the chart right, under the minimized panel's bar
+                    words = (text, (m, 4.0), "top-left")
+                    chart = (m + w + gap / 2, chart_top, free - m, bottom)
+            elif chart_at == "right":
+                words = (text, (across / 2, 4.0), "top-center")
+                chart = (x1 + gap, top, free - m, H - m)
             else:
                 words = (text, (across / 2, 4.0), "top-center")
+                chart = (m, y1 + gap, free - m, H - m)
+            chart = _tidy(chart, (y0 + y1) / 2)
             fits = share >= STAGE_SHARE or (x1 - x0) >= STAGE_WIDTH * free
+            roomy = chart[2] - chart[0] >= cw - 1 and chart[3] - chart[1] >= ch - 1
             size = max(share / STAGE_SHARE, (x1 - x0) / (STAGE_WIDTH * free))
-            words = (*words, layout)
-            if fits:  # the first layout (in the order of preference) that fits is taken
-                return pos, look, words
-            if best is None or size > best[0]:
-                best = (size, pos, look, words)
-        _, pos, look, words = best
-        return pos, look, words
+            result = (pos, look, (*words, layout, free_css), chart)
+            if fits and roomy:  # the first layout (in the order of preference) that fits
+                return result
+            rank = (roomy, size)
+            if best is None or rank > best[0]:
+                best = (rank, result)
+        return best[1]
 
     def _stage_text(self, key: str, layout: str, free_px: float) -> str:
         """The words of ``key``'s stage: title, key figures and (``layout`` not ending in
@@ -241,6 +310,9 @@ class Views:
         figures = []
         for name, value in ex.key_figures():
             shown, _, theory = value.partition(" (theory ")
+            # a figure not measured yet: short, so the words keep their lines (the panel's
+            # readout says "not resolved")
+            shown = "…" if shown == "not resolved" else shown
             figures.append((f"{name} {shown}", f"  theory {theory[:-1]}" if theory else ""))
         headline = ex.title if layout.endswith("-short") else f"{ex.title}: {ex.caption}"
         if layout.startswith("column"):
@@ -249,7 +321,10 @@ class Views:
                 lines += [figure] + ([theory] if theory else [])
             return "\n".join(lines)
         chars = max(int(free_px / (CHAR_PX * STAGE_TEXT)) - 1, COLUMN_CHARS)
-        parts = [f"{f} ({t.strip()})" if t else f for f, t in figures]
+        parts = []
+        for f, t in figures:  # a figure too long for a line: its theory on the next
+            whole = f"{f} ({t.strip()})" if t else f
+            parts += [whole] if len(whole) <= chars else [f, f"({t.strip()})"]
         if layout.endswith("-short"):  # the title shares its line with the figures
             return "\n".join(wrap([headline, *parts], chars))
         return "\n".join([*textwrap.wrap(headline, chars), *wrap(parts, chars)])
@@ -259,8 +334,9 @@ class Views:
         (the panel's width left free unless it is minimized for presenting)."""
         clients = [client] if client is not None else list(self.server.get_clients().values())
         if not clients and view in VIEWS:  # no page yet: the words where a 1280 x 800 one has them
-            position, target, words = self.stage_view(VIEWS[view])
+            position, target, words, chart = self.stage_view(VIEWS[view])
             self._place_words(words, position, target, (1280, 800))
+            self._place_chart(VIEWS[view], chart, position, target, (1280, 800), 1.0)
         for c in clients:
             size, px = page_size(c), css_scale(c)
             panel = 0 if self.presenting else PANEL_PX * px
@@ -269,11 +345,11 @@ class Views:
                 c.gui.main_panel.minimize()
             if view in VIEWS:
                 bar = PANEL_PX * px  # minimized, the panel keeps its bar at the top right
-                position, target, words = self.stage_view(
+                position, target, words, chart = self.stage_view(
                     VIEWS[view], *size, panel_px=panel, px=px, bar_px=bar
                 )
-                self._words_free = (size[0] - bar) / px  # CSS px the words' lines may take
                 self._place_words(words, position, target, size)
+                self._place_chart(VIEWS[view], chart, position, target, size, px)
             else:
                 position, target = self.camera_preset(view, *size, panel_px=panel)
             self.framed[c.client_id] = (position, target)
@@ -286,7 +362,8 @@ class Views:
         """Put the stage's label where ``words`` says, for the camera ``position`` looking at
         ``target`` on a page of ``size``: on the plane through the point looked at, facing
         the camera (viser draws labels over the scene, so the depth only sets the point)."""
-        text, (x, y), anchor, self._stage_layout = words
+        text, (x, y), anchor, layout, self._words_free = words
+        self._stage_layout = layout.split("-")[0] + ("-short" if layout.endswith("-short") else "")
         w, h = size
         f, r, u = framing.basis(position, target)
         depth = float(np.dot(np.subtract(target, position), f))
@@ -297,6 +374,30 @@ class Views:
         self.stage_label.anchor = anchor
         self.stage_label.text = text
         self._stage_words = words
+
+    def _place_chart(self, key, rect, position, target, size, px: float) -> None:
+        """Stand ``key``'s chart in the page rectangle ``rect`` the stage left it, drawn anew."""
+        chart = self.charts[key]
+        chart.place(position, target, rect, size, px)
+        self.chart_rects[key] = rect
+        self._framed_bounds = self.exhibits[key].bounds
+        chart.update(self.chart_window, self.playing)
+
+    def _draw_stage_chart(self) -> None:
+        """A frame's part of the stage: the chart on stage follows its exhibit (one node
+        update, only when there is something new); an exhibit whose box changed on stage
+        (the disk released: Poinsot's construction beside it) is framed again."""
+        if self.stage is None:
+            return
+        ex = self.exhibits[self.stage]
+        bounds = ex.bounds
+        framed = getattr(self, "_framed_bounds", None)
+        if framed is not None and not all(
+            np.allclose(a, b) for a, b in zip(bounds, framed, strict=True)
+        ):
+            self._framed_bounds = bounds
+            self.enqueue("app", {"op": "reframe"})
+        self.charts[self.stage].update(self.chart_window, self.playing)
 
     # ------------------------------------------------------------------ the stage
     def _build_stage(self) -> None:
@@ -312,6 +413,9 @@ class Views:
         self._stage_words = None
         self._stage_layout = "band"
         self._words_free = 940.0  # CSS px across the page the words' lines may take
+        # each exhibit's chart on its stage (under its root: it hides with the exhibit)
+        self.charts = {key: StageChart(ex, STAGE_TEXT) for key, ex in self.exhibits.items()}
+        self.chart_rects: dict[str, tuple] = {}  # key -> page rectangle [px] last placed in
         self.framed: dict[int, tuple] = {}  # client id -> (position, look_at) last framed for it
         self._show_stage()
 
@@ -350,6 +454,8 @@ class Views:
             ex.label.visible = self.stage is None  # on stage the title is in the stage's words
             for h in ex.stage_labels():
                 h.visible = self.stage == key
+            self.charts[key].visible = self.stage == key
+            ex.on_stage(self.stage == key)
         self.stage_label.visible = self.stage is not None
         if "stage" in getattr(self, "w", {}):
             shown = HOME if self.stage is None else self.exhibits[self.stage].name

@@ -183,6 +183,15 @@ class Exhibit(ExhibitModel):
         """The exhibit's text labels in the scene (the stage sizes them for the page)."""
         return [h for h in self.nodes.values() if type(h).__name__ == "LabelHandle"]
 
+    def on_stage(self, shown: bool) -> None:
+        """The exhibit goes on stage (``shown``) or leaves it: what it draws only there."""
+
+    def stage_plot(self) -> tuple[str, tuple[tuple[str, tuple[int, int, int]], ...]]:
+        """The chart the stage shows against time (:mod:`mechviz.viz.scene.stage_chart`): its
+        y axis's label with the unit, and ``(name, colour)`` of each series, names of
+        :meth:`plot_variables`. By default the relative energy error."""
+        return "relative energy error ΔE/E", (("energy_error", (60, 110, 240)),)
+
     def stage_labels(self) -> list:
         """Labels shown only while the exhibit is on stage (at home, beside the other
         exhibits, they would run into them)."""

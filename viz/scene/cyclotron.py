@@ -74,6 +74,10 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
     icon = "ATOM"
     caption = "every orbit takes 2πm/|q|B, whatever its speed"
 
+    def stage_plot(self):
+        # x swings at the gyrofrequency: its period is the figure the stage measures
+        return "charge's x [m]", (("x", geo.CHARGE),)
+
     # ------------------------------------------------------------------ scene (built once)
     def _build(self) -> None:
         s, r, H = self.scene, self.root, self.config.height

@@ -32,6 +32,22 @@ TITLE = "Spinning disk with a bead"
 # The disk's opacity: driven, nearly solid; released, the Poinsot ellipsoid at the centre of
 # mass shows through it.
 DISK_OPACITY = {"driven": 0.85, "released": 0.3}
+NAMES = "Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode"
+STAGE_NAMES = "Poinsot: ellipsoid rolls\non the plane ⊥ L"  # short: large on the stage
+# Poinsot's picture on the disk's stage, in disk radii
+STAGE_DISTANCE = 1.0  # the plane's distance from the ellipsoid's centre (half its height)
+STAGE_GAP = 1.2  # clear of the disk's box in perspective (the arrows reach its edges)
+# On the stage the picture is turned about the camera's horizontal, L tipped towards the hall:
+# with L up, the plane is seen edge on and the picture is as flat as the plane's distance
+# (the ellipsoid lies along the plane); tipped, its long axis shows in the height too.
+STAGE_TIP = math.radians(50.0)
+STAGE_TILT = np.array(
+    [
+        [1.0, 0.0, 0.0],
+        [0.0, math.cos(STAGE_TIP), -math.sin(STAGE_TIP)],
+        [0.0, math.sin(STAGE_TIP), math.cos(STAGE_TIP)],
+    ]
+)
 
 
 class PoinsotPicture:
@@ -48,7 +64,7 @@ class PoinsotPicture:
         self.names = [
             scene.add_label(
                 f"{root}/poinsot_label",
-                "Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode",
+                NAMES,
                 anchor="top-right",
                 visible=False,
             ),
@@ -63,14 +79,60 @@ class PoinsotPicture:
         )
         self.scale = 1.0
         self.radius = 1.0
+        self.plane_radius = 0.9  # [m]
+        self.half = np.full(3, 0.6)  # half the sides [m] of the box the staged picture is in
+        self.tilt = np.eye(3)  # world -> the picture's world (turned on the stage)
+        self.staged = False  # on the stage: large, beside the disk (at home: small, at the CM)
+        self._started = None  # the last start's arguments (a move to or from the stage redraws)
 
-    def start(self, moments: np.ndarray, radius: float, shown: bool) -> None:
+    def beside(self, radius: float) -> np.ndarray:
+        """The staged picture's centre (relative to the exhibit origin) [m]: right of the
+        disk's box, its back level with the box's back (nearer the hall, so larger), its
+        lowest point half a radius above the disk's lowest (its names hang there, inside the
+        exhibit's box)."""
+        hx, hy, hz = self.half
+        x = 1.4 * radius + STAGE_GAP * radius + hx
+        return np.array([x, 1.4 * radius - hy, LIFT[2] + 0.5 * radius + hz])
+
+    def stage(self, staged: bool) -> None:
+        """Large beside the disk on its stage, small at the centre of mass elsewhere (the
+        curves start afresh at the new size)."""
+        if staged != self.staged:
+            self.staged = staged
+            if self._started is not None:
+                self.start(*self._started)
+
+    def start(self, moments: np.ndarray, radius: float, shown: bool, state=None) -> None:
+        """A new run: ``moments`` [kg m^2] the principal ones, ``state`` the free body's (the
+        plane's distance sizes the staged picture; ``None`` while driven)."""
+        self._started = (moments, radius, shown, state)
         semi = 1.0 / np.sqrt(moments)
+        # at home: inside the disk, the longest semi-axis 0.6 R
         self.scale = 0.6 * radius / float(semi.max())
+        self.plane_radius = 0.9 * radius
+        if self.staged and state is not None:
+            # on stage: the picture's height is the plane's distance from the centre, twice
+            # (the ellipsoid touches the plane, and is symmetric about its centre): that sets
+            # its size, as tall as a third of the page beside the disk
+            pc = dk.poinsot(moments, state)
+            self.scale = STAGE_DISTANCE * radius / pc["distance"]
+            a, d = float(semi.max()) * self.scale, STAGE_DISTANCE * radius
+            # the herpolhode stays within sqrt(a^2 - d^2) of the foot of L
+            self.plane_radius = max(1.05 * math.sqrt(max(a * a - d * d, 0.0)), 0.6 * a)
+            n = np.abs(STAGE_TILT @ to_world(pc["normal"]))
+            across = np.sqrt(np.maximum(1.0 - n * n, 0.0))
+            # along each axis: the plane's rim, and the ellipsoid (d along n, a across it)
+            rim = d * n + self.plane_radius * across
+            self.half = np.maximum(rim, np.sqrt((d * n) ** 2 + (a * across) ** 2))
+            self.tilt = STAGE_TILT
+        else:
+            self.half = np.full(3, 0.6 * radius)
+            self.tilt = np.eye(3)
         if self.ellipsoid is not None:
             self.ellipsoid.remove()
         mesh = geo.sphere_mesh(1.0, 3)
         mesh.apply_scale(semi * self.scale)
+        self._shape = np.asarray(mesh.vertices, float)  # the ellipsoid's own points [m]
         self.ellipsoid = self.scene.add_mesh_simple(
             f"{self.root}/poinsot/ellipsoid",
             mesh.vertices,
@@ -78,7 +140,7 @@ class PoinsotPicture:
             color=geo.CENTRE,
             opacity=0.35,
         )
-        plane = geo.disk_mesh(0.9 * radius, 0.004 * radius)
+        plane = geo.disk_mesh(self.plane_radius, 0.004 * radius)
         self.scene.add_mesh_simple(
             f"{self.root}/invariable_plane/plane",
             plane.vertices,
@@ -92,24 +154,44 @@ class PoinsotPicture:
         self.radius = radius
         for h in self.names:
             h.visible = shown
+            h.text = STAGE_NAMES if self.staged else NAMES
+            h.anchor = "top-center" if self.staged else "top-right"
 
     def draw(self, pc: dict, cm_world: np.ndarray) -> None:
         """``pc`` from :func:`mechviz.dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
-        relative to the exhibit origin)."""
+        relative to the exhibit origin): the picture's centre, except on stage (beside)."""
+        if self.staged:
+            cm_world = self.beside(self.radius)
         self.frame.position = cm_world
-        self.frame.wxyz = geo.quat_from_matrix(P @ pc["rotation"])
-        n = to_world(pc["normal"])
+        tilt = self.tilt
+        self.frame.wxyz = geo.quat_from_matrix(tilt @ P @ pc["rotation"])
+        n = tilt @ to_world(pc["normal"])
         turn = _z_onto(n)  # the plane's own z along n; the plane sits at its distance along n
         offset = n * pc["distance"] * self.scale
         self.plane_frame.wxyz = geo.quat_from_matrix(turn)
         self.plane_frame.position = cm_world + offset
         # under the ellipsoid, reaching left (the hoop's labels stand to the right)
-        self.names[0].position = cm_world + (0.3 * self.radius, 0.0, -0.65 * self.radius)
+        self.names[0].position = cm_world + (
+            (0.0, -self.half[1], -self.half[2])  # the box's near lower edge: under it all
+            if self.staged
+            else (0.3 * self.radius, 0.0, -0.65 * self.radius)
+        )
         self.polhode.push(pc["contact_body"] * self.scale)
         self.polhode.draw()
         # the herpolhode in the plane's own coordinates (the plane is fixed while L is)
-        self.herpolhode.push(turn.T @ (to_world(pc["contact_space"]) * self.scale - offset))
+        self.herpolhode.push(turn.T @ (tilt @ to_world(pc["contact_space"]) * self.scale - offset))
         self.herpolhode.draw()
+
+    def picture_points(self) -> np.ndarray:
+        """Points [m] of the picture as drawn, relative to the exhibit origin: the ellipsoid's
+        surface and the plane's rim (what a test projects to measure it on the page)."""
+        turn = geo.matrix_from_quat(self.frame.wxyz)
+        body = self._shape @ turn.T + np.asarray(self.frame.position, float)
+        phi = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+        rim = self.plane_radius * np.column_stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)])
+        plane = geo.matrix_from_quat(self.plane_frame.wxyz)
+        rim = rim @ plane.T + np.asarray(self.plane_frame.position, float)
+        return np.concatenate([body, rim])
 
 
 def _z_onto(n: np.ndarray) -> np.ndarray:
@@ -312,7 +394,12 @@ class DiskExhibit(DiskModel, Exhibit):
             LIFT + to_world(a + p.omega * dk.AXLE * self.omega_scale) + (0.0, 0.0, 0.1 * p.radius)
         )
         self.vector_labels[1].visible = not driven
-        self.poinsot.start(dk.free_kernel_params(p), p.radius, shown=not driven)
+        self.poinsot.start(
+            dk.free_kernel_params(p),
+            p.radius,
+            shown=not driven,
+            state=None if driven else self.state,
+        )
         self.body.position = LIFT  # A stays put while driven
 
     def _rewound(self) -> None:
@@ -377,9 +464,34 @@ class DiskExhibit(DiskModel, Exhibit):
         return (-1.4 * R, -1.4 * R, 0.0), (1.4 * R, 1.4 * R, LIFT[2] + 2.3 * R)
 
     @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The disk's box, and on its stage once released, Poinsot's picture beside it."""
+        lo, hi = super().bounds
+        if self.poinsot.staged and self.config.mode == "released":
+            lo2, hi2 = self.poinsot_bounds()
+            lo, hi = np.minimum(lo, lo2), np.maximum(hi, hi2)
+        return lo, hi
+
+    def poinsot_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box [m] of Poinsot's picture on the stage (with room for its names below)."""
+        R = self.params.radius
+        c, h = self.world(self.poinsot.beside(R)), self.poinsot.half
+        return c - h, c + h
+
+    def on_stage(self, shown: bool) -> None:
+        self.poinsot.stage(shown)
+        self.revision += 1  # drawn again where it now stands
+
+    @property
     def camera(self):
         o = self.origin
         return (tuple(o + (0.8, -5.0, 2.8)), tuple(o + (0.0, 0.0, 1.4)))
+
+    def stage_plot(self):
+        if self.config.mode == "driven":  # L's tip circles the axle: what the bearings turn
+            return "L_x [kg m²/s]", (("Lx", geo.MOMENTUM),)
+        # in the principal axes' colours: the intermediate one's (green) flips in a tumble
+        return "ω₁,₂,₃ [rad/s]", tuple((f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3))
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:

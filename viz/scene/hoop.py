@@ -125,6 +125,10 @@ class HoopExhibit(HoopModel, Exhibit):
     icon = "CIRCLE"
     caption = "(θ1, θ2) left, chaos map above it (click)"
 
+    def stage_plot(self):
+        # in the colours of the hoop and the bead, the two bodies the angles turn
+        return "θ1, θ2 [rad]", (("theta1", geo.HOOP), ("theta2", geo.BEAD))
+
     def _build(self) -> None:
         s, r = self.scene, self.root
         s.add_frame(r, show_axes=False, position=self.origin)
