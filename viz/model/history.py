@@ -6,6 +6,7 @@ shows, so a change of window keeps what was drawn (:class:`LongHistory`)."""
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -115,32 +116,40 @@ class Motion:
         self.shape = tuple(shape)
         self._t = Ring((), maxlen)
         self._x = Ring(self.shape, maxlen)
+        # the loop thread adds while another (a page's request, a test) may read: the times
+        # and the states are two rings, read and written together
+        self._lock = threading.Lock()
 
     def __len__(self) -> int:
         return len(self._t)
 
     def clear(self) -> None:
-        self._t.clear()
-        self._x.clear()
+        with self._lock:
+            self._t.clear()
+            self._x.clear()
 
     def add(self, t: float, x) -> None:
         """Keep the state at ``t`` [s], once: a frame in which the run took no step (a step
         longer than a frame) adds nothing, so the estimators read the run's own samples, not
         the same one over and over (a charge that seemed not to move between two frames looked
         like an alias)."""
-        if len(self._t) and t <= self._t.newest():
-            return
-        self._t.add(t)
-        self._x.add(x)
+        with self._lock:
+            if len(self._t) and t <= self._t.newest():
+                return
+            self._t.add(t)
+            self._x.add(x)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._t.array(), self._x.array()
+        """``(t, x)`` as fresh arrays of one length, from any thread."""
+        with self._lock:
+            return self._t.array(), self._x.array()
 
     def forget_after(self, t: float) -> None:
         """Forget the samples later than ``t`` [s]."""
-        n = len(self._t)
-        self._t.forget_after(t)
-        self._x.drop_newest(n - len(self._t))
+        with self._lock:
+            n = len(self._t)
+            self._t.forget_after(t)
+            self._x.drop_newest(n - len(self._t))
 
 
 class LongHistory(History):
