@@ -73,13 +73,13 @@ def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
     app, page, _ = viewer
     page.get_by_role("tab", name="Hoop").click()
     readout = page.get_by_text("(dt=0.0166667 s)", exact=False).first
-    readout.wait_for(timeout=10_000)
+    readout.wait_for(timeout=scaled(10) * 1000)
     assert "rk4" in page.content()
     page.get_by_role("combobox", name="Method").click()
     page.get_by_role("option", name="verlet", exact=True).click()
-    page.get_by_text("Stormer-Verlet", exact=False).first.wait_for(timeout=15_000)
+    page.get_by_text("Stormer-Verlet", exact=False).first.wait_for(timeout=scaled(15) * 1000)
     wait_until(lambda: app.exhibits["hoop"].sim.method.name == "verlet", 15, "verlet to run")
-    page.locator("code", has_text="verlet").first.wait_for(timeout=10_000)
+    page.locator("code", has_text="verlet").first.wait_for(timeout=scaled(10) * 1000)
 
 
 def _field(page, label: str):
@@ -94,7 +94,7 @@ def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
     box.fill("-3")
     box.press("Enter")  # a number field is read on Enter
     page.get_by_role("alert").filter(has_text="Gravity g [m/s²] must lie between").first.wait_for(
-        timeout=15_000
+        timeout=scaled(15) * 1000
     )
     assert app.exhibits["hoop"].sim is sim
 

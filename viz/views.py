@@ -481,7 +481,7 @@ class Views:
 
     def _build_leave(self) -> None:
         """The ways out of presentation mode: the Escape key (a command of viser's palette with
-        that hotkey) and a button in a small panel floating at the page's bottom right, shown
+        that hotkey) and a button in a small panel floating at the page's bottom left, shown
         only while presenting (the main panel is minimized then)."""
         viser, gui = self._viser, self.gui
 
@@ -498,7 +498,7 @@ class Views:
                 "Leave presentation (Esc)", icon=viser.Icon.X, hint="Back home, the panel open"
             )
         self.w["leave"].on_click(leave)
-        self.leave_panel.float(x=-15, y=-15)
+        self.leave_panel.float(x=15, y=-15)
 
     # ------------------------------------------------------------------ the page
     def _apply_theme(self, theme: str) -> None:
