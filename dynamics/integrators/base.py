@@ -211,12 +211,14 @@ class Method:
         )
 
 
-def _verner(order: int, step_cost_ns: float, bench: tuple[str, ...], color: str) -> Method:
-    """Verner's "most efficient" pair of ``order`` (its error estimate one order lower), run by
-    the compiled Runge-Kutta runner from its tableau file ``vern<order>``."""
+def _pair(
+    name: str, title: str, order: int, step_cost_ns: float, bench: tuple[str, ...], color: str
+) -> Method:
+    """An embedded explicit Runge-Kutta pair of ``order`` with dense output, run by the
+    compiled Runge-Kutta runner from its tableau file ``name``."""
     return Method(
-        f"vern{order}",
-        f"Verner's most efficient {order}({order - 1}) (compiled)",
+        name,
+        title,
         order,
         (),
         True,
@@ -225,11 +227,17 @@ def _verner(order: int, step_cost_ns: float, bench: tuple[str, ...], color: str)
         "numba",
         stability="step size controlled to rtol, atol",
         counts="right-hand-side evaluations (the dense output's included)",
-        pair=f"vern{order}",
+        pair=name,
         step_cost_ns=step_cost_ns,
         bench=bench,
         chart_color=color,
     )
+
+
+def _verner(order: int, step_cost_ns: float, bench: tuple[str, ...], color: str) -> Method:
+    """Verner's "most efficient" pair of ``order`` (its error estimate one order lower)."""
+    title = f"Verner's most efficient {order}({order - 1}) (compiled)"
+    return _pair(f"vern{order}", title, order, step_cost_ns, bench, color)
 
 
 METHODS: dict[str, Method] = {
@@ -390,21 +398,13 @@ METHODS: dict[str, Method] = {
             step_cost_ns=400.0,
             chart_color="tab:olive",
         ),
-        Method(
+        _pair(
             "dop853",
             "DOP853 (compiled)",
             8,
-            (),
-            True,
-            False,
-            "rhs",
-            "numba",
-            stability="step size controlled to rtol, atol",
-            counts="right-hand-side evaluations (the dense output's included)",
-            pair="dop853",
-            step_cost_ns=2000.0,
-            bench=("sweep", "fastest", "first-answer"),
-            chart_color="tab:orange",
+            2000.0,
+            ("sweep", "fastest", "first-answer"),
+            "tab:orange",
         ),
         _verner(6, 1500.0, ("sweep",), "goldenrod"),
         _verner(7, 1700.0, ("sweep",), "sienna"),
