@@ -25,7 +25,6 @@ methods whose steps follow the round-off).
 
 from __future__ import annotations
 
-import gc
 import statistics
 import time
 from collections.abc import Callable
@@ -39,17 +38,12 @@ from mechviz.dynamics.codegen.steps import generated_rk4
 from mechviz.dynamics.integrators import kernels, rk, taylor
 
 from .problems import PROBLEMS
+from .tableau_cost import ensemble, paired_rounds
 
 GOAL = 1.05  # a generated form may cost at most 5 % more per step than the hand-written one
 #: The forms compared: the right-hand side (inside DOP853), the RK4 step, the Taylor series.
 FORMS = ("rhs", "rk4 step", "taylor series")
 Call = Callable[[], tuple[float, np.ndarray, int]]  # () -> (CPU seconds, final states, steps)
-
-
-def _ensemble(y0: np.ndarray, members: int) -> np.ndarray:
-    """``members`` copies of ``y0`` spread by up to 1e-3 (as an ensemble's members are)."""
-    rng = np.random.default_rng(0)
-    return y0 + 1e-3 * rng.uniform(-1.0, 1.0, (members, y0.size)) * np.maximum(np.abs(y0), 1.0)
 
 
 def _dop853(sys, Y0, p, t_end, tol) -> Call:
@@ -100,7 +94,7 @@ def _calls(problem, members: int, tol: float) -> dict[str, tuple[Call, Call]]:
     system = problem.system
     sys_id, p = system.sys_id, system.kernel_params()
     eq = EQUATIONS[sys_id]()
-    Y0 = _ensemble(problem.y0, members)
+    Y0 = ensemble(problem, members)
     t_end = problem.t_end
     n_fixed = 2000  # RK4 steps of a call, over a tenth of the span
     hand_expand = taylor.EXPANDS[sys_id][0]
@@ -120,17 +114,8 @@ def _calls(problem, members: int, tol: float) -> dict[str, tuple[Call, Call]]:
 def _paired(old: Call, new: Call, rounds: int) -> dict:
     _, y_old, steps = old()  # compiles and warms up
     _, y_new, new_steps = new()
-    times: dict[str, list[float]] = {"hand": [], "generated": []}
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        for k in range(rounds):  # interleaved, alternating which goes first
-            both = (("hand", old), ("generated", new))
-            for label, call in both if k % 2 == 0 else both[::-1]:
-                times[label].append(call()[0])
-    finally:
-        if was_enabled:
-            gc.enable()
+    hand, generated = paired_rounds(old, new, rounds)
+    times = {"hand": hand, "generated": generated}
     per_step = {k: 1e9 * statistics.median(v) / steps for k, v in times.items()}
     ratios = [g / h for g, h in zip(times["generated"], times["hand"], strict=True)]
     scale = np.maximum(np.abs(y_old), 1.0)

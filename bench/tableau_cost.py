@@ -29,7 +29,7 @@ from .problems import PROBLEMS
 GOAL = 1.05  # the generic runner may cost at most 5 % more per step
 
 
-def _ensemble(problem, members: int) -> np.ndarray:
+def ensemble(problem, members: int) -> np.ndarray:
     """``members`` copies of the problem's start, spread by up to 1e-3 so that the steps differ
     a little between members (as an ensemble's do)."""
     rng = np.random.default_rng(0)
@@ -37,12 +37,29 @@ def _ensemble(problem, members: int) -> np.ndarray:
     return y0 + 1e-3 * rng.uniform(-1.0, 1.0, (members, y0.size)) * np.maximum(np.abs(y0), 1.0)
 
 
+def paired_rounds(a, b, rounds: int) -> tuple[list[float], list[float]]:
+    """Seconds of each of ``rounds`` calls of ``a()`` and ``b()`` (each returns its CPU seconds
+    first), interleaved, alternating which goes first, the garbage collector off meanwhile."""
+    times: tuple[list[float], list[float]] = ([], [])
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for k in range(rounds):
+            order = ((0, a), (1, b)) if k % 2 == 0 else ((1, b), (0, a))
+            for i, call in order:
+                times[i].append(call()[0])
+    finally:
+        if was_enabled:
+            gc.enable()
+    return times
+
+
 def _calls(problem, members: int, tol: float):
     """The two runs of one problem: ``(before, generic)``, each a call that returns
     ``(seconds, final states, stats)``."""
     system = problem.system
     sys_id, p = system.sys_id, system.kernel_params()
-    Y0 = _ensemble(problem, members)
+    Y0 = ensemble(problem, members)
     n, d = Y0.shape
     pair = rk.load_pair("dop853")
 
@@ -73,21 +90,12 @@ def tableau_cost(*, quick: bool = False, members: int = 32, tol: float = 1e-10) 
     docstring); ``quick``: fewer rounds."""
     rounds = 9 if quick else 31
     out: dict[str, dict] = {}
-    was_enabled = gc.isenabled()
     for name, problem in PROBLEMS.items():
         old, new = _calls(problem, members, tol)
         _, y_old, s_old = old()  # compiles and warms up
         _, y_new, s_new = new()
-        times = {"before": [], "generic": []}
-        gc.disable()
-        try:
-            for k in range(rounds):  # interleaved, alternating which goes first
-                pair = (("before", old), ("generic", new))
-                for label, call in pair if k % 2 == 0 else pair[::-1]:
-                    times[label].append(call()[0])
-        finally:
-            if was_enabled:
-                gc.enable()
+        before, generic = paired_rounds(old, new, rounds)
+        times = {"before": before, "generic": generic}
         steps = int(s_new[:, 1].sum())
         per_step = {k: 1e9 * statistics.median(v) / steps for k, v in times.items()}
         round_ratios = [g / b for g, b in zip(times["generic"], times["before"], strict=True)]
