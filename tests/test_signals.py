@@ -223,3 +223,39 @@ def test_a_finished_atlas_leaves_no_process_and_nothing_in_its_temporary_folder(
     assert (out / "chaos.png").is_file()
     wait_until(lambda: not alive(seen), 10, f"the command's processes to end: {seen}")
     assert [p.name for p in tmp.iterdir()] == []
+
+
+def _sigint_disposition(queue) -> None:
+    handler = signal.getsignal(signal.SIGINT)
+    queue.put("ignored" if handler is signal.SIG_IGN else "handled")
+
+
+def _spawned_sigint(inside: bool, folder: Path) -> str:
+    import contextlib
+    import multiprocessing
+
+    from mechviz.dynamics._spawn import spawned_workers_ignore_ctrl_c
+
+    context = multiprocessing.get_context("spawn")
+    queue = context.Queue()
+    block = spawned_workers_ignore_ctrl_c(folder) if inside else contextlib.nullcontext()
+    with block:
+        proc = context.Process(target=_sigint_disposition, args=(queue,))
+        proc.start()
+    try:
+        return queue.get(timeout=scaled(60))
+    finally:
+        proc.join()
+
+
+def test_a_worker_spawned_for_a_run_ignores_ctrl_c_from_its_start_and_this_process_does_not(
+    tmp_path,
+):
+    """The bench's compile workers and the atlas's cluster are spawned this way: a spawned
+    interpreter that handled SIGINT itself would print "Fatal Python error" or a traceback if a
+    terminal's Ctrl-C came while it imports. Python keeps an ignored SIGINT ignored, so the
+    worker's first Python code already sees it ignored; this process still handles Ctrl-C, and
+    the spawn executable is put back (a worker spawned after the block handles it again)."""
+    assert _spawned_sigint(True, tmp_path) == "ignored"
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert _spawned_sigint(False, tmp_path) == "handled"

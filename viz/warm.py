@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from mechviz import dynamics
+from mechviz.dynamics._spawn import spawned_workers_ignore_ctrl_c
 from mechviz.dynamics.results import REFERENCE_METHOD
 
 from .model import MODELS
@@ -74,17 +75,18 @@ _HELD_SIGNALS = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if 
 
 @contextlib.contextmanager
 def _quiet_start():
-    """While workers start: Ctrl-C, SIGTERM and SIGHUP held, here and in each worker (a mask
-    is kept across exec) until the worker's set-up: a signal that comes then neither leaves
-    workers half started nor makes one still importing print a traceback, and none is lost:
-    a held signal is handled as this ends (and in a worker as its set-up ends).
+    """While workers start: Ctrl-C, SIGTERM and SIGHUP noted here rather than handled, so a
+    signal that comes then does not leave workers half started, and none is lost: the first
+    noted is raised again as this ends. The workers themselves ignore Ctrl-C until their set-up
+    (:func:`mechviz.dynamics._spawn.spawned_workers_ignore_ctrl_c`): a spawned interpreter
+    inherits neither this mask nor these handlers, and one interrupted while it imports prints
+    ``Fatal Python error`` into the terminal.
 
-    Here the mask alone does not hold them: it is this thread's, and the kernel hands a signal
+    The mask alone does not hold them here: it is this thread's, and the kernel hands a signal
     sent to the process to any thread that does not block it (numpy's BLAS threads, started
     before), whose handler then raises in this thread all the same, in the middle of a worker's
     start (a worker whose parent stopped writing its start-up data fails reading it, with a
-    traceback). So the handlers are also replaced by ones that only note the signal; the first
-    noted is raised again once the previous handlers are back."""
+    traceback). So the handlers are also replaced by ones that only note the signal."""
     if not hasattr(signal, "pthread_sigmask"):  # Windows: no masks, nothing held
         yield
         return
@@ -114,7 +116,7 @@ def _end_with_parent(parent: int) -> None:
 
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
     signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
-    if hasattr(signal, "pthread_sigmask"):  # held while it started
+    if hasattr(signal, "pthread_sigmask"):  # none held (a parent's mask is not inherited)
         signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
     with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
         import ctypes
@@ -159,6 +161,7 @@ def fill_cache_in_parallel(
     import hashlib
     import multiprocessing
     import os
+    import tempfile
     from pathlib import Path
 
     import numba
@@ -177,8 +180,9 @@ def fill_cache_in_parallel(
     # spawn, not fork: a forked child would share this process's numba and threading state
     context = multiprocessing.get_context("spawn")
     procs: list = []
+    scratch = tempfile.TemporaryDirectory(prefix="mechviz-warm-")
     try:
-        with _quiet_start():
+        with _quiet_start(), spawned_workers_ignore_ctrl_c(scratch.name):
             for i in range(n):
                 proc = context.Process(
                     target=_warm_chunk,
@@ -204,6 +208,7 @@ def fill_cache_in_parallel(
         for p in procs:
             if p.pid is not None:
                 p.join()
+        scratch.cleanup()
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.touch()
     return time.perf_counter() - t0, n

@@ -24,7 +24,6 @@ import contextlib
 import logging
 import os
 import random
-import shlex
 import shutil
 import signal
 import sys
@@ -39,6 +38,7 @@ import numpy as np
 import xarray as xr
 from distributed.diagnostics.plugin import WorkerPlugin
 
+from .._spawn import spawned_workers_ignore_ctrl_c
 from . import store as _store
 from .grid import AtlasSpec
 from .kernels import VARIABLES, compute_chunk
@@ -118,7 +118,7 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
     try:
         # the workers' interpreter ignores Ctrl-C for the cluster's whole life: a nanny starts a
         # lost worker again with it
-        with _workers_ignore_ctrl_c(scratch):
+        with spawned_workers_ignore_ctrl_c(scratch):
             try:
                 # the scheduler's scratch folder too (it reads the configuration, not an argument)
                 with dask.config.set({"temporary-directory": scratch}):
@@ -182,50 +182,10 @@ def _shut_down(client, cluster) -> None:
         cluster.close(timeout=5)
 
 
-@contextlib.contextmanager
-def _workers_ignore_ctrl_c(folder: str):
-    """Worker processes started inside ignore SIGINT from their first instruction: a terminal's
-    Ctrl-C reaches the whole process group, and it is this process's to handle (cancel, keep,
-    shut the cluster down), not each worker's (a traceback apiece, or a worker dead while it
-    imports and a cluster that fails to start).
-
-    An ignored signal is passed on through fork and exec, a blocked one or a Python handler is
-    not (a spawned process starts with neither). So the workers are spawned through a
-    two-line interpreter in ``folder`` that ignores SIGINT and execs this Python
-    (``multiprocessing.set_executable``, put back on the way out), and this process goes on
-    handling Ctrl-C meanwhile: one pressed while the cluster starts is recorded
-    (:func:`_signals_between_chunks`) and the run stops as soon as the cluster is up. Where
-    ``folder`` cannot hold a program (a ``noexec`` mount), this process ignores SIGINT while the
-    workers start instead, as the workers' only way to learn it."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    import multiprocessing
-    from multiprocessing import spawn
-
-    if os.statvfs(folder).f_flag & getattr(os, "ST_NOEXEC", 0):
-        previous_handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            yield
-        finally:
-            signal.signal(signal.SIGINT, previous_handler)
-        return
-    program = Path(folder) / "python-ignoring-ctrl-c"
-    # sh's ``trap '' INT`` is an ignored SIGINT, which ``exec`` keeps
-    program.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n")
-    program.chmod(0o700)
-    previous = spawn.get_executable()
-    multiprocessing.set_executable(str(program))
-    try:
-        yield
-    finally:
-        multiprocessing.set_executable(os.fsdecode(previous))
-
-
 class _IgnoreCtrlC(WorkerPlugin):
-    """Worker plugin: the worker process ignores SIGINT (see :func:`_workers_ignore_ctrl_c`),
-    and dies with the process that started it (Linux), so a run killed outright leaves no
-    worker computing for nobody."""
+    """Worker plugin: the worker process ignores SIGINT (as it has from its first instruction,
+    :func:`mechviz.dynamics._spawn.spawned_workers_ignore_ctrl_c`), and dies with the process
+    that started it (Linux), so a run killed outright leaves no worker computing for nobody."""
 
     name = "mechviz-ignore-ctrl-c"
 
