@@ -21,6 +21,7 @@ from mechviz.dynamics import (
     disk,
     methods_for,
 )
+from mechviz.dynamics._jit import njit
 from mechviz.dynamics.disk import DiskParams
 from mechviz.dynamics.hoop import HoopParams
 from mechviz.dynamics.integrators import kernels
@@ -224,6 +225,19 @@ def test_blow_up_raises_a_clear_error_and_keeps_the_last_good_state():
 def test_implicit_step_that_cannot_converge_raises():
     with pytest.raises(IntegrationError, match="implicit solve did not converge"):
         Simulation(Hoop(), "midpoint", dt=2.0, state=[2.0, -2.0, 5.0, -5.0]).advance_to(20.0)
+
+
+def test_the_implicit_midpoint_never_takes_an_overflowed_iterate_for_a_fixed_point():
+    """Iterates that overflow are a diverged iteration (-1: "did not converge"), not a step to a
+    non-finite state: ``inf <= tol (1 + inf)`` alone would pass the convergence test."""
+
+    @njit
+    def blow_up(y, p, out):
+        for j in range(y.size):
+            out[j] = 1e300 * y[j] * y[j]
+
+    y = np.array([1.0, 2.0])
+    assert kernels.midpoint_step(blow_up, y, np.zeros(1), 1.0, np.empty((3, 2))) == -1
 
 
 def test_fixed_steps_are_exactly_dt_and_time_is_counted_in_steps():

@@ -82,7 +82,9 @@ def midpoint_step(rhs, y, p, h, work):
             change += abs(new - y1[j])
             size += abs(new)
             y1[j] = new
-        if change <= MIDPOINT_TOL * (1.0 + size):
+        # An iterate that overflowed is no fixed point (inf <= inf would pass): the iteration
+        # diverged, which is the failure to report, not a step to a non-finite state.
+        if change <= MIDPOINT_TOL * (1.0 + size) and size < math.inf:
             for j in range(d):
                 y[j] = y1[j]
             return evals
