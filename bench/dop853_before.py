@@ -17,13 +17,14 @@ from pathlib import Path
 import numpy as np
 import scipy
 
-from mechviz.dynamics import cyclotron, disk, hoop
 from mechviz.dynamics._jit import njit
 from mechviz.dynamics.integrators.kernels import (
     CYCLOTRON,
+    FREE_BODY,
     HOOP,
     NONFINITE,
     OK,
+    RHS,
     TOO_SMALL_STEP,
     report,
 )
@@ -83,16 +84,20 @@ def _interpolate(Q, y0, x, out):
         out[j] = v + y0[j]
 
 
+# the product's right-hand sides (the generic runner's), so that only the loops differ
+_CHARGE_RHS, _HOOP_RHS, _FREE_BODY_RHS = (RHS[i] for i in (CYCLOTRON, HOOP, FREE_BODY))
+
+
 @njit()  # not cached: the benchmark keeps no kernel in the cache
 def _rhs(sys_id, y, p, out):
     """The right-hand side of system ``sys_id`` (:mod:`.kernels`' ids). Called with a constant
     ``sys_id``, the compiled loop keeps only its branch."""
     if sys_id == CYCLOTRON:
-        cyclotron.rhs(y, p, out)
+        _CHARGE_RHS(y, p, out)
     elif sys_id == HOOP:
-        hoop.rhs(y, p, out)
+        _HOOP_RHS(y, p, out)
     else:
-        disk.free_rhs(y, p, out)
+        _FREE_BODY_RHS(y, p, out)
 
 
 @njit()  # not cached: the benchmark keeps no kernel in the cache

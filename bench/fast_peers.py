@@ -11,7 +11,7 @@
   methods DOP853, Vern8 and Vern7.
 - **scipy**: ``odeint`` (LSODA in Fortran; the loop stays in Fortran and only the right-hand
   side calls back into Python, which makes it scipy's fastest here), the right-hand side in
-  plain Python over ``math`` (the free body's: :func:`mechviz.dynamics.disk.free_derivatives`, called
+  plain Python over ``math`` (the free body's: :func:`.handwritten.free_derivatives`, called
   from Python).
 
 Every solver answers ``solve(y0, params, t_end, tol) -> (final state, steps)`` with
@@ -109,7 +109,7 @@ class CyrkSolver:
 # --------------------------------------------------------------------------- scipy
 def odeint_rhs(sys_id: int, params: np.ndarray):
     """The right-hand side as ``f(y, t)``: in plain Python over ``math``, but for the free body,
-    whose Python callable is our compiled :func:`mechviz.dynamics.disk.free_derivatives`."""
+    whose Python callable is our compiled :func:`.handwritten.free_derivatives`."""
     p = [float(v) for v in params]
     if sys_id == CYCLOTRON:
         w = p[0]
@@ -130,7 +130,7 @@ def odeint_rhs(sys_id: int, params: np.ndarray):
             return [w1, w2, (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det]
 
     else:
-        from mechviz.dynamics.disk import free_derivatives
+        from .handwritten import free_derivatives
 
         i1, i2, i3 = p
 

@@ -2,16 +2,18 @@
 
 Each system's equations are written once (:mod:`mechviz.dynamics.codegen.equations`) and its
 compiled forms generated from them: the right-hand side, classical RK4's step and Taylor's
-recurrences. Here each generated form is run beside the hand-written one it would replace, on
-each benchmark problem, in one process, interleaved call by call (alternating which goes
-first) on the same ensemble, so that load on a shared machine falls on both alike:
+recurrences. Here each generated form is run beside the hand-written one, on each benchmark
+problem, in one process, interleaved call by call (alternating which goes first) on the same
+ensemble, so that load on a shared machine falls on both alike:
 
-- ``rhs``: DOP853 through the tableau runner given the system's id (its hand-written
-  right-hand side) or the generated right-hand side (same steps, same arithmetic around it);
-- ``rk4``: fixed steps of the hand-written RK4 (:data:`~mechviz.dynamics.integrators.kernels.RK4`)
-  and of the generated one;
+- ``rhs``: DOP853 through the tableau runner given the system's id (the product's right-hand
+  side, generated: :data:`~mechviz.dynamics.integrators.kernels.RHS`) or the hand-written one it
+  replaced (:mod:`.handwritten`; same steps, same arithmetic around it);
+- ``rk4``: fixed steps of the product's RK4 step, generated
+  (:data:`~mechviz.dynamics.integrators.kernels.RK4`), and of the hand-written one it replaced;
 - ``taylor``: Taylor's method (:func:`~mechviz.dynamics.integrators.taylor.run_taylor_with`, one
-  driver) with the hand-written expansion or the generated one, at the order the product uses.
+  driver) with the hand-written expansion or the generated one, at the order the product uses
+  (the product uses the generated one on the free body, the hand-written ones elsewhere).
   (The product's charge takes its steps in closed form, :mod:`~mechviz.dynamics.integrators.
   taylor_linear`; its expansion is compared all the same.)
 
@@ -32,11 +34,10 @@ from collections.abc import Callable
 import numpy as np
 
 from mechviz.dynamics.codegen.equations import EQUATIONS
-from mechviz.dynamics.codegen.rhs import generated_rhs
 from mechviz.dynamics.codegen.series import generated_expand
-from mechviz.dynamics.codegen.steps import generated_rk4
 from mechviz.dynamics.integrators import kernels, rk, taylor
 
+from . import handwritten
 from .problems import PROBLEMS
 from .tableau_cost import ensemble, paired_rounds
 
@@ -99,10 +100,13 @@ def _calls(problem, members: int, tol: float) -> dict[str, tuple[Call, Call]]:
     n_fixed = 2000  # RK4 steps of a call, over a tenth of the span
     hand_expand = taylor.EXPANDS[sys_id][0]
     return {
-        "rhs": (_dop853(sys_id, Y0, p, t_end, tol), _dop853(generated_rhs(eq), Y0, p, t_end, tol)),
+        "rhs": (
+            _dop853(handwritten.RHS[sys_id], Y0, p, t_end, tol),
+            _dop853(sys_id, Y0, p, t_end, tol),
+        ),
         "rk4 step": (
+            _rk4(handwritten.RK4[sys_id], Y0, p, 0.1 * t_end / n_fixed, n_fixed),
             _rk4(kernels.RK4[sys_id], Y0, p, 0.1 * t_end / n_fixed, n_fixed),
-            _rk4(generated_rk4(eq), Y0, p, 0.1 * t_end / n_fixed, n_fixed),
         ),
         "taylor series": (
             _taylor(hand_expand, taylor.N_ROWS, sys_id, Y0, p, t_end, tol),

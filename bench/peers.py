@@ -10,7 +10,7 @@
   calls ``propagate_until(T)``.
 
 Each peer integrates the same equations with the same parameters (the right-hand sides call our
-compiled ``acceleration`` functions, or restate them in heyoka's expressions), from the same
+compiled scalar forms, :mod:`.handwritten`, or restate them in heyoka's expressions), from the same
 initial state over the same span; errors are measured against the same references. A peer that
 is not installed is reported with the reason instead of run.
 """
@@ -103,13 +103,14 @@ def _cyrk_rhs(kind: int):
     """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
     import numba as nb
 
-    from mechviz.dynamics import cyclotron, disk, hoop
     from mechviz.dynamics.integrators.kernels import CYCLOTRON, HOOP
+
+    from . import handwritten
 
     if kind in _CFUNCS:
         return _CFUNCS[kind]
     if kind == CYCLOTRON:
-        acc = cyclotron.acceleration
+        acc = handwritten.charge_acceleration
 
         def f(dy, t, y, args):
             dy[0] = y[3]
@@ -121,7 +122,7 @@ def _cyrk_rhs(kind: int):
             dy[5] = 0.0
 
     elif kind == HOOP:
-        acc = hoop.acceleration
+        acc = handwritten.hoop_acceleration
 
         def f(dy, t, y, args):
             dy[0] = y[2]
@@ -131,7 +132,7 @@ def _cyrk_rhs(kind: int):
             dy[3] = b
 
     else:
-        der = disk.free_derivatives
+        der = handwritten.free_derivatives
 
         def f(dy, t, y, args):
             r = der(y[0], y[1], y[2], y[3], y[4], y[5], y[6], args[0], args[1], args[2])

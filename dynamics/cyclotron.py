@@ -196,44 +196,6 @@ def error_metric(y: np.ndarray, y_exact: np.ndarray) -> float:
 
 
 # --------------------------------------------------------------------------- compiled pieces
-@njit(cache=True)
-def acceleration(vx, vy, w):
-    """Transverse acceleration ``(q/m) v x B = Omega (vy, -vx)``; none along B."""
-    return w * vy, -w * vx
-
-
-@njit(cache=True)
-def rhs(y, p, out):
-    """``dy/dt`` in place: ``r' = v``, ``v' = Omega (vy, -vx, 0)`` with ``p = [Omega]``."""
-    out[0] = y[3]
-    out[1] = y[4]
-    out[2] = y[5]
-    out[3], out[4] = acceleration(y[3], y[4], p[0])
-    out[5] = 0.0
-
-
-@njit(cache=True)
-def rk4_step(y, p, h):
-    """One classical RK4 step in scalar locals, in place; returns the 4 evaluations.
-
-    Written out rather than generic: with stage arrays the same step costs 3-4x as much here.
-    """
-    w = p[0]
-    x0, y0, z0, u0, v0, vz = y[0], y[1], y[2], y[3], y[4], y[5]
-    a1u, a1v = acceleration(u0, v0, w)
-    u1, v1 = u0 + 0.5 * h * a1u, v0 + 0.5 * h * a1v
-    a2u, a2v = acceleration(u1, v1, w)
-    u2, v2 = u0 + 0.5 * h * a2u, v0 + 0.5 * h * a2v
-    a3u, a3v = acceleration(u2, v2, w)
-    u3, v3 = u0 + h * a3u, v0 + h * a3v
-    a4u, a4v = acceleration(u3, v3, w)
-    c = h / 6.0
-    y[0] = x0 + c * (u0 + 2.0 * (u1 + u2) + u3)
-    y[1] = y0 + c * (v0 + 2.0 * (v1 + v2) + v3)
-    y[2] = z0 + h * vz
-    y[3] = u0 + c * (a1u + 2.0 * (a2u + a3u) + a4u)
-    y[4] = v0 + c * (a1v + 2.0 * (a2v + a3v) + a4v)
-    return 4
 
 
 @njit(cache=True)

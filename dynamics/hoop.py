@@ -200,45 +200,6 @@ def mode1_period(p: HoopParams, amplitude: float) -> float:
 
 
 # --------------------------------------------------------------------------- compiled pieces
-@njit(cache=True)
-def acceleration(th1, th2, w1, w2, M, m, ga):
-    """Angular accelerations from the 2x2 mass-matrix solve (``ga = g / a``)."""
-    s = math.sin(th1 - th2)
-    c = math.cos(th1 - th2)
-    r1 = -m * s * w2 * w2 - (M + m) * ga * math.sin(th1)
-    r2 = s * w1 * w1 - ga * math.sin(th2)
-    m11 = 2.0 * M + m
-    det = m11 - m * c * c
-    return (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det
-
-
-@njit(cache=True)
-def rhs(y, p, out):
-    """``dy/dt`` in place; ``p = [M, m, a, g]``."""
-    out[0] = y[2]
-    out[1] = y[3]
-    out[2], out[3] = acceleration(y[0], y[1], y[2], y[3], p[0], p[1], p[3] / p[2])
-
-
-@njit(cache=True)
-def rk4_step(y, p, h):
-    """One classical RK4 step in scalar locals, in place; returns the 4 evaluations."""
-    M, m, ga = p[0], p[1], p[3] / p[2]
-    q1, q2, u1, u2 = y[0], y[1], y[2], y[3]
-    a1, b1 = acceleration(q1, q2, u1, u2, M, m, ga)
-    hh = 0.5 * h
-    u1b, u2b = u1 + hh * a1, u2 + hh * b1
-    a2, b2 = acceleration(q1 + hh * u1, q2 + hh * u2, u1b, u2b, M, m, ga)
-    u1c, u2c = u1 + hh * a2, u2 + hh * b2
-    a3, b3 = acceleration(q1 + hh * u1b, q2 + hh * u2b, u1c, u2c, M, m, ga)
-    u1d, u2d = u1 + h * a3, u2 + h * b3
-    a4, b4 = acceleration(q1 + h * u1c, q2 + h * u2c, u1d, u2d, M, m, ga)
-    c = h / 6.0
-    y[0] = q1 + c * (u1 + 2.0 * (u1b + u1c) + u1d)
-    y[1] = q2 + c * (u2 + 2.0 * (u2b + u2c) + u2d)
-    y[2] = u1 + c * (a1 + 2.0 * (a2 + a3) + a4)
-    y[3] = u2 + c * (b1 + 2.0 * (b2 + b3) + b4)
-    return 4
 
 
 @njit(cache=True)

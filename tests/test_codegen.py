@@ -1,18 +1,23 @@
 """Code generated from the equations written once (:mod:`mechviz.dynamics.codegen`) agrees with
-the hand-written kernels to round-off, on random states and parameters other than the defaults."""
+the hand-written kernels to round-off, on random states and parameters other than the defaults;
+the product's right-hand sides and RK4 steps are the generated ones (the hand-written ones they
+replaced, :mod:`mechviz.bench.handwritten`, are the check), and load without sympy."""
 
 from __future__ import annotations
+
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
+from mechviz.bench.handwritten import RHS, RK4
 from mechviz.dynamics.codegen.equations import EQUATIONS
 from mechviz.dynamics.codegen.rhs import generated_rhs
 from mechviz.dynamics.codegen.series import generated_expand
 from mechviz.dynamics.codegen.steps import generated_rk4
 from mechviz.dynamics.ids import FREE_BODY, HOOP
-from mechviz.dynamics.integrators import taylor
-from mechviz.dynamics.integrators.kernels import RHS, RK4
+from mechviz.dynamics.integrators import kernels, taylor
 
 ROUND_OFF = 1e-14  # relative to the size of the right-hand side's terms
 
@@ -134,6 +139,34 @@ def test_the_generated_rk4_step_is_the_hand_written_one_to_round_off(sys_id):
         new, old = 0.5 * y, 0.5 * y
         assert step(new, p, 0.05) == 4 == RK4[sys_id](old, p, 0.05)
         assert np.max(np.abs(new - old)) <= ROUND_OFF * (1.0 + np.max(np.abs(old))), (y, p)
+
+
+@pytest.mark.parametrize("sys_id", sorted(EQUATIONS))
+def test_the_product_right_hand_side_and_rk4_step_are_the_generated_ones(sys_id):
+    """The kernels' tables hold the code generated from the equations (the same source text as
+    a test-defined system's, so the same numbers bit for bit), not hand-written functions."""
+    eq = EQUATIONS[sys_id]()
+    for form in (kernels.RHS[sys_id], kernels.RK4[sys_id]):
+        assert form.py_func.__module__.startswith("mechviz_generated_"), form
+    for y, p in _random_cases(sys_id, n=3):
+        product, generated = np.empty(eq.dim), np.empty(eq.dim)
+        kernels.RHS[sys_id](y, p, product)
+        generated_rhs(eq)(y, p, generated)
+        np.testing.assert_array_equal(product, generated)
+        product, generated = y.copy(), y.copy()
+        assert kernels.RK4[sys_id](product, p, 0.05) == generated_rk4(eq)(generated, p, 0.05)
+        np.testing.assert_array_equal(product, generated)
+
+
+def test_the_product_forms_load_without_sympy_once_written():
+    """A process that finds the generated modules written (this one wrote them, importing the
+    kernels) imports every integrator without importing sympy (half a second)."""
+    code = (
+        "import sys\n"
+        "from mechviz.dynamics.integrators import base, kernels, rk, scipy_ivp, taylor\n"
+        "assert 'sympy' not in sys.modules, sorted(m for m in sys.modules if 'sympy' in m)[:3]\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
 
 
 @pytest.mark.slow

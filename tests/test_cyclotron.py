@@ -8,6 +8,7 @@ import sympy as sp
 
 from mechviz.dynamics import Cyclotron, Simulation, cyclotron
 from mechviz.dynamics.cyclotron import CyclotronParams
+from mechviz.dynamics.integrators import kernels
 
 PARAMS = [
     CyclotronParams(),
@@ -35,7 +36,7 @@ def test_equations_of_motion_equal_euler_lagrange_of_the_gauge_lagrangian():
             subs.update({c: s[i] for i, c in enumerate((x, y, z))})
             expected = [float(acc[sp.diff(c, t, 2)].subs(subs)) for c in (x, y, z)]
             out = np.empty(6)
-            cyclotron.rhs(s, p.kernel_params(), out)
+            kernels.RHS[kernels.CYCLOTRON](s, p.kernel_params(), out)
             np.testing.assert_allclose(out[:3], s[3:], rtol=0, atol=0)
             np.testing.assert_allclose(out[3:], expected, rtol=1e-12, atol=1e-12)
 
@@ -103,7 +104,7 @@ def test_exact_solution_satisfies_the_equations_of_motion():
             2 * h
         )
         f = np.empty(6)
-        cyclotron.rhs(y, p.kernel_params(), f)
+        kernels.RHS[kernels.CYCLOTRON](y, p.kernel_params(), f)
         np.testing.assert_allclose(dy, f, atol=1e-8)
 
 

@@ -2,9 +2,9 @@
 
 The expressions are reduced by common-subexpression elimination (``sympy.cse``: the hoop's
 ``sin(th1 - th2)``, ``cos(th1 - th2)`` and determinant are computed once) and printed as a
-numba function in scalar locals, with the calling convention of the hand-written kernels
-(:data:`mechviz.dynamics.integrators.kernels.RHS`): ``y`` (d,) the state, ``p`` the
-parameters' array, ``out`` (d,) written in place.
+numba function in scalar locals, with the calling convention of the product's right-hand sides
+(:data:`mechviz.dynamics.integrators.kernels.RHS`, which are these, generated for the product's
+systems): ``y`` (d,) the state, ``p`` the parameters' array, ``out`` (d,) written in place.
 """
 
 from __future__ import annotations

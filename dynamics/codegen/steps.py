@@ -1,10 +1,11 @@
 """Fixed-step methods' steps generated from :class:`.Equations`: classical RK4 in scalar locals.
 
-The hand-written RK4 steps (:data:`mechviz.dynamics.integrators.kernels.RK4`) are written out
-in scalar locals because stage arrays cost 3-4x as much; the generated step is written the same
-way: the right-hand side as a function of scalars returning a tuple (compiled into the step),
-called four times, with every constant of the parameters (the hoop's ``g/a``, the free body's
-``(I2 - I3)/I1``) computed once per step rather than once per evaluation. Calling convention
+The product's RK4 steps (:data:`mechviz.dynamics.integrators.kernels.RK4`) are these, generated
+for its systems. They are written out in scalar locals, as the hand-written steps they replaced
+were, because stage arrays cost 3-4x as much: the right-hand side as a function of scalars
+returning a tuple (compiled into the step), called four times, with every constant of the
+parameters (the hoop's ``g/a``, the free body's ``(I2 - I3)/I1``) computed once per step rather
+than once per evaluation. Calling convention
 of a direct step (:mod:`mechviz.dynamics.integrators.kernels`): ``rk4_step(y, p, h)`` advances
 ``y`` in place and returns the evaluations used (4).
 """

@@ -2,8 +2,9 @@
 
 Two kinds of step, each with one signature:
 
-- a *direct* step ``step(y, p, h) -> evals`` is a system's own compiled step (RK4 written in
-  scalar locals, Boris, Stormer-Verlet, the rotation splitting, the exact flow);
+- a *direct* step ``step(y, p, h) -> evals`` is a system's own compiled step (RK4 in scalar
+  locals, generated from the equations; Boris, Stormer-Verlet, the rotation splitting, the
+  exact flow);
 - a *composed* step ``step(inner, y, p, h, work) -> evals`` is generic over ``inner``: the
   system's right-hand side ``rhs(y, p, out)`` for explicit Euler and the implicit midpoint rule,
   or the system's symmetric second-order step for Yoshida's composition.
@@ -30,7 +31,8 @@ import numpy as np
 
 from .. import cyclotron, disk, hoop
 from .._jit import njit
-from ..ids import CYCLOTRON, FREE_BODY, HOOP  # noqa: F401  (re-exported)
+from ..codegen.product import product_module
+from ..ids import CYCLOTRON, FREE_BODY, HOOP  # (also re-exported)
 
 # System ids (:mod:`mechviz.dynamics.ids`): index into the tables at the bottom.
 
@@ -177,6 +179,10 @@ def run_composed(step, inner, Y, p, h, n_steps, status):
 
 
 # Per system (index = system id): right-hand side, own symmetric second-order step, RK4.
-RHS = (cyclotron.rhs, hoop.rhs, disk.free_rhs)
+# The right-hand sides and RK4 steps are generated from the equations written once
+# (:mod:`..codegen`: loaded from the cache folder, without sympy once written); per step they
+# cost what the hand-written ones they replaced did (``mechviz bench --generated-cost``).
+_IDS = (CYCLOTRON, HOOP, FREE_BODY)
+RHS = tuple(product_module(i, "rhs").rhs for i in _IDS)
 SYMMETRIC2 = (cyclotron.boris_step, hoop.verlet_step, disk.splitting_step)
-RK4 = (cyclotron.rk4_step, hoop.rk4_step, disk.free_rk4_step)
+RK4 = tuple(product_module(i, "step").rk4_step for i in _IDS)

@@ -46,9 +46,8 @@ import numpy as np
 from numba import types
 from numba.extending import overload, register_jitable
 
-from .. import cyclotron, disk, hoop
 from .._jit import njit
-from .kernels import CYCLOTRON, HOOP, NONFINITE, OK, TOO_SMALL_STEP, report
+from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, RHS, TOO_SMALL_STEP, report
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
@@ -140,19 +139,18 @@ def _rms(x):
     return math.sqrt(np.sum(x * x) / x.size)
 
 
+# The product's right-hand sides (generated from the equations: :data:`.kernels.RHS`), each a
+# global of its own so that a compiled branch calls it directly (a tuple of them would have to
+# be indexed at run time, and its items are of different types).
+_CHARGE_RHS, _HOOP_RHS, _FREE_BODY_RHS = (RHS[i] for i in (CYCLOTRON, HOOP, FREE_BODY))
+
+
 def _rhs(sys_id, y, p, out):
     """The right-hand side of system ``sys_id``: one of :mod:`.kernels`' ids, or a compiled
     ``rhs(y, p, out)`` itself (a system known only by its equations: a generated right-hand
     side, :mod:`mechviz.dynamics.codegen.rhs`). Compiled by :func:`_rhs_compiled`; this is the
     interpreter's version (a helper below called from Python)."""
-    if callable(sys_id):
-        sys_id(y, p, out)
-    elif sys_id == CYCLOTRON:
-        cyclotron.rhs(y, p, out)
-    elif sys_id == HOOP:
-        hoop.rhs(y, p, out)
-    else:
-        disk.free_rhs(y, p, out)
+    (sys_id if callable(sys_id) else RHS[sys_id])(y, p, out)
 
 
 @overload(_rhs, jit_options={"error_model": "numpy"})
@@ -165,11 +163,11 @@ def _rhs_compiled(sys_id, y, p, out):
 
         def by_id(sys_id, y, p, out):
             if sys_id == CYCLOTRON:
-                cyclotron.rhs(y, p, out)
+                _CHARGE_RHS(y, p, out)
             elif sys_id == HOOP:
-                hoop.rhs(y, p, out)
+                _HOOP_RHS(y, p, out)
             else:
-                disk.free_rhs(y, p, out)
+                _FREE_BODY_RHS(y, p, out)
 
         return by_id
 

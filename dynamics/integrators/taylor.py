@@ -36,7 +36,6 @@ import numba
 import numpy as np
 from numba import prange
 
-from .. import cyclotron, disk, hoop
 from .._jit import njit
 from ..codegen.product import product_module
 from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
@@ -47,7 +46,7 @@ from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     TIGHT_TOL,
     order_for,
 )
-from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, report
+from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, RHS, report
 from .taylor_linear import charge_eval, charge_steps, two_sum
 
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
@@ -89,7 +88,8 @@ def charge_expand(A, p, order):
 
 @njit(cache=True, fastmath=FUSED)
 def free_body_expand(A, p, order):
-    """Euler's equations and ``q' = q (0, w) / 2`` (:func:`mechviz.dynamics.disk.free_derivatives`).
+    """Euler's equations and ``q' = q (0, w) / 2``
+    (:func:`mechviz.dynamics.codegen.equations.free_body`).
 
     Each of the seven sums adds one term per index: the three products of a quaternion
     component are formed first, off the chain of dependent additions (1.7x faster at order 5).
@@ -123,10 +123,10 @@ def free_body_expand(A, p, order):
 
 @njit(cache=True, fastmath=SUMS)
 def hoop_expand(A, p, order):
-    """The hoop and bead (:func:`mechviz.dynamics.hoop.acceleration`): with ``u = th1 - th2``,
-    ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``, ``r2 = sin(u) w1^2 - (g/a) sin th2``, the
-    accelerations solve the mass-matrix system ``(2M + m) w1' + m cos(u) w2' = r1``,
-    ``cos(u) w1' + w2' = r2``.
+    """The hoop and bead (:func:`mechviz.dynamics.codegen.equations.hoop`): with
+    ``u = th1 - th2``, ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``,
+    ``r2 = sin(u) w1^2 - (g/a) sin th2``, the accelerations solve the mass-matrix system
+    ``(2M + m) w1' + m cos(u) w2' = r1``, ``cos(u) w1' + w2' = r2``.
 
     The series are taken of that system rather than of its solved form (the quotients by
     ``det = 2M + m - m cos(u)^2``): order ``k`` of each line is the order-``k`` accelerations
@@ -454,12 +454,13 @@ def run_taylor_with(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, sta
     return total
 
 
-# the right-hand sides the hand-written expansions are written for (tests compare the two; the
-# generated expansions are compared with these)
+# the hand-written expansions and the product's right-hand sides (generated from the same
+# equations) they are written for: the tests compare the two, and the generated expansions with
+# the hand-written ones
 EXPANDS = {
-    CYCLOTRON: (charge_expand, cyclotron.rhs),
-    HOOP: (hoop_expand, hoop.rhs),
-    FREE_BODY: (free_body_expand, disk.free_rhs),
+    CYCLOTRON: (charge_expand, RHS[CYCLOTRON]),
+    HOOP: (hoop_expand, RHS[HOOP]),
+    FREE_BODY: (free_body_expand, RHS[FREE_BODY]),
 }
 
 
