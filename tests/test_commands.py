@@ -1,11 +1,12 @@
 """The exhibits' typed commands: every one read from its dict form, a bad one refused in one line
-naming what is wrong."""
+naming what is wrong, and a model refusing a command it does not take."""
 
 import math
 
 import pytest
 
 from mechviz.dynamics import SettingError
+from mechviz.viz.model import CyclotronModel, HoopModel
 from mechviz.viz.model.commands import COMMANDS, Kick, Reset, Set, as_dict, parse
 
 # every command class, as a dict (the form a file or another program writes) and as the value
@@ -73,3 +74,26 @@ def test_a_command_checks_itself_when_built():
         Set(fields={"params": {"mass": 1.0}})
     with pytest.raises(AttributeError):
         Kick(dv=1.0).dv = 2.0  # frozen
+
+
+def test_a_model_refuses_a_command_it_does_not_take_and_changes_nothing():
+    hoop = HoopModel()
+    config, revision = hoop.config, hoop.revision
+    with pytest.raises(
+        ValueError, match=r"^hoop takes no kick command; op must be one of reset, set$"
+    ):
+        hoop.apply(Kick(dv=0.5))
+    with pytest.raises(ValueError, match=r"a command must be one of reset, set .*'op': 'reset'"):
+        hoop.apply({"op": "reset"})  # a dict goes through parse first
+    assert hoop.config is config and hoop.revision == revision
+
+
+def test_a_parsed_command_applies_as_the_typed_one():
+    """A kick read from its dict form moves the charge's circle as the typed kick does."""
+    a, b = CyclotronModel(), CyclotronModel()
+    for m in (a, b):
+        m.advance(1.0)
+    a.apply(Kick(dv=0.5))
+    b.apply(parse({"op": "kick", "dv": 0.5}))
+    assert a.theory_radius == b.theory_radius and (a.state == b.state).all()
+    assert CyclotronModel.commands == (Reset, Set, Kick)

@@ -103,6 +103,17 @@ def as_dict(command: Command) -> dict[str, Any]:
     return {"op": command.op(), **out}
 
 
+def refused(key: str, takes: tuple[type[_Command], ...], command: object) -> ValueError:
+    """The error for ``command`` given to the exhibit ``key``, which takes the commands
+    ``takes``: it names the command, or the value that is none (a dict: :func:`parse` first)."""
+    ops = ", ".join(c.op() for c in takes)
+    if isinstance(command, COMMANDS):
+        return ValueError(f"{key} takes no {command.op()} command; op must be one of {ops}")
+    return ValueError(
+        f"a command must be one of {ops} (mechviz.viz.model.commands); got {command!r}"
+    )
+
+
 def _error(op: str, exc: msgspec.ValidationError, params: Any) -> ValueError:
     """msgspec's message as one line that names the field: a ``SettingError`` from a command's
     own check as it is (it names its field, and the panel labels it); ``at `$.dv``` moves to
