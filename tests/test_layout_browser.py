@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 from waiting import scaled, wait_until
 
+from mechviz.viz.model.commands import Set
+
 pytestmark = pytest.mark.browser
 
 PAGE = (1280, 800)
@@ -90,7 +92,7 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
     from mechviz.viz.scene import atlas_map
 
     app, page = viewer
-    app.enqueue("disk", {"op": "set", "mode": mode})
+    app.enqueue("disk", Set(fields={"mode": mode}))
     wait_until(lambda: app.exhibits["disk"].config.mode == mode, 15, f"the {mode} disk")
     free = _panel_left(page)
     names = set()

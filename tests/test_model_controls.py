@@ -10,6 +10,7 @@ import pytest
 
 from mechviz.dynamics import measure
 from mechviz.viz.model import CyclotronConfig, CyclotronModel
+from mechviz.viz.model.commands import Kick, Set
 
 FRAME = 1 / 60
 
@@ -22,14 +23,14 @@ def _frames(model, seconds: float) -> None:
 def test_changing_the_kick_strength_changes_only_the_next_kick_and_keeps_the_run():
     model = CyclotronModel(CyclotronConfig(method="boris", dt=0.01))
     _frames(model, 2.0)
-    model.apply({"op": "kick", "dv": 0.3})
+    model.apply(Kick(dv=0.3))
     _frames(model, 1.0)
     t, state, sim = model.t, model.state.copy(), model.sim
-    model.apply({"op": "set", "kick": 0.8})
+    model.apply(Set(fields={"kick": 0.8}))
     assert model.config.kick == 0.8
     assert model.sim is sim and model.t == t  # the same run, at the same time
     np.testing.assert_array_equal(model.state, state)  # the kick given stays given
-    model.apply({"op": "kick"})  # the next kick is the new strength
+    model.apply(Kick())  # the next kick is the new strength
     v_before = np.hypot(*state[3:5])
     assert np.hypot(*model.state[3:5]) == pytest.approx(np.hypot(v_before, 0.8), rel=1e-3)
 
@@ -37,10 +38,10 @@ def test_changing_the_kick_strength_changes_only_the_next_kick_and_keeps_the_run
 def test_the_beam_comes_and_goes_without_restarting_the_run_or_dropping_a_kick():
     model = CyclotronModel(CyclotronConfig(method="boris", dt=0.01, beam_size=8))
     _frames(model, 1.5)
-    model.apply({"op": "kick", "dv": 0.5})
+    model.apply(Kick(dv=0.5))
     _frames(model, 0.5)
     t, state, sim = model.t, model.state.copy(), model.sim
-    model.apply({"op": "set", "beam": True})
+    model.apply(Set(fields={"beam": True}))
     assert model.sim is sim and model.t == t
     np.testing.assert_array_equal(model.state, state)  # the kicked charge goes on
     assert model.beam is not None and model.beam.t == t
@@ -54,9 +55,9 @@ def test_the_beam_comes_and_goes_without_restarting_the_run_or_dropping_a_kick()
     _frames(model, 0.5)
     assert model.beam.t == pytest.approx(model.t)  # on the main run's clock
     t2, state2 = model.t, model.state.copy()
-    model.apply({"op": "set", "beam_size": 4})  # another beam, the run goes on
+    model.apply(Set(fields={"beam_size": 4}))  # another beam, the run goes on
     assert model.sim is sim and model.t == t2 and len(model.beam.state) == 4
-    model.apply({"op": "set", "beam": False})
+    model.apply(Set(fields={"beam": False}))
     assert model.beam is None and model.sim is sim and model.t == t2
     np.testing.assert_array_equal(model.state, state2)
     _frames(model, 0.5)
@@ -83,7 +84,7 @@ def test_a_figure_once_measured_stays_until_the_motion_changes():
     model._measure = lambda: {"gyrofrequency": next(estimates)}
     assert model.measured()["gyrofrequency"].value == 1.0
     assert model.measured()["gyrofrequency"].value == 1.0  # no longer resolved: kept
-    model.apply({"op": "kick", "dv": 0.2})  # the motion changed: measured afresh
+    model.apply(Kick(dv=0.2))  # the motion changed: measured afresh
     model._measure = lambda: {"gyrofrequency": measure.unresolved("a new circle")}
     assert not model.measured()["gyrofrequency"]
 

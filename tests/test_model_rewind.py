@@ -11,6 +11,7 @@ import pytest
 
 from mechviz.dynamics import cyclotron as cy
 from mechviz.viz.model import CyclotronConfig, CyclotronModel, DiskConfig, DiskModel, HoopModel
+from mechviz.viz.model.commands import Kick, Set
 from mechviz.viz.model.rewind import BUDGET, SECONDS
 
 FRAME = 1 / 60
@@ -51,7 +52,7 @@ def test_boris_resumed_from_the_moment_shown_retraces_its_own_run_and_forgets_a_
     m.set_chart_window(60.0)  # as the viewer's charts: drawn from the long history
     _run(m, 10.0)
     before_kick = m.theory_radius
-    m.apply({"op": "kick", "dv": 0.5})
+    m.apply(Kick(dv=0.5))
     _run(m, 10.0)
     t_end, end = m.t, m.state.copy()
     assert m.theory_radius > before_kick * 1.05  # the kick widened the circle
@@ -94,7 +95,7 @@ def test_the_tumbling_disk_scrubbed_back_has_that_moments_energy_and_reference_e
 def test_the_hoop_scrubbed_back_across_a_new_start_shows_the_old_start_and_its_ghost():
     m = HoopModel()
     seen = _run(m, 6.0)
-    m.apply({"op": "set", "mode": "mode 2"})  # the runs jump to another start, time goes on
+    m.apply(Set(fields={"mode": "mode 2"}))  # the runs jump to another start, time goes on
     _run(m, 6.0)
     m.scrub(9.0)  # 3 s into the first start
     np.testing.assert_array_equal(m.state, seen[m.t]["state"])
@@ -107,7 +108,7 @@ def test_the_hoop_scrubbed_back_across_a_new_start_shows_the_old_start_and_its_g
 
 def test_a_blow_up_after_the_moment_gone_back_to_has_not_happened():
     m = HoopModel()
-    m.apply({"op": "set", "method": "euler", "dt": 0.05})
+    m.apply(Set(fields={"method": "euler", "dt": 0.05}))
     _run(m, 60.0)
     assert m.paused and m.failure  # explicit Euler's energy grew past the limit
     t_fail = m.failure_error.t

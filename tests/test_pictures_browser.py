@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 from waiting import frames_later, wait_until
 
+from mechviz.viz.model.commands import Kick, Reset, Set
+
 pytestmark = pytest.mark.browser
 
 
@@ -83,20 +85,20 @@ def _choose(app, key: str, x: str, y: str) -> None:
     app.w[f"{key}.plot_y"].value = variables[y].label
 
 
-KICK = {"op": "kick", "dv": 0.4}
-MIX = {"op": "set", "mode": "mix", "amplitude": 1.0}
-MODE_1 = {"op": "set", "mode": "mode 1", "amplitude": 1.5}
+KICK = Kick(dv=0.4)
+MIX = Set(fields={"mode": "mix", "amplitude": 1.0})
+MODE_1 = Set(fields={"mode": "mode 1", "amplitude": 1.5})
 
 
 @pytest.mark.parametrize(
     ("tab", "key", "pair", "name", "start"),
     [
-        ("Cyclotron", "cyclotron", ("r", "V_eff"), "well", ("reset", KICK)),
-        ("Cyclotron", "cyclotron", ("x", "y"), "orbit-from-above", ("reset", KICK)),
+        ("Cyclotron", "cyclotron", ("r", "V_eff"), "well", (Reset(), KICK)),
+        ("Cyclotron", "cyclotron", ("x", "y"), "orbit-from-above", (Reset(), KICK)),
         # mode 1 is unstable at large amplitude: the picture is taken within a few periods
-        ("Hoop", "hoop", ("theta1", "omega1"), "phase-portrait", (MODE_1, "reset")),
-        ("Hoop", "hoop", ("theta1", "theta2"), "configuration-space", (MIX, "reset")),
-        ("Disk", "disk", ("w2", "w3"), "polhode", ("reset",)),
+        ("Hoop", "hoop", ("theta1", "omega1"), "phase-portrait", (MODE_1, Reset())),
+        ("Hoop", "hoop", ("theta1", "theta2"), "configuration-space", (MIX, Reset())),
+        ("Disk", "disk", ("w2", "w3"), "polhode", (Reset(),)),
     ],
 )
 def test_the_plot_shows_the_motion_and_its_exact_curve(

@@ -12,6 +12,7 @@ import pytest
 from mechviz import dynamics
 from mechviz.dynamics import hoop as hp
 from mechviz.viz.model import CyclotronConfig, DiskConfig, HoopConfig
+from mechviz.viz.model.commands import Set
 from mechviz.viz.model.plot import PlotImage, Samples
 from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit
 
@@ -206,7 +207,7 @@ def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_oth
         assert np.abs(app.w["hoop.plot"].image.astype(int) - before).mean() > 1  # drawn anew
 
         disk = app.panels["disk"]
-        app.exhibits["disk"].apply({"op": "set", "mode": "released"})
+        app.exhibits["disk"].apply(Set(fields={"mode": "released"}))
         disk.refresh_plot(force=True)
         released = DiskExhibit.plot_variables(app.exhibits["disk"].config)
         assert (

@@ -17,6 +17,7 @@ from recordings import decode_recording, frame_times
 from mechviz import dynamics
 from mechviz.viz import record as rec
 from mechviz.viz.cli import main
+from mechviz.viz.model.commands import Kick, Set
 from mechviz.viz.scene import EXHIBITS, CyclotronExhibit
 
 # Short runs that still hold enough motion to measure each demo's figures.
@@ -255,15 +256,16 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     demo = results["beam"].demo
     live = CyclotronExhibit(server)
     live.apply(
-        {
-            "op": "set",
-            "method": demo.method,
-            "dt": demo.dt,
-            "vz": demo.initial.vz,
-            "beam": True,
-            "beam_size": demo.initial.beam,
-            "beam_speeds": demo.initial.speeds,
-        }
+        Set(
+            fields={
+                "method": demo.method,
+                "dt": demo.dt,
+                "vz": demo.initial.vz,
+                "beam": True,
+                "beam_size": demo.initial.beam,
+                "beam_speeds": demo.initial.speeds,
+            }
+        )
     )
     rows = list(csv.DictReader(io.StringIO((out / "beam.csv").read_text())))
     names = dynamics.SYSTEMS["cyclotron"].state_names
@@ -421,9 +423,9 @@ def test_viewer_record_toggle_records_the_session_and_offers_the_html(monkeypatc
         recorder.checkbox.value = True  # as if ticked in the browser
         for k in range(40):
             if k == 10:
-                app.enqueue("cyclotron", {"op": "kick", "dv": 0.5})
+                app.enqueue("cyclotron", Kick(dv=0.5))
             if k == 20:
-                app.enqueue("hoop", {"op": "set", "method": "rk4"})
+                app.enqueue("hoop", Set(fields={"method": "rk4"}))
             app.step_frame()
         assert recorder.recording
         recorder.checkbox.value = False

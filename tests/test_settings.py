@@ -19,6 +19,7 @@ import pytest
 
 from mechviz import dynamics
 from mechviz.dynamics import api
+from mechviz.viz.model.commands import Set
 
 T_END = 0.25
 
@@ -134,7 +135,7 @@ def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, meth
     before = ex.config
     if field == "rtol":  # a dropdown in the panel: only the model can be given a bad one
         with pytest.raises(dynamics.SettingError) as err:
-            ex.apply({"op": "set", "method": method, "rtol": number})
+            ex.apply(Set(fields={"method": method, "rtol": number}))
         assert err.value.field == named["viewer"]
     else:
         key = f"{system}.params.{field}" if field in spec.default_params() else f"{system}.{field}"

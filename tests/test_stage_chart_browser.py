@@ -21,6 +21,8 @@ import pytest
 from test_stage_browser import _arrived, _framed, _panel_left
 from waiting import wait_until
 
+from mechviz.viz.model.commands import Set
+
 pytestmark = pytest.mark.browser
 
 SIZES = [(1280, 800), (1920, 1080)]
@@ -122,7 +124,7 @@ def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tm
     _stage(app, page, "Disk")
     ex = app.exhibits["disk"]
     before = _framed(app)
-    app.enqueue("disk", {"op": "set", "mode": "released"})
+    app.enqueue("disk", Set(fields={"mode": "released"}))
     try:
         wait_until(lambda: ex.config.mode == "released", 15, "the release")
         position, target, fov = _arrived(app, before)  # framed again with Poinsot beside
@@ -148,5 +150,5 @@ def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tm
         wait_until(lambda: ex.poinsot.polhode.n_segments > 20, 30, "the polhode drawn")
         _shot(page, f"stage-disk-released-{width}x{height}.png", tmp_path)
     finally:
-        app.enqueue("disk", {"op": "set", "mode": "driven"})
+        app.enqueue("disk", Set(fields={"mode": "driven"}))
         wait_until(lambda: ex.config.mode == "driven", 15, "driven again")

@@ -27,6 +27,7 @@ import browser
 import pytest
 from waiting import wait_until
 
+from mechviz.viz.model.commands import Set
 from mechviz.viz.scene.fields import number_text
 
 pytestmark = pytest.mark.browser
@@ -151,7 +152,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
     def pause() -> float:
         return MAX_PAUSE * rng.random() ** 4
 
-    app.enqueue(CYC, {"op": "set", "method": "boris"})  # a fixed step: the step box shows
+    app.enqueue(CYC, Set(fields={"method": "boris"}))  # a fixed step: the step box shows
     wait_until(lambda: app.exhibits[CYC].config.method == "boris", 20, "boris")
     page.get_by_role("tab", name="Cyclotron").click()
     seen: dict[str, list[float]] = {name: [] for name in BOXES}  # every value in force, in order
@@ -259,7 +260,7 @@ def test_a_stepper_moves_a_number_to_the_next_value_of_its_series(viewer):
     app, page = viewer
     page.get_by_role("tab", name="Cyclotron").click()
     ex = app.exhibits[CYC]
-    app.enqueue(CYC, {"op": "set", "params": {"mass": 1.0}})
+    app.enqueue(CYC, Set(params={"mass": 1.0}))
     wait_until(lambda: ex.config.params["mass"] == 1.0, 20, "mass 1")
     box = _box(page, "Mass m [kg]")
     stepper = box.locator("xpath=following::button[normalize-space()='+'][1]")

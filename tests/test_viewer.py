@@ -26,6 +26,7 @@ from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps
 
 from mechviz.viz import geometry as geo  # noqa: E402
 from mechviz.viz.model import HoopConfig  # noqa: E402
+from mechviz.viz.model.commands import Kick, Reset, Set  # noqa: E402
 from mechviz.viz.scene import DiskExhibit, HoopExhibit  # noqa: E402
 from mechviz.viz.scene.disk import LIFT, P  # noqa: E402
 
@@ -138,7 +139,7 @@ def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
 
 def test_released_disk_is_drawn_with_the_free_body_pose(server):
     ex = DiskExhibit(server)
-    ex.apply({"op": "set", "mode": "released", "follow_cm": False})
+    ex.apply(Set(fields={"mode": "released", "follow_cm": False}))
     for _ in range(40):
         ex.advance(FRAME)
     ex.draw()
@@ -202,7 +203,7 @@ def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
     frames(app, 30)
     assert ex.sim.rtol == 1e-12 and ex.sim.steps > loose_steps  # tighter: more steps, same time
     assert ex.sim.last_step < loose_h
-    app.enqueue("hoop", {"op": "set", "rtol": 3e-7})  # a value off the decades (a demo's)
+    app.enqueue("hoop", Set(fields={"rtol": 3e-7}))  # a value off the decades (a demo's)
     frames(app, 1)
     assert w.value == "3e-7" and "3e-7" in w.options
 
@@ -286,7 +287,7 @@ def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app)
     v = math.hypot(before[3], before[4])
     _expected_state, expected_centre, expected_radius = cy.radial_kick(p, before, 0.5)
     enter(app, "cyclotron.kick", "0.5")
-    app.enqueue("cyclotron", {"op": "kick", "dv": 0.5})
+    app.enqueue("cyclotron", Kick(dv=0.5))
     app.enqueue("app", "pause")
     frames(app, 1)
     assert ex.theory_radius == pytest.approx(math.hypot(v, 0.5), rel=1e-12)
@@ -362,7 +363,7 @@ def test_diverging_euler_pauses_only_the_charge_and_reset_recovers(app):
     frames(app, 5)
     assert ex.t == t_cyc
     assert app.exhibits["hoop"].t > t_hoop
-    app.enqueue("cyclotron", "reset")
+    app.enqueue("cyclotron", Reset())
     frames(app, 3)
     assert not ex.paused and ex.failure is None and ex.t > 0
 
@@ -377,7 +378,7 @@ def test_a_step_beyond_the_stability_limit_pauses_the_hoop_with_the_step_named(s
     assert "rk4" in ex.failure and "dt=0.9" in ex.failure
     title, _body = ex.events[-1]
     assert "Hoop" in title
-    ex.apply("reset")
+    ex.apply(Reset())
     assert not ex.paused and ex.t == 0.0
 
 
@@ -388,22 +389,22 @@ def test_the_step_control_shows_the_stability_limit_theory_gives(app):
     w = app.w["hoop.limit"]
     omega2 = hp.normal_modes(app.exhibits["hoop"].params)[0][1]
     assert f"dt < {2 * math.sqrt(2) / omega2:.4g} s" in w.content
-    app.enqueue("hoop", {"op": "set", "method": "verlet", "dt": 0.01})
+    app.enqueue("hoop", Set(fields={"method": "verlet", "dt": 0.01}))
     frames(app, 1)
     assert f"dt < {2 / omega2:.4g} s" in w.content and "⚠" not in w.content
-    app.enqueue("hoop", {"op": "set", "dt": 0.6})  # beyond 2 / omega_2 = 0.521 s
+    app.enqueue("hoop", Set(fields={"dt": 0.6}))  # beyond 2 / omega_2 = 0.521 s
     frames(app, 1)
     assert "⚠" in w.content and "beyond" in w.content
 
     c = app.w["cyclotron.limit"]
     assert "exact" in c.content  # the default: the exact flow, any step
-    app.enqueue("cyclotron", {"op": "set", "method": "rk4", "dt": 0.05})
-    app.enqueue("cyclotron", {"op": "set", "params": {"field": 4.0}})  # omega = qB/m = 4 rad/s
+    app.enqueue("cyclotron", Set(fields={"method": "rk4", "dt": 0.05}))
+    app.enqueue("cyclotron", Set(params={"field": 4.0}))  # omega = qB/m = 4 rad/s
     frames(app, 1)
     assert f"dt < {2 * math.sqrt(2) / 4.0:.4g} s" in c.content
-    app.enqueue("cyclotron", {"op": "set", "method": "euler"})
+    app.enqueue("cyclotron", Set(fields={"method": "euler"}))
     frames(app, 1)
     assert "Unstable at every dt" in c.content
-    app.enqueue("cyclotron", {"op": "set", "method": "boris"})
+    app.enqueue("cyclotron", Set(fields={"method": "boris"}))
     frames(app, 1)
     assert "any dt" in c.content

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from mechviz.viz.app import MechvizApp
+from mechviz.viz.model.commands import Kick, Set
 from mechviz.viz.scene.hoop import CONFIG_SIZE
 
 # every test here starts the viewer's server
@@ -43,7 +44,7 @@ def _inside(points: np.ndarray, box, margin: float = 1e-5) -> np.ndarray:
 
 
 def _euler(app, key: str, frames: int, frame_dt: float, **settings) -> None:
-    app.exhibits[key].apply({"op": "set", "method": "euler", **settings})
+    app.exhibits[key].apply(Set(fields={"method": "euler", **settings}))
     for _ in range(frames):
         app.step_frame(frame_dt)
         if app.exhibits[key].paused:
@@ -85,7 +86,7 @@ def test_eulers_runaway_in_the_hoops_configuration_space_stays_in_its_square(app
 
 def test_the_released_disks_growing_vectors_are_drawn_up_to_its_edge(app):
     ex = app.exhibits["disk"]
-    ex.apply({"op": "set", "mode": "released"})
+    ex.apply(Set(fields={"mode": "released"}))
     _euler(app, "disk", 1200, 0.1)
     assert float(ex.sample.energy_error[0]) > 1.0  # the energy more than doubled
     arrows = _drawn(app, "disk", ("/vectors",))
@@ -99,7 +100,7 @@ def test_a_kick_that_sends_the_orbit_past_the_edge_still_draws_all_of_it(app):
     """Bounding the drawing is for runaways: a kick of 1 m/s moves the exact circle 1 m off the
     axis with radius sqrt(2) m, beyond the exhibit's box, and every turn of it is drawn."""
     ex = app.exhibits["cyclotron"]
-    ex.apply({"op": "kick", "dv": 1.0})
+    ex.apply(Kick(dv=1.0))
     centre = ex.theory_centre[:2] + ex.origin[:2]
     for _ in range(420):  # a period (2 pi s) and more
         app.step_frame(1 / 60)

@@ -28,6 +28,7 @@ from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps
 from mechviz.bench.frame_cost import measure_frame_cost  # noqa: E402
 from mechviz.viz import geometry as geo  # noqa: E402
 from mechviz.viz.model import CyclotronConfig, HoopConfig  # noqa: E402
+from mechviz.viz.model.commands import Kick, Reset, Set  # noqa: E402
 from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
 from mechviz.viz.scene.disk import P  # noqa: E402
 
@@ -66,7 +67,7 @@ def test_a_new_hoop_start_keeps_the_clock_and_the_count_of_steps(server):
     for _ in range(60):
         ex.advance(FRAME)
     t, steps = ex.t, ex.sim.steps
-    ex.apply({"op": "set", "mode": "mode 2", "amplitude": 0.3})
+    ex.apply(Set(fields={"mode": "mode 2", "amplitude": 0.3}))
     assert ex.t == t and ex.sim.steps == steps and ex.compare.t == t
     np.testing.assert_array_equal(ex.state, hp.mode_state(ex.params, (0.0, 0.3)))
     np.testing.assert_array_equal(ex.ghost_state(), ex.state)  # linear theory from the new start
@@ -80,7 +81,7 @@ def test_the_released_disk_shows_its_principal_axes_about_the_centre_of_mass(ser
     mr2 = p.disk_mass * p.radius**2
     about_a = dk.principal_axes(p)[0] / mr2
     assert f"I1 (red) {about_a[0]:.4g}" in ex.readout()  # driven: about A (0.654 MR²)
-    ex.apply({"op": "set", "mode": "released"})
+    ex.apply(Set(fields={"mode": "released"}))
     moments, axes = dk.principal_axes_cm(p)
     assert "about the centre of mass" in ex.readout()
     assert all(
@@ -95,17 +96,17 @@ def test_the_released_disk_shows_its_principal_axes_about_the_centre_of_mass(ser
 def test_the_seed_row_shows_only_for_the_seed_bead(server):
     ex = DiskExhibit(server)
     assert "5/8 M R ω²" in ex.readout()
-    ex.apply({"op": "set", "params": {"bead_mass": 0.5}})
+    ex.apply(Set(params={"bead_mass": 0.5}))
     assert "5/8" not in ex.readout()
 
 
 def test_a_view_option_does_not_restart_the_released_disk(server):
     ex = DiskExhibit(server)
-    ex.apply({"op": "set", "mode": "released"})
+    ex.apply(Set(fields={"mode": "released"}))
     for _ in range(30):
         ex.advance(FRAME)
     sim, t = ex.sim, ex.t
-    ex.apply({"op": "set", "follow_cm": False})
+    ex.apply(Set(fields={"follow_cm": False}))
     assert ex.sim is sim and ex.t == t
 
 
@@ -253,7 +254,7 @@ def test_the_first_view_and_each_preset_show_their_exhibits_whole_left_of_the_pa
 def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
     """No two labels overlap, nor a label and the chaos map standing in the scene, at any
     preset, over a whole turn of the driven disk (or a tumble of the released one)."""
-    app.exhibits["disk"].apply({"op": "set", "mode": mode})
+    app.exhibits["disk"].apply(Set(fields={"mode": mode}))
     for _ in range(48):  # 3.2 s at 1x: a whole turn of the driven disk (omega = 2 rad/s)
         for _ in range(4):
             app.step_frame()
@@ -320,7 +321,7 @@ def test_the_charge_moves_in_its_effective_potential_under_the_level_of_its_ener
         assert w["r_min"] - 1e-9 <= w["x"][i] <= w["r_max"] + 1e-9
     assert np.nanmin(w["V"]) == pytest.approx(np.nanmax(w["bottom"]), rel=1e-12)  # r0 at the bottom
     p_phi = w["p_phi"]
-    ex.apply({"op": "kick", "dv": 0.5})
+    ex.apply(Kick(dv=0.5))
     assert ex.well()["p_phi"] != pytest.approx(p_phi)  # a kick changes p_phi: a new well
 
 
@@ -343,7 +344,7 @@ def test_a_mode_2_start_stays_on_its_line_in_configuration_space_only_at_small_a
 
 def test_the_released_disk_draws_poinsot_with_the_contact_point_on_the_invariable_plane(server):
     ex = DiskExhibit(server)
-    ex.apply({"op": "set", "mode": "released", "extra_spin": (0.0, 0.0, 0.2)})
+    ex.apply(Set(fields={"mode": "released", "extra_spin": (0.0, 0.0, 0.2)}))
     pc_view = ex.poinsot
     assert pc_view.frame.visible and pc_view.plane_frame.visible
     for _ in range(120):
@@ -359,7 +360,7 @@ def test_the_released_disk_draws_poinsot_with_the_contact_point_on_the_invariabl
     # the contact point, drawn on the ellipsoid, lies in the plane
     contact = centre + P @ pc["contact_space"] * pc_view.scale
     assert (contact - plane_at) @ plane_normal == pytest.approx(0.0, abs=1e-6)
-    ex.apply({"op": "set", "mode": "driven"})
+    ex.apply(Set(fields={"mode": "driven"}))
     assert not pc_view.frame.visible and not pc_view.plane_frame.visible
 
 
@@ -408,19 +409,19 @@ def test_the_tolerance_sets_the_error_the_viewer_shows(server):
 
 def test_a_gyrofrequency_the_frames_cannot_resolve_is_said_so_not_shown_as_an_alias(app):
     # mass 1e-3 kg: omega = 1000 rad/s, the velocity turns tens of radians between samples
-    app.enqueue("cyclotron", {"op": "set", "params": {"mass": 1e-3}})
+    app.enqueue("cyclotron", Set(params={"mass": 1e-3}))
     frames(app, 90)
     ex = app.exhibits["cyclotron"]
     estimate = ex.measured()["gyrofrequency"]
     assert estimate.value is None and "at this frame rate" in estimate.reason
     assert "not resolved (at this frame rate" in ex.readout()
-    app.enqueue("cyclotron", {"op": "set", "params": {"mass": 1.0}})  # 1 rad/s: resolved
+    app.enqueue("cyclotron", Set(params={"mass": 1.0}))  # 1 rad/s: resolved
     frames(app, 240)
     assert ex.measured()["gyrofrequency"].value == pytest.approx(1.0, rel=1e-3)
 
 
 def test_an_adaptive_run_reads_its_steps_per_simulated_second_not_one_frames_count(app):
-    app.enqueue("hoop", {"op": "set", "method": "dop853"})
+    app.enqueue("hoop", Set(fields={"method": "dop853"}))
     frames(app, 60)
     ex = app.exhibits["hoop"]
     rate = ex.sample.steps / ex.t
@@ -433,13 +434,13 @@ def test_a_kick_leaves_a_ghost_of_the_orbit_before_it(app):
     assert not ex.ghost_ring.visible  # no kick yet
     centre, radius = ex.theory_centre.copy(), ex.theory_radius
     enter(app, "cyclotron.kick", "0.5")
-    app.enqueue("cyclotron", {"op": "kick"})
+    app.enqueue("cyclotron", Kick())
     frames(app, 2)
     assert ex.ghost_ring.visible and ex.theory_radius > radius  # a new circle, the old one kept
     np.testing.assert_allclose(ex.ghost_ring.position[:2], centre[:2], atol=1e-6)
     ghost_r = np.hypot(*ex.ghost_ring.points[:, 0, :2].T.astype(float))
     np.testing.assert_allclose(ghost_r, radius, rtol=1e-5)
-    app.enqueue("cyclotron", "reset")
+    app.enqueue("cyclotron", Reset())
     frames(app, 1)
     assert not ex.ghost_ring.visible
 

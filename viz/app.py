@@ -12,24 +12,24 @@ API for other tools (the recorder, the bench)
 ---------------------------------------------
 Exhibits work without the app (:mod:`mechviz.viz.scene` holds them and describes the contract)::
 
-    from mechviz.viz.model import CyclotronConfig
+    from mechviz.viz.model import CyclotronConfig, Kick, Reset, Set  # mechviz.viz.model.commands
     from mechviz.viz.scene import CyclotronExhibit
 
     ex = CyclotronExhibit(server, CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
     ex.advance(1 / 30)                 # simulated seconds; a blow-up pauses it (ex.paused, ex.failure)
     with server.atomic():
         ex.draw()                      # handle assignments only
-    ex.apply({"op": "kick", "dv": 0.5})          # cyclotron: radial kick [m/s], the run goes on
-    ex.apply({"op": "set", "method": "rk4", "dt": 0.02})   # any config field; restarts the run
-    ex.apply({"op": "set", "params": {"field": 2.0}})      # ValueError naming the field if invalid
-    ex.apply("reset")
+    ex.apply(Kick(dv=0.5))                                # cyclotron: radial kick [m/s], the run goes on
+    ex.apply(Set(fields={"method": "rk4", "dt": 0.02}))   # any config field; restarts the run
+    ex.apply(Set(params={"field": 2.0}))                  # ValueError naming the field if invalid
+    ex.apply(Reset())                                     # commands.parse reads one from a dict
     ex.sample, ex.measured(), ex.readout(), ex.chart_data(), ex.camera
 
 The whole app, headless and without its loop thread::
 
     app = MechvizApp(port=0, start_loop=False)   # or MechvizApp(server=my_server, ...)
     app.step_frame()                 # apply queued commands, advance, draw (one frame)
-    app.enqueue("hoop", {"op": "set", "method": "rk4"})   # as the GUI does
+    app.enqueue("hoop", Set(fields={"method": "rk4"}))    # as the GUI does
     app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
     app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
     app.enqueue("app", {"op": "scrub", "value": -10})     # paused, 10 s of the show back
@@ -56,6 +56,7 @@ import numpy as np
 
 from .frames import FrameLog, refresh_frames
 from .live_record import add_record_toggle
+from .model.commands import COMMANDS, Command, refused
 from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
 from .scene.fields import NumberField, ThreadFlag, Typing
@@ -230,9 +231,11 @@ class MechvizApp(Views):
         return (w[-1][1] - w[0][1]) / (w[-1][0] - w[0][0])
 
     # ------------------------------------------------------------------ commands
-    def enqueue(self, target: str, command: Mapping[str, Any] | str | Callable) -> None:
-        """Queue a command for the loop: ``target`` is an exhibit key or ``"app"``; a callable
-        (with target ``"call"``) is run in the loop thread with the app as argument."""
+    def enqueue(self, target: str, command: Command | Mapping[str, Any] | str | Callable) -> None:
+        """Queue a command for the loop: to an exhibit ``target`` a typed one (a dict fails here),
+        to ``"app"`` a dict; a callable (target ``"call"``) runs in the loop thread with the app."""
+        if target in self.exhibits and not isinstance(command, COMMANDS):
+            raise refused(target, COMMANDS, command)
         self.commands.put((target, command))
 
     def _apply_commands(self) -> None:

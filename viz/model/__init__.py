@@ -5,6 +5,7 @@ alone; :mod:`mechviz.viz.scene` draws them.
 """
 
 from .base import ExhibitConfig, ExhibitModel
+from .commands import Command, Kick, Reset, Set
 from .cyclotron import CyclotronConfig, CyclotronModel
 from .disk import DiskConfig, DiskModel
 from .hooks import SystemHooks, by_system
@@ -16,6 +17,7 @@ MODELS: dict[str, type[ExhibitModel]] = by_system((CyclotronModel, DiskModel, Ho
 
 __all__ = [
     "MODELS",
+    "Command",
     "CyclotronConfig",
     "CyclotronModel",
     "DiskConfig",
@@ -24,5 +26,8 @@ __all__ = [
     "ExhibitModel",
     "HoopConfig",
     "HoopModel",
+    "Kick",
+    "Reset",
+    "Set",
     "SystemHooks",
 ]

@@ -7,12 +7,12 @@ draws nothing. The view (:mod:`mechviz.viz.scene`) subclasses it to draw the sce
 the recorder, the notebook and the tests run the model alone. Every model has
 
 - ``config``: a frozen, validated settings dataclass (:class:`ExhibitConfig`); change it with
-  ``apply({"op": "set", field: value, ...})``,
+  ``apply(Set(fields={field: value, ...}))``,
 - ``advance(sim_seconds)`` / ``advance_to(t)``: one compiled ``dynamics`` call per simulation (a
   blow-up pauses the exhibit and queues a message in ``events`` instead of raising);
   ``measure=True`` also samples the energy and error (a chart point) and checks for divergence,
-- ``apply(command)``: ``{"op": "reset"}``, ``{"op": "set", ...}`` and the exhibit's own
-  operations (a kick); an invalid value raises ``ValueError`` naming the field, changing nothing,
+- ``apply(command)``: ``Reset()``, ``Set(...)``, the exhibit's own (``Kick(dv)``), typed values of
+  :mod:`mechviz.viz.model.commands`; an invalid one raises ``ValueError`` naming it, changing nothing,
 - ``state``, ``sample``, ``t``, ``paused``, ``failure``, ``measured()`` (the figures measured
   from the motion, by name, from :mod:`mechviz.dynamics.measure`), ``chart_data()``, ``runs()`` (the
   simulations a recording traces, by role),
@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -36,6 +35,7 @@ import numpy as np
 from mechviz import dynamics
 from mechviz.dynamics import params as _v
 
+from .commands import Command, Reset, Set, refused
 from .history import History, LongHistory, Motion, Ring  # noqa: F401  (re-exported)
 from .hooks import SystemHooks
 from .plot import Curve, Samples, Variable, common_variables
@@ -124,8 +124,8 @@ class ExhibitModel(Rewinding, SystemHooks):
     """Base class: subclasses define ``Config`` (``key`` and ``chart_series`` follow from it),
     ``title``, ``name`` and the hooks
     ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
-    advance), ``measured`` and ``_apply_op`` (own operations). A view learns of a new start from
-    ``_started()``, called at the end of every ``_start``."""
+    advance), ``measured`` and ``_apply_command`` (its own ``commands``). A view learns of a new
+    start from ``_started()``, called at the end of every ``_start``."""
 
     key: ClassVar[str] = ""
     title: ClassVar[str] = ""
@@ -140,6 +140,8 @@ class ExhibitModel(Rewinding, SystemHooks):
     # settings applied to the running exhibit by ``_apply_live`` (a beam added to the run):
     # the clock, the runs and what was given them (a kick) go on
     live_fields: ClassVar[frozenset[str]] = frozenset()
+    # the command classes ``apply`` takes; an exhibit's own are handled by its _apply_command
+    commands: ClassVar[tuple[type, ...]] = (Reset, Set)
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -388,27 +390,25 @@ class ExhibitModel(Rewinding, SystemHooks):
         )
 
     # ------------------------------------------------------------------ commands
-    def apply(self, command: Mapping[str, Any] | str) -> str:
-        """Apply one command; returns a short description. ``ValueError`` leaves all untouched."""
+    def apply(self, command: Command) -> str:
+        """Apply one command (:mod:`mechviz.viz.model.commands`), returning a short description; one
+        it does not take or an invalid value raises ``ValueError`` naming it, changing nothing."""
+        if not isinstance(command, self.commands):
+            raise refused(self.key, self.commands, command)
         self.revision += 1
         if self.scrubbed is not None:  # a change goes on from the moment shown
             self.resume_here()
-        if isinstance(command, str):
-            command = {"op": command}
-        command = dict(command)
-        op = command.pop("op", None)
-        if op == "reset":
-            self.reset()
-            return f"{self.title}: reset"
-        if op == "set":
-            return self.set(**command)
-        return self._apply_op(op, command)
+        return self._apply_command(command)
 
-    def _apply_op(self, op, args: dict) -> str:
-        raise ValueError(f"op must be one of reset, set{self._ops_hint()}; got {op!r}")
-
-    def _ops_hint(self) -> str:
-        return ""
+    def _apply_command(self, command: Command) -> str:
+        """Reset and Set; an exhibit's override handles its own commands and passes on the rest."""
+        match command:
+            case Reset():
+                self.reset()
+                return f"{self.title}: reset"
+            case Set(fields=fields, params=params):
+                return self.set(**fields, **({"params": params} if params else {}))
+        raise refused(self.key, self.commands, command)  # in ``commands`` but handled nowhere
 
     def set(self, **changes) -> str:
         """Change config fields (validated first; the running simulation is kept on error)."""

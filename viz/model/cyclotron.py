@@ -23,6 +23,7 @@ from mechviz.dynamics import measure
 from mechviz.dynamics.registry import CYCLOTRON
 
 from .base import ExhibitConfig, ExhibitModel, Motion, finite_numbers, positive
+from .commands import Command, Kick, Reset, Set
 from .figures import figure, keep
 from .hooks import CHART_COLOURS, demo_value, mark_periods
 from .plot import Curve, well_axes
@@ -108,6 +109,7 @@ class CyclotronModel(ExhibitModel):
     Config = CyclotronConfig
     view_fields = frozenset({"kick"})  # the strength of the next kick: nothing moves yet
     live_fields = frozenset({"beam", "beam_size", "beam_speeds"})
+    commands = (Reset, Set, Kick)
     origin = (-3.95, 1.7, 0.0)
     frame_cost_compare = "boris"
     demo_keys: ClassVar[dict[str, str]] = {
@@ -321,13 +323,10 @@ class CyclotronModel(ExhibitModel):
         return out
 
     # ------------------------------------------------------------------ commands
-    def _ops_hint(self) -> str:
-        return ", kick"
-
-    def _apply_op(self, op, args: dict) -> str:
-        if op != "kick":
-            return super()._apply_op(op, args)
-        dv = finite_numbers("dv", (args.get("dv", self.config.kick),), 1)[0]
+    def _apply_command(self, command: Command) -> str:
+        if not isinstance(command, Kick):
+            return super()._apply_command(command)
+        dv = float(self.config.kick if command.dv is None else command.dv)  # Kick checked it
         self.kick_effects(dv)
         centre, radius = self.theory_centre, self.theory_radius
         return (

@@ -244,7 +244,7 @@ class HoopMapsView:
             return
         angles = m.angles_at(*place)
         if angles is not None:
-            self.panel.send({"op": "set", "mode": "custom", "angles": angles})
+            self.panel.change(mode="custom", angles=angles)
 
     def look_at_map(self, client) -> None:
         """Put ``client``'s camera straight in front of the scene's map."""

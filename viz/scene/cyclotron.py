@@ -19,6 +19,7 @@ import numpy as np
 from mechviz.dynamics import cyclotron as cy
 
 from .. import geometry as geo
+from ..model.commands import Kick
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
 from .base import Exhibit, against_theory, fmt
 
@@ -336,7 +337,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
                 1.0,
                 0.05,
                 c.kick,
-                lambda v: panel.send({"op": "set", "kick": float(v)}),
+                lambda v: panel.change(kick=float(v)),
             )
             kick = gui.add_button(
                 "Kick", hint="Radial velocity kick: the predicted circle moves at once"
@@ -355,17 +356,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
                 1,
                 c.beam_size,
                 # a whole number goes as one; 2.5 is refused by the config, named
-                lambda v: panel.send(
-                    {"op": "set", "beam_size": int(v) if float(v).is_integer() else v}
-                ),
+                lambda v: panel.change(beam_size=int(v) if float(v).is_integer() else v),
             )
 
         def give_kick(_event) -> None:
             panel.app.typing.left()  # the person left any box typed in (text not entered stays so)
-            panel.send({"op": "kick"})  # dv: the kick in force when the command is applied
+            panel.send(Kick())  # dv: the kick in force when the command is applied
 
         kick.on_click(give_kick)
-        panel.on(beam, lambda v: panel.send({"op": "set", "beam": bool(v)}))
+        panel.on(beam, lambda v: panel.change(beam=bool(v)))
         panel.plot(
             "p_φ is conserved, so r moves in the well V_eff(r) = (p_φ − qBr²/2)²/2mr² at the level "
             "E⊥ (dashed), between the turning points, at the gyrofrequency; its bottom is "

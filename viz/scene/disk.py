@@ -579,15 +579,15 @@ class DiskExhibit(DiskModel, Exhibit):
                 0.5,
                 0.01,
                 float(c.extra_spin[2]),
-                lambda v: panel.send({"op": "set", "extra_spin": (0.0, 0.0, float(v))}),
+                lambda v: panel.change(extra_spin=(0.0, 0.0, float(v))),
                 current=lambda: float(self.config.extra_spin[2]),
                 hint="Spin about the disk normal added at release: seeds the tumble",
             )
             follow = panel.put(
                 "follow_cm", gui.add_checkbox("Follow centre of mass", initial_value=c.follow_cm)
             )
-        panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
-        panel.on(follow, lambda v: panel.send({"op": "set", "follow_cm": bool(v)}))
+        panel.on(mode, lambda v: panel.change(mode=v))
+        panel.on(follow, lambda v: panel.change(follow_cm=bool(v)))
         panel.plot(
             "Released: the angular velocity in the body's principal frame about the centre of "
             "mass (axes 1, 2, 3 from the smallest moment to the largest). E and \\|L\\| are "

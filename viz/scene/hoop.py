@@ -350,14 +350,14 @@ class HoopExhibit(HoopModel, Exhibit):
                 2.5,
                 0.05,
                 float(c.amplitude),
-                lambda v: panel.send({"op": "set", "amplitude": float(v)}),
+                lambda v: panel.change(amplitude=float(v)),
             )
 
             def angle(k):
                 def apply(x):
                     angles = list(self.config.angles)  # read in the loop thread when applied
                     angles[k] = x
-                    panel.send({"op": "set", "mode": "custom", "angles": tuple(angles)})
+                    panel.change(mode="custom", angles=tuple(angles))
 
                 return apply
 
@@ -371,7 +371,7 @@ class HoopExhibit(HoopModel, Exhibit):
                     lo=-3.14,
                     hi=3.14,
                 )
-        panel.on(mode, lambda v: panel.send({"op": "set", "mode": v}))
+        panel.on(mode, lambda v: panel.change(mode=v))
         panel.plot(
             "Mode 1 (θ1 = θ2) is exactly a pendulum, θ'' = −ω₁² sin θ with ω₁ = √(g/2a): its "
             "phase portrait (θ1, θ1') stays on the orbit of its energy, inside the separatrix "

@@ -31,6 +31,7 @@ import numpy as np
 
 from mechviz import dynamics
 
+from ..model.commands import Command, Reset, Set
 from ..model.plot import PlotImage
 from ..warm import warm_method
 from .base import LOG_FLOOR
@@ -98,8 +99,12 @@ class Panel:
         )
         self._plot_time = -math.inf  # when it was drawn (time.monotonic)
 
-    def send(self, command) -> None:
+    def send(self, command: Command) -> None:
         self.app.enqueue(self.key, command)
+
+    def change(self, **fields) -> None:
+        """Send the settings ``fields`` by name (:class:`mechviz.viz.model.commands.Set`)."""
+        self.send(Set(fields=fields))
 
     def on(self, widget, fn: Callable[[Any], None]) -> None:
         """``on_update`` that ignores the app's own widget syncs and passes the new value."""
@@ -296,7 +301,7 @@ class Panel:
                     f"params.{name}",
                     label,
                     value,
-                    lambda x, n=name: self.send({"op": "set", "params": {n: x}}),
+                    lambda x, n=name: self.send(Set(params={n: x})),
                     current=lambda n=name: self.exhibit.config.params[n],
                     lo=lo,
                     hi=hi,
@@ -317,7 +322,7 @@ class Panel:
                 "dt",
                 "Step dt [s]",
                 ex.config.dt,
-                lambda x: self.send({"op": "set", "dt": x}),
+                lambda x: self.change(dt=x),
                 current=lambda: self.exhibit.config.dt,
                 check=self.check_step,
             )
@@ -339,10 +344,10 @@ class Panel:
                 # compile the method's kernels here, in the callback's thread, not in a frame
                 if v in names:
                     warm_method(system_name, v)
-                self.send({"op": "set", field: v})
+                self.change(**{field: v})
 
             self.on(method, choose)
-            self.on(rtol, lambda v: self.send({"op": "set", "rtol": float(v)}))
+            self.on(rtol, lambda v: self.change(rtol=float(v)))
             if compare:
                 cmp_ = self.put(
                     "compare_method",
@@ -356,11 +361,11 @@ class Panel:
                 def choose_cmp(v):
                     if v != "none":
                         warm_method(system_name, v)
-                    self.send({"op": "set", "compare_method": None if v == "none" else v})
+                    self.change(compare_method=None if v == "none" else v)
 
                 self.on(cmp_, choose_cmp)
             reset = gui.add_button(f"Reset {ex.title.lower()}", icon=self.viser.Icon.REFRESH)
-            reset.on_click(lambda _: self.send("reset"))
+            reset.on_click(lambda _: self.send(Reset()))
         self.show_step_controls()
 
     PLOT_INTERVAL = 0.2  # s between updates of the plot: drawing new axes costs frames
