@@ -44,7 +44,9 @@ def _arrived(app, before=None):
         return (
             framed is not None
             and framed is not before
+            # both: a camera reported between the two would frame another view
             and np.allclose(cam.look_at, framed[1], atol=1e-3)
+            and np.allclose(cam.position, framed[0], atol=1e-3)
             and cam
         )
 
