@@ -222,8 +222,9 @@ class Views:
         holds the chart; the chart right of the exhibit, below it, or below the words'
         column (:data:`LAYOUTS`). The first layout in which the exhibit fills
         :data:`STAGE_SHARE` of the height or :data:`STAGE_WIDTH` of the free width, the chart
-        at least :data:`CHART_MIN` CSS px, is taken; failing that, the one where the exhibit
-        is largest. ``px``: page pixels per CSS pixel of the labels (:func:`css_scale`);
+        at least :data:`CHART_MIN` CSS px, is taken; failing that, one where the exhibit
+        fits (its chart then smaller), else one whose chart has its least size, the exhibit
+        largest. ``px``: page pixels per CSS pixel of the labels (:func:`css_scale`);
         ``bar_px``: page pixels on the right the words keep clear of (the panel's width by
         default: a minimized panel keeps its title bar at the top right, where the band of
         words runs)."""
@@ -297,7 +298,10 @@ class Views:
             result = (pos, look, (*words, layout, free_css), chart)
             if fits and roomy:  # the first layout (in the order of preference) that fits
                 return result
-            rank = (roomy, size)
+            # none both: the exhibit keeping its figure comes first (it is what the stage is
+            # for; a slow page reports fewer pixels and its words then take more room), then
+            # a chart of its full size, then the larger exhibit
+            rank = (fits, roomy, size)
             if best is None or rank > best[0]:
                 best = (rank, result)
         return best[1]
