@@ -116,8 +116,6 @@ def _end_with_parent(parent: int) -> None:
 
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
     signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
-    if hasattr(signal, "pthread_sigmask"):  # none held (a parent's mask is not inherited)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
     with contextlib.suppress(OSError, AttributeError):  # Linux: the kernel tells us
         import ctypes
 
