@@ -70,7 +70,7 @@ def test_home_shows_the_three_left_of_the_panel_down_the_page(viewer):
     position, target, fov = _camera(app, "Home")
     shares, spans = {}, []
     for key, ex in app.exhibits.items():
-        share, x0, x1, y0, y1 = framing.share(*ex.bounds, position, target, *PAGE, fov)
+        share, x0, x1, y0, y1 = framing.share(*ex.home_bounds, position, target, *PAGE, fov)
         assert 0 <= x0 and x1 <= free and 0 <= y0 and y1 <= PAGE[1], key
         shares[key] = share
         spans.append((y0, y1))

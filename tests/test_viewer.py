@@ -300,11 +300,36 @@ def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app)
 
 
 def test_the_first_view_a_page_gets_is_the_all_preset_with_everything_in_it(app):
-    """The camera a page starts with is the *All* preset of the finished scene (the hoop's chaos
-    map, built with the GUI, included): a page the app is slow to reframe shows it as is."""
+    """The camera a page starts with is the *All* preset of the finished scene (every exhibit
+    as it shows at home): a page the app is slow to reframe shows it as is."""
     position, look_at = app.camera_preset("All")
     np.testing.assert_allclose(app.server.initial_camera.position, position, atol=1e-9)
     np.testing.assert_allclose(app.server.initial_camera.look_at, look_at, atol=1e-9)
+
+
+def test_the_hoops_maps_stand_on_its_stage_only_and_a_stage_set_by_the_app_is_not_echoed(app):
+    """At home the configuration square and the chaos map are hidden (between the disk and the
+    hoop they would read as part of neither) and the home view is framed without them; on the
+    hoop's stage they are shown. The panel's Stage buttons follow the stage the app sets
+    without sending it back as a click of their own (a second stage command would frame the
+    page again, over a camera moved since, such as "Look at the map")."""
+    hoop = app.exhibits["hoop"]
+    square, chaos = hoop.config_space.node, hoop.maps_view.node
+    try:
+        for view, shown in (("Hoop", True), ("Home", False), ("Disk", False), ("Hoop", True)):
+            app.enqueue("app", {"op": "stage", "value": view})
+            frames(app, 1)
+            assert (square.visible, chaos.visible) == (shown, shown), view
+            assert app.w["stage"].value == view
+            assert app.commands.empty(), f"{view}: the Stage buttons sent the stage back"
+        home_lo, home_hi = hoop.home_bounds
+        lo = hoop.bounds[0]
+        assert home_lo[0] > lo[0] + 1.0  # the square, left of the hoop, left out at home
+        centre = hoop.world(hoop.maps_view.centre_local)  # the chaos map's, above the square
+        assert not np.all((centre >= home_lo) & (centre <= home_hi))
+    finally:
+        app.enqueue("app", {"op": "stage", "value": "Home"})
+        frames(app, 1)
 
 
 def test_each_stage_frames_its_exhibit_to_three_quarters_of_the_height_or_the_free_width(app):

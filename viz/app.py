@@ -180,15 +180,13 @@ class MechvizApp(Views):
             self._draw()
         server.on_client_connect(self._frame_new_client)
         self.gui = None
-        self.recorder = (
-            None  # the Record toggle's mechviz.viz.live_record.LiveRecorder (with the GUI)
-        )
+        self.recorder = None  # the Record toggle's live_record.LiveRecorder (with the GUI)
         if gui:
             self._build_gui()
             self._show_stage()  # the labels the GUI's parts made (the hoop's maps), for home
             self._update_gui(force=True)
             self.recorder = add_record_toggle(self)
-        # after the GUI: the hoop's chaos map (built with its tab) is part of the home view
+        # after the GUI, which builds the hoop's maps: every node is in place to be framed
         server.initial_camera.position, server.initial_camera.look_at = self.camera_preset("Home")
         if start_loop:
             self.start()
@@ -496,6 +494,8 @@ class MechvizApp(Views):
 
         @w["stage"].on_click
         def _(event) -> None:
+            if self._syncing:  # viser calls this for the loop's own setting of the value too
+                return
             self.typing.left()  # the person moved on: a box typed in shows the value in force
             self.enqueue("app", {"op": "stage", "value": w["stage"].value, "client": event.client})
 

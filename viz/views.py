@@ -34,7 +34,7 @@ LABEL_INK_PX = 11.0  # px of "Hg" ink per unit of font_screen_scale (viser 1.1.1
 TEXT_SHARE = 0.03  # of a page's height: the least any text of a stage is, on a 1080-px page
 STAGE_TEXT = 3.0  # font_screen_scale on a stage: 33 px of ink, 3.06 % of 1080 px
 HOME_TEXT = 1.0  # the labels other than the titles at home (the titles: TITLE_TEXT)
-TITLE_TEXT = 1.0
+TITLE_TEXT = 1.6  # 18 px of ink: a name to choose by from across a room
 LINE_PX = 14.5  # px a line of a label takes (text and box) per unit of scale (measured 14.2)
 CHAR_PX = 5.6  # px a character of the figures takes, on average, per unit of scale (5.35)
 COLUMN_CHARS = 20  # characters a line of the figures' column holds
@@ -190,7 +190,9 @@ class Views:
         name, its stage (:meth:`stage_view`); *Top* looks straight down on the exhibit on
         stage (at home, on the cyclotron's orbit)."""
         if view in (HOME, "All"):  # the three boxes' own corners: their pictures
-            corners = np.concatenate([framing.corners(*ex.bounds) for ex in self.exhibits.values()])
+            corners = np.concatenate(
+                [framing.corners(*ex.home_bounds) for ex in self.exhibits.values()]
+            )
             direction = np.subtract(OVERVIEW[1], OVERVIEW[0])
             return framing.frame_points(
                 corners, direction, width, height, fill=OVERVIEW_FILL, panel_px=panel_px

@@ -148,12 +148,14 @@ class HoopMapsView:
         self.panel, self.exhibit = panel, exhibit
         self.app = panel.app
         self.maps = HoopMaps()
+        self.shown = True  # in the scene (the hoop's stage), as :meth:`show` sets it
+        self._inside = False  # the start's marker falls on the map
         atexit.register(self.maps.close)
         self.chaos_picture, self.stability_picture = MapPicture(), MapPicture()
         self._shown: tuple | None = None  # what the pictures show
         # the step the stability picture marks: (amplitude [rad], dt [s], its place (u, v))
         self.step_drawn: tuple[float, float, tuple[float, float]] | None = None
-        gui, viser = panel.gui, panel.viser
+        gui = panel.gui
         with gui.add_folder("Chaos map", expand_by_default=False):
             panel.put(
                 "chaos_note",
@@ -166,8 +168,6 @@ class HoopMapsView:
                     "there.**</small>"
                 ),
             )
-            look = gui.add_button("Look at the map", icon=viser.Icon.MAP)
-            look.on_click(lambda event: self.look_at_map(event.client))
             self.chaos_image = panel.put("chaos_map", gui.add_image(self._blank(), format="png"))
             self.status = panel.put("maps_status", gui.add_markdown(""))
         with gui.add_folder("Stability map", expand_by_default=False):
@@ -246,6 +246,13 @@ class HoopMapsView:
         if angles is not None:
             self.panel.change(mode="custom", angles=angles)
 
+    def look_clicked(self, event) -> None:
+        """The panel's "Look at the map": the hoop on stage, the camera in front of its map."""
+        # the map stands on the hoop's stage only: the stage first, then the camera on the map
+        # (the app applies the two in this order, in its own thread)
+        self.app.enqueue("app", {"op": "stage", "value": self.exhibit.name, "client": event.client})
+        self.app.enqueue("call", lambda _app: self.look_at_map(event.client))
+
     def look_at_map(self, client) -> None:
         """Put ``client``'s camera straight in front of the scene's map."""
         if client is None:
@@ -310,7 +317,14 @@ class HoopMapsView:
         half = 0.04 * MAP_SIZE
         cross = [[c - (half, 0, 0), c + (half, 0, 0)], [c - (0, 0, half), c + (0, 0, half)]]
         self.marker.points = np.asarray(cross, np.float32)
-        self.marker.visible = 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+        self._inside = 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+        self.marker.visible = self.shown and self._inside
+
+    def show(self, shown: bool) -> None:
+        """The map in the scene (``shown``, on the hoop's stage) or not (at home)."""
+        self.shown = shown
+        self.node.visible = shown
+        self.marker.visible = shown and self._inside
 
     @staticmethod
     def _blank() -> np.ndarray:

@@ -165,6 +165,12 @@ class Exhibit(ExhibitModel):
     def _extent(self):  # pragma: no cover - abstract
         raise NotImplementedError
 
+    @property
+    def home_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box [m] of what the exhibit shows at home, beside the others (what it draws
+        only on stage left out, :meth:`on_stage`): by default :attr:`bounds`."""
+        return self.bounds
+
     def key_figures(self) -> list[tuple[str, str]]:
         """``(name, value)`` of the figures presentation mode shows large beside the exhibit:
         the time and the relative energy error, and each exhibit's own measured figures."""

@@ -50,6 +50,8 @@ class ConfigurationSpace:
 
     def __init__(self, scene, root: str, centre: np.ndarray, cap: int, bounded: bool) -> None:
         self.scene, self.root, self.centre = scene, root, centre
+        # one frame over the square's nodes, so that the stage shows or hides them together
+        self.node = scene.add_frame(root, show_axes=False)
         half = 0.5 * CONFIG_SIZE
         c = [(-half, 0, -half), (half, 0, -half), (half, 0, half), (-half, 0, half)]
         frame = np.array([[c[k], c[(k + 1) % 4]] for k in range(4)], np.float32)
@@ -271,6 +273,22 @@ class HoopExhibit(HoopModel, Exhibit):
             self.cmp_trail.push(bead[2])
             self.cmp_trail.draw()
 
+    def on_stage(self, shown: bool) -> None:
+        # the configuration square and the chaos map explain the hoop on its own stage; at
+        # home, between the disk and the hoop, they would read as part of neither
+        if hasattr(self, "config_space"):
+            self.config_space.node.visible = shown
+        maps = getattr(self, "maps_view", None)  # the maps come with the GUI
+        if maps is not None:
+            maps.show(shown)
+
+    @property
+    def home_bounds(self):
+        a = self.params.radius  # the hoop, its gallows and a comparison run beside it
+        right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
+        lo, hi = (-1.1 * a, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
+        return self.origin + np.asarray(lo, float), self.origin + np.asarray(hi, float)
+
     def _extent(self):
         a = self.params.radius
         right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
@@ -340,6 +358,9 @@ class HoopExhibit(HoopModel, Exhibit):
     # ------------------------------------------------------------------ GUI
     def build_panel(self, panel) -> None:
         gui, c = panel.gui, self.config
+        # at the top of the tab: the way to the chaos map (its pictures are further down)
+        look = gui.add_button("Look at the map", icon=panel.viser.Icon.MAP)
+        look.on_click(lambda event: self.maps_view.look_clicked(event))
         panel.readout_and_chart(compare=True)
         with gui.add_folder("Initial condition"):
             mode = panel.put("mode", gui.add_dropdown("Mode", options=MODES, initial_value=c.mode))
