@@ -97,3 +97,28 @@ def test_a_parsed_command_applies_as_the_typed_one():
     b.apply(parse({"op": "kick", "dv": 0.5}))
     assert a.theory_radius == b.theory_radius and (a.state == b.state).all()
     assert CyclotronModel.commands == (Reset, Set, Kick)
+
+
+def test_a_view_observing_a_model_is_told_of_every_change_and_of_none_after_it_stops():
+    """The viewer draws an exhibit when its model says it changed (``observe``), not by
+    comparing counters every frame: a command, an advance and a reset each tell the observer;
+    a refused command tells nothing; once stopped, nothing more."""
+    hoop = HoopModel()
+    told: list[int] = []
+    stop = hoop.observe(lambda model: told.append(model.revision))
+    hoop.apply(Set(fields={"amplitude": 0.3}))
+    assert told and told[-1] == hoop.revision
+    n = len(told)
+    hoop.advance(0.05)
+    assert len(told) > n
+    n = len(told)
+    with pytest.raises(ValueError):
+        hoop.apply(Set(fields={"method": "no such method"}))
+    assert len(told) == n
+    hoop.apply(Reset())
+    assert len(told) > n
+    stop()
+    n = len(told)
+    hoop.advance(0.05)
+    hoop.apply(Reset())
+    assert len(told) == n

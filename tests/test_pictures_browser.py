@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from waiting import frames_later, wait_until
 
+from mechviz.viz.app_commands import Present
 from mechviz.viz.model.commands import Kick, Reset, Set
 
 pytestmark = pytest.mark.browser
@@ -125,7 +126,7 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
     """Presentation mode on the released disk: the inertia ellipsoid on its invariable plane,
     the polhode and herpolhode, the principal axes about the centre of mass."""
     app, page = viewer
-    app.enqueue("app", {"op": "present", "value": "Disk"})
+    app.enqueue("app", Present("Disk"))
     try:
         wait_until(lambda: app.presenting is not None, 20, "presentation mode")
         # the still shows the construction, not presentation mode's key figures beside it
@@ -146,4 +147,4 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
         _save(img[y0 : int(y1) + 20, x0 : int(x1) + 20], "poinsot", tmp_path)
         assert "Poinsot" in app.exhibits["disk"].poinsot.names[0].text
     finally:
-        app.enqueue("app", {"op": "present", "value": "Off"})
+        app.enqueue("app", Present("Off"))

@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 from waiting import scaled, wait_until
 
+from mechviz.viz.app_commands import Present, Stage
+
 pytestmark = pytest.mark.browser
 
 SIZES = [(1280, 800), (1920, 1080), (800, 1000)]
@@ -88,7 +90,7 @@ def test_each_stage_shows_its_exhibit_alone_large_with_words_for_a_hall(viewer, 
     if button.is_visible():
         button.click()
     else:  # a narrow page has its panel minimized on a stage: what the button sends
-        app.enqueue("app", {"op": "stage", "value": view})
+        app.enqueue("app", Stage(view))
     wait_until(lambda: app.stage == key, 15, f"the {view} stage")
     position, target, fov = _arrived(app, before)
     for other, ex in app.exhibits.items():
@@ -143,7 +145,7 @@ def test_home_shows_the_three_again(viewer):
     if button.is_visible():
         button.click()
     else:  # a narrow page has its panel minimized on a stage: what the button sends
-        app.enqueue("app", {"op": "stage", "value": "Home"})
+        app.enqueue("app", Stage("Home"))
     wait_until(lambda: app.stage is None, 15, "home")
     _arrived(app, before)
     assert all(ex.nodes[ex.root].visible for ex in app.exhibits.values())
@@ -154,7 +156,7 @@ def test_escape_leaves_presentation_mode(viewer):
     app, page, (width, _) = viewer
     if width != 1280:
         pytest.skip("once is enough")
-    app.enqueue("app", {"op": "present", "value": "Hoop"})
+    app.enqueue("app", Present("Hoop"))
     wait_until(lambda: app.presenting == "hoop", 15, "presentation mode")
     button = page.get_by_role("button", name="Leave presentation (Esc)")
     button.wait_for(timeout=scaled(15) * 1000)

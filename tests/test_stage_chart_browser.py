@@ -21,6 +21,7 @@ import pytest
 from test_stage_browser import _arrived, _framed, _panel_left
 from waiting import wait_until
 
+from mechviz.viz.app_commands import Pause, Play, Scrub, Stage
 from mechviz.viz.model.commands import Set
 
 pytestmark = pytest.mark.browser
@@ -41,7 +42,7 @@ def _stage(app, page, view: str):
     if button.is_visible():
         button.click()
     else:
-        app.enqueue("app", {"op": "stage", "value": view})
+        app.enqueue("app", Stage(view))
     from mechviz.viz.views import VIEWS
 
     wait_until(lambda: app.stage == VIEWS[view], 15, f"the {view} stage")
@@ -100,17 +101,17 @@ def test_each_stage_shows_its_chart_beside_the_exhibit_readable_and_up_to_date(
     assert min(sizes) >= 0.03 * min(height, 1080), sizes
     assert "[" in chart.y_title.text and chart.x_title.text == "t [s]"  # axes with units
     # the line ends at the exhibit's time: paused, then taken back by Rewind
-    app.enqueue("app", "pause")
+    app.enqueue("app", Pause())
     wait_until(lambda: not app.playing, 15, "the pause")
     wait_until(lambda: abs(_last_time(chart) - ex.t) < 1e-3, 15, "the chart at the time shown")
     t_paused = ex.t
-    app.enqueue("app", {"op": "scrub", "value": -0.5})
+    app.enqueue("app", Scrub(-0.5))
     wait_until(lambda: ex.t < t_paused - 0.1, 15, "the exhibit taken back")
     wait_until(
         lambda: abs(_last_time(chart) - ex.t) < 1e-3, 15, "the chart at the moment gone back to"
     )
     print(f"  paused at {t_paused:.2f} s, rewound to {ex.t:.2f} s: the chart ends there")
-    app.enqueue("app", "play")
+    app.enqueue("app", Play())
     wait_until(lambda: app.playing, 15, "play")
     wait_until(lambda: _last_time(chart) > ex.t - 0.2, 15, "the chart going on")
     _shot(page, f"stage-{key}-{width}x{height}.png", tmp_path)

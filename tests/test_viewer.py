@@ -25,6 +25,7 @@ viser = pytest.importorskip("viser")
 from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps.py)
 
 from mechviz.viz import geometry as geo  # noqa: E402
+from mechviz.viz.app_commands import Camera, Pause, Play, ResetAll, Speed, Stage, Step  # noqa: E402
 from mechviz.viz.model import HoopConfig  # noqa: E402
 from mechviz.viz.model.commands import Kick, Reset, Set  # noqa: E402
 from mechviz.viz.scene import DiskExhibit, HoopExhibit  # noqa: E402
@@ -152,16 +153,16 @@ def test_released_disk_is_drawn_with_the_free_body_pose(server):
 # --------------------------------------------------------------------------- GUI commands
 def test_pause_stops_simulated_time_and_step_advances_one_frame(app):
     frames(app, 3)
-    app.enqueue("app", {"op": "pause"})
+    app.enqueue("app", Pause())
     frames(app, 1)
     t = {k: ex.t for k, ex in app.exhibits.items()}
     frames(app, 10)
     assert {k: ex.t for k, ex in app.exhibits.items()} == t
     assert app.w["play"].label == "Play"
-    app.enqueue("app", "step")
+    app.enqueue("app", Step())
     frames(app, 1)
     assert app.exhibits["disk"].t == pytest.approx(t["disk"] + FRAME * app.speed)
-    app.enqueue("app", "play")
+    app.enqueue("app", Play())
     frames(app, 2)
     assert app.exhibits["disk"].t > t["disk"] + FRAME
     assert app.w["play"].label == "Pause"
@@ -190,7 +191,7 @@ def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
     w = app.w["hoop.rtol"]
     # down to 1e-12, the tightest a run is still compared with the reference run at
     assert w.value == "1e-9" and w.options[0] == "1e-3" and w.options[-1] == "1e-12"
-    app.enqueue("app", {"op": "speed", "value": 10.0})  # 1/6 s per frame: several steps each
+    app.enqueue("app", Speed(10.0))  # 1/6 s per frame: several steps each
     app.w["hoop.method"].value = "dop853"
     w.value = "1e-6"  # fires the callback as a browser would
     frames(app, 30)
@@ -210,7 +211,7 @@ def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
 
 def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
     frames(app, 20)
-    app.enqueue("app", "pause")
+    app.enqueue("app", Pause())
     frames(app, 1)
     ex = app.exhibits["cyclotron"]
     sim, state, t, config = ex.sim, ex.sample.state.copy(), ex.t, ex.config
@@ -221,7 +222,7 @@ def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
     _title, body = app.messages[-1]
     assert body.startswith("Mass m [kg] must lie between") and "got -2" in body  # named as labelled
     assert app.w["cyclotron.params.mass"].value == "1"  # the widget shows the value in use
-    app.enqueue("app", "play")
+    app.enqueue("app", Play())
     frames(app, 2)
     assert ex.t > t
 
@@ -270,11 +271,11 @@ def test_a_value_that_cannot_be_taken_is_refused_by_name_and_the_box_springs_bac
 
 def test_real_time_factor_says_nothing_while_paused_and_starts_afresh_after_a_reset(app):
     frames(app, 10)
-    app.enqueue("app", "pause")
-    app.enqueue("app", "reset")
+    app.enqueue("app", Pause())
+    app.enqueue("app", ResetAll())
     frames(app, 3)
     assert app.real_time_factor is None
-    app.enqueue("app", "play")
+    app.enqueue("app", Play())
     frames(app, 5)
     assert app.real_time_factor > 0
 
@@ -288,12 +289,12 @@ def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app)
     _expected_state, expected_centre, expected_radius = cy.radial_kick(p, before, 0.5)
     enter(app, "cyclotron.kick", "0.5")
     app.enqueue("cyclotron", Kick(dv=0.5))
-    app.enqueue("app", "pause")
+    app.enqueue("app", Pause())
     frames(app, 1)
     assert ex.theory_radius == pytest.approx(math.hypot(v, 0.5), rel=1e-12)
     np.testing.assert_allclose(ex.theory_centre[:2], expected_centre[:2], atol=1e-12)
     assert ex._ring_radius == pytest.approx(expected_radius, rel=1e-9)
-    app.enqueue("app", "play")
+    app.enqueue("app", Play())
     frames(app, 120)
     st = ex.sample.state[0]
     assert math.hypot(*(st[:2] - expected_centre[:2])) == pytest.approx(expected_radius, rel=1e-9)
@@ -317,7 +318,7 @@ def test_the_hoops_maps_stand_on_its_stage_only_and_a_stage_set_by_the_app_is_no
     square, chaos = hoop.config_space.node, hoop.maps_view.node
     try:
         for view, shown in (("Hoop", True), ("Home", False), ("Disk", False), ("Hoop", True)):
-            app.enqueue("app", {"op": "stage", "value": view})
+            app.enqueue("app", Stage(view))
             frames(app, 1)
             assert (square.visible, chaos.visible) == (shown, shown), view
             assert app.w["stage"].value == view
@@ -328,8 +329,23 @@ def test_the_hoops_maps_stand_on_its_stage_only_and_a_stage_set_by_the_app_is_no
         centre = hoop.world(hoop.maps_view.centre_local)  # the chaos map's, above the square
         assert not np.all((centre >= home_lo) & (centre <= home_hi))
     finally:
-        app.enqueue("app", {"op": "stage", "value": "Home"})
+        app.enqueue("app", Stage("Home"))
         frames(app, 1)
+
+
+def test_the_app_takes_only_its_own_typed_commands_and_refuses_the_rest_at_once(app):
+    """A dict, an op's name or an exhibit's command sent to the app is refused in the caller's
+    thread, naming the commands it takes, and nothing is queued; a typed one is applied."""
+    for wrong in ({"op": "pause"}, "pause", Kick(dv=0.1)):
+        with pytest.raises(ValueError, match="an app command must be one of Play, Pause"):
+            app.enqueue("app", wrong)
+        assert app.commands.empty()
+    app.enqueue("app", Pause())
+    frames(app, 1)
+    assert not app.playing
+    app.enqueue("app", Play())
+    frames(app, 1)
+    assert app.playing
 
 
 def test_each_stage_frames_its_exhibit_to_three_quarters_of_the_height_or_the_free_width(app):
@@ -365,7 +381,7 @@ def test_each_stage_frames_its_exhibit_to_three_quarters_of_the_height_or_the_fr
     position, target = app.camera_preset("Top")  # straight down on the orbit
     down = np.subtract(target, position)
     assert down[2] < 0 and np.hypot(*down[:2]) < 0.02 * abs(down[2])
-    app.enqueue("app", {"op": "camera", "view": "Hoop"})  # no client: nothing to move, no error
+    app.enqueue("app", Camera("Hoop"))  # no client: nothing to move, no error
     frames(app, 1)
 
 

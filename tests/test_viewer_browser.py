@@ -16,6 +16,8 @@ import pytest
 from playwright.sync_api import Error as PlaywrightError
 from waiting import frames_later, scaled, wait_until
 
+from mechviz.viz.app_commands import Present, Theme
+
 pytestmark = pytest.mark.browser
 
 
@@ -119,7 +121,7 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
     """The hoop presented alone (panel collapsed, key figures large), with the lighting of the
     screenshot before; saved as docs/img/viewer-present.png by ``make screenshots``."""
     app, page, _ = viewer
-    app.enqueue("app", {"op": "present", "value": "Hoop"})
+    app.enqueue("app", Present("Hoop"))
     try:
         wait_until(lambda: app.presenting == "hoop", 20, "presentation mode")
         page.get_by_role("button", name="Pause").wait_for(state="hidden", timeout=scaled(20) * 1000)
@@ -144,7 +146,7 @@ def test_readme_screenshot_of_presentation_mode(viewer, tmp_path):
         page.screenshot(path=str(screenshot), timeout=scaled(30) * 1000)
         assert screenshot.stat().st_size > 20_000
     finally:
-        app.enqueue("app", {"op": "present", "value": "Off"})
+        app.enqueue("app", Present("Off"))
         page.get_by_role("button", name="Pause").wait_for(timeout=scaled(20) * 1000)
 
 
@@ -201,11 +203,11 @@ def test_a_chart_still_draws_its_lines_after_a_resize_and_three_tab_switches(vie
 
 def test_the_dark_theme_keeps_the_three_exhibits_visible(viewer, tmp_path):
     app, page, _ = viewer
-    app.enqueue("app", {"op": "theme", "value": "dark"})
+    app.enqueue("app", Theme("dark"))
     try:
         img = browser.wait_for_pixels(page, _three_exhibits, timeout_s=90)
         assert np.median(img[:40, :400]) < 60  # the page behind the scene is dark
         screenshot = browser.picture_path("viewer-dark.png", tmp_path)
         page.screenshot(path=str(screenshot), timeout=scaled(30) * 1000)
     finally:
-        app.enqueue("app", {"op": "theme", "value": "light"})
+        app.enqueue("app", Theme("light"))

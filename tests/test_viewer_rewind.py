@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from viewer_steps import FRAME
 
+from mechviz.viz.app_commands import Play
+
 # every test here starts the viewer's server (the app fixture: tests/conftest.py)
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("warm_viewer")]
 
@@ -45,7 +47,7 @@ def test_rewinding_pauses_and_shows_every_exhibit_that_far_back_then_play_goes_o
     assert np.linalg.norm(moved - charge) > 0.5
     assert app.w["rewind"].value == "-2.5"
     # Play: on from the moment shown, the clock included
-    app.enqueue("app", {"op": "play"})
+    app.enqueue("app", Play())
     app.step_frame(FRAME)
     assert app.playing and app.w["rewind"].value == "0"
     for key, ex in app.exhibits.items():
@@ -60,7 +62,7 @@ def test_back_to_zero_and_play_goes_on_from_where_it_paused(app):
     t0 = app.exhibits["hoop"].t
     enter(app, "-1")
     enter(app, "0")
-    app.enqueue("app", {"op": "play"})
+    app.enqueue("app", Play())
     app.step_frame(FRAME)
     assert app.exhibits["hoop"].t == pytest.approx(t0 + FRAME, abs=1e-9)
 

@@ -27,6 +27,7 @@ from viewer_steps import FRAME, enter, frames  # noqa: E402  (tests/viewer_steps
 
 from mechviz.bench.frame_cost import measure_frame_cost  # noqa: E402
 from mechviz.viz import geometry as geo  # noqa: E402
+from mechviz.viz.app_commands import Present, Stage, Theme  # noqa: E402
 from mechviz.viz.model import CyclotronConfig, HoopConfig  # noqa: E402
 from mechviz.viz.model.commands import Kick, Reset, Set  # noqa: E402
 from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit  # noqa: E402
@@ -181,7 +182,7 @@ def test_the_theme_switch_darkens_the_page_and_the_floor(app):
     app.w["theme"].value = "dark"
     frames(app, 1)
     assert app.theme == "dark" and tuple(app.grid.plane_color) == geo.BACKGROUNDS["dark"]
-    app.enqueue("app", {"op": "theme", "value": "sepia"})
+    app.enqueue("app", Theme("sepia"))
     frames(app, 1)
     assert app.theme == "dark" and "Theme must be one of light, dark" in app.messages[-1][1]
 
@@ -260,7 +261,7 @@ def test_no_two_labels_overlap_at_any_preset_while_the_disk_turns(app, mode):
             app.step_frame()
         for view in ("Home", "Cyclotron", "Disk", "Hoop", "Top"):
             # Top looks down on the exhibit on stage: the cyclotron's orbit
-            app.enqueue("app", {"op": "stage", "value": "Cyclotron" if view == "Top" else view})
+            app.enqueue("app", Stage("Cyclotron" if view == "Top" else view))
             app.step_frame()
             camera = app.camera_preset(view)
             boxes = [
@@ -289,7 +290,7 @@ def test_a_stage_shows_one_exhibit_alone_with_every_label_a_thirtieth_of_a_1080_
     from mechviz.viz.views import LABEL_INK_PX
 
     nodes = app.scene_nodes()
-    app.enqueue("app", {"op": "stage", "value": "Hoop"})
+    app.enqueue("app", Stage("Hoop"))
     frames(app, 1)
     assert app.stage == "hoop" and nodes["/hoop"].visible
     assert not nodes["/disk"].visible and not nodes["/cyclotron"].visible
@@ -301,10 +302,10 @@ def test_a_stage_shows_one_exhibit_alone_with_every_label_a_thirtieth_of_a_1080_
     words = app.stage_label
     assert words.visible and "ω1" in words.text and "theory" in words.text and "t " in words.text
     assert words.font_screen_scale * LABEL_INK_PX >= 0.03 * 1080
-    app.enqueue("app", {"op": "present", "value": "Disk"})
+    app.enqueue("app", Present("Disk"))
     frames(app, 1)
     assert app.presenting == app.stage == "disk" and app.leave_panel.visible
-    app.enqueue("app", {"op": "present", "value": "Off"})  # what Escape and the button send
+    app.enqueue("app", Present("Off"))  # what Escape and the button send
     frames(app, 1)
     assert app.stage is None and app.presenting is None and not app.leave_panel.visible
     assert all(nodes[f"/{k}"].visible for k in app.exhibits)

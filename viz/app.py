@@ -31,8 +31,8 @@ The whole app, headless and without its loop thread::
     app.step_frame()                 # apply queued commands, advance, draw (one frame)
     app.enqueue("hoop", Set(fields={"method": "rk4"}))    # as the GUI does
     app.w["hoop.dt"].value = "2.5e-2"; app.number_fields["hoop.dt"].submit()  # typed, Enter
-    app.enqueue("app", {"op": "pause"})                   # play / pause / toggle / step / speed / reset
-    app.enqueue("app", {"op": "scrub", "value": -10})     # paused, 10 s of the show back
+    app.enqueue("app", Pause())      # viz.app_commands: Play, Step, Speed, ResetAll, Stage, ...
+    app.enqueue("app", Scrub(-10))   # paused, 10 s of the show back
     app.exhibits["hoop"]; app.common_folder  # GUI folder where extra controls (Record) can go
     app.frame_hooks.append(fn)       # fn(app) runs in the loop thread after each frame's draw
     app.frame_log.since(0)           # (first, start [s], cost [ms], loop CPU [ms]) per frame
@@ -54,6 +54,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from . import app_commands as ac
 from .frames import FrameLog, refresh_frames
 from .live_record import add_record_toggle
 from .model.commands import COMMANDS, Command, refused
@@ -119,8 +120,9 @@ class MechvizApp(Views):
         self.frame_hooks: list[Callable[[MechvizApp], None]] = []
         self.frame_log = FrameLog()  # start time and cost of the last frames (status line, bench)
         self._rtf_window: deque = deque(maxlen=240)
-        self._drawn: dict[str, int] = {}  # exhibit key -> revision last drawn
-        self._shown: dict[str, tuple[int, int]] = {}  # key -> (revision, history version) shown
+        self._to_draw: set[str] = set()  # exhibits changed since drawn (they tell: observe)
+        self._to_show: set[str] = set()  # exhibits changed since their readout was shown
+        self._charted: dict[str, int] = {}  # exhibit key -> history version its chart shows
         self._cost_text = ""
         self.stage: str | None = None  # the exhibit on stage; None: home, the three together
         self.presenting: str | None = None  # the exhibit on stage with the panel minimized
@@ -172,8 +174,10 @@ class MechvizApp(Views):
             )
             for key, cls in EXHIBITS.items()
         }
-        for ex in self.exhibits.values():
+        for key, ex in self.exhibits.items():
             ex.chart_window = self.chart_window  # the charts draw on the long history
+            ex.observe(lambda _model, key=key: (self._to_draw.add(key), self._to_show.add(key)))
+        self._to_draw.update(self.exhibits)
         self.panels: dict[str, Panel] = {}
         self._build_stage()
         with server.atomic():
@@ -229,11 +233,15 @@ class MechvizApp(Views):
         return (w[-1][1] - w[0][1]) / (w[-1][0] - w[0][0])
 
     # ------------------------------------------------------------------ commands
-    def enqueue(self, target: str, command: Command | Mapping[str, Any] | str | Callable) -> None:
-        """Queue a command for the loop: to an exhibit ``target`` a typed one (a dict fails here),
-        to ``"app"`` a dict; a callable (target ``"call"``) runs in the loop thread with the app."""
+    def enqueue(self, target: str, command: Command | ac.AppCommand | Callable) -> None:
+        """Queue a command for the loop: to an exhibit ``target`` one of its typed commands
+        (:mod:`mechviz.viz.model.commands`), to ``"app"`` one of :mod:`mechviz.viz.app_commands`;
+        a callable (target ``"call"``) runs in the loop thread with the app. Anything else is
+        refused here, in the caller's thread."""
         if target in self.exhibits and not isinstance(command, COMMANDS):
             raise refused(target, COMMANDS, command)
+        if target == "app" and not isinstance(command, ac.APP_COMMANDS):
+            raise ac.refused(command)
         self.commands.put((target, command))
 
     def _apply_commands(self) -> None:
@@ -245,11 +253,9 @@ class MechvizApp(Views):
             try:
                 if target == "call":
                     command(self)
-                    self._drawn.clear()  # it may have changed anything: draw all again
+                    self._to_draw.update(self.exhibits)  # it may have changed anything
                 elif target == "app":
-                    self._apply_app(
-                        dict(command) if not isinstance(command, str) else {"op": command}
-                    )
+                    self._apply_app(command)
                 else:
                     ex = self.exhibits[target]
                     ex.apply(command)
@@ -265,66 +271,57 @@ class MechvizApp(Views):
                 else:
                     self.notify("Invalid value", str(exc), color="red")
 
-    def _apply_app(self, cmd: dict) -> None:
-        op = cmd.get("op")
-        if op in ("play", "pause", "toggle"):
-            playing = {"play": True, "pause": False, "toggle": not self.playing}[op]
-            if playing != self.playing:
-                self._rtf_window.clear()  # a pause is not a slow-down
-            if playing:
-                self.rewind_control.resume()  # scrubbed back: on from the moment shown
-            self.playing = playing
-        elif op == "step":
-            self.rewind_control.resume()
-            self.playing = False
-            self._advance(self.speed * self.frame_dt, measure_all=True)
-        elif op == "speed":
-            lo, hi = SPEEDS
-            try:
-                v = parse_number("Speed [×]", cmd["value"], lo, hi)
-            finally:
-                self._show_speed()  # the box shows the speed in force (springs back if refused)
-            self.speed = v
-            self._show_speed()
-            self._rtf_window.clear()
-        elif op == "reset":
-            for ex in self.exhibits.values():
-                ex.reset()
-            self.sim_time = 0.0
-            self._rtf_window.clear()  # the clock went back: the old samples say nothing now
-            self.rewind_control.forget()
-        elif op == "scrub":
-            self.rewind_control.scrub(cmd.get("value"))
-        elif op == "camera":
-            self._move_camera(cmd.get("client"), cmd["view"])
-        elif op == "stage":
-            self._set_stage(cmd.get("value"), cmd.get("client"))
-        elif op == "reframe":  # a page changed shape (or has just connected)
-            view = "Home" if self.stage is None else self.exhibits[self.stage].name
-            self._move_camera(cmd.get("client"), view)
-        elif op == "chart_window":
-            v = cmd.get("value")
-            if v not in CHART_WINDOWS.values():
-                raise ValueError(
-                    f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {v!r}"
-                )
-            self.chart_window = float(v)
-            for ex in self.exhibits.values():
-                ex.set_chart_window(self.chart_window)
-            self._shown.clear()
-        elif op == "present":
-            self._present(cmd.get("value"), cmd.get("client"))
-        elif op == "theme":
-            if cmd.get("value") not in GRIDS:
-                raise ValueError(
-                    f"Theme must be one of {', '.join(GRIDS)}, got {cmd.get('value')!r}"
-                )
-            self._apply_theme(cmd["value"])
-        else:
-            raise ValueError(
-                "app op must be play, pause, toggle, step, speed, reset, scrub, camera, stage, "
-                f"reframe, chart_window, present or theme; got {op!r}"
-            )
+    def _apply_app(self, cmd: ac.AppCommand) -> None:
+        match cmd:
+            case ac.Play() | ac.Pause() | ac.Toggle():
+                playing = {ac.Play: True, ac.Pause: False, ac.Toggle: not self.playing}[type(cmd)]
+                if playing != self.playing:
+                    self._rtf_window.clear()  # a pause is not a slow-down
+                if playing:
+                    self.rewind_control.resume()  # scrubbed back: on from the moment shown
+                self.playing = playing
+            case ac.Step():
+                self.rewind_control.resume()
+                self.playing = False
+                self._advance(self.speed * self.frame_dt, measure_all=True)
+            case ac.Speed(value):
+                try:
+                    v = parse_number("Speed [×]", value, *SPEEDS)
+                finally:
+                    self._show_speed()  # the box shows the speed in force (springs back if refused)
+                self.speed = v
+                self._show_speed()
+                self._rtf_window.clear()
+            case ac.ResetAll():
+                for ex in self.exhibits.values():
+                    ex.reset()
+                self.sim_time = 0.0
+                self._rtf_window.clear()  # the clock went back: the old samples say nothing now
+                self.rewind_control.forget()
+            case ac.Scrub(value):
+                self.rewind_control.scrub(value)
+            case ac.Camera(view, client):
+                self._move_camera(client, view)
+            case ac.Stage(value, client):
+                self._set_stage(value, client)
+            case ac.Reframe(client):  # a page changed shape (or has just connected)
+                view = "Home" if self.stage is None else self.exhibits[self.stage].name
+                self._move_camera(client, view)
+            case ac.ChartWindow(value):
+                if value not in CHART_WINDOWS.values():
+                    raise ValueError(
+                        f"Chart window must be one of {', '.join(CHART_WINDOWS)}, got {value!r}"
+                    )
+                self.chart_window = float(value)
+                for ex in self.exhibits.values():
+                    ex.set_chart_window(self.chart_window)
+                self._charted.clear()
+            case ac.Present(value, client):
+                self._present(value, client)
+            case ac.Theme(value):
+                if value not in GRIDS:
+                    raise ValueError(f"Theme must be one of {', '.join(GRIDS)}, got {value!r}")
+                self._apply_theme(value)
         if self.gui is not None:
             self._sync_play_button()
 
@@ -382,9 +379,9 @@ class MechvizApp(Views):
         """Draw the exhibits whose state changed since they were last drawn (while paused a
         frame pushes nothing)."""
         for key, ex in self.exhibits.items():
-            if self._drawn.get(key) != ex.revision:
+            if key in self._to_draw:
+                self._to_draw.discard(key)  # before: a change while drawing is drawn next frame
                 ex.draw()
-                self._drawn[key] = ex.revision
         self._draw_stage_chart()
 
     def _loop(self) -> None:
@@ -444,12 +441,12 @@ class MechvizApp(Views):
                 gui,
                 "Speed [×]",
                 self.speed,
-                read=lambda text: self.enqueue("app", {"op": "speed", "value": text}),
+                read=lambda text: self.enqueue("app", ac.Speed(text)),
                 current=lambda: self.speed,
                 hint="Simulated seconds per real second",
                 **self.field_hooks(),
                 track=(SPEEDS[0], SPEEDS[1], 0.1),
-                track_apply=lambda x: self.enqueue("app", {"op": "speed", "value": x}),
+                track_apply=lambda x: self.enqueue("app", ac.Speed(x)),
             )
             w["speed"], w["speed_track"] = self.speed_field.box, self.speed_field.track
             self.number_fields["speed"] = self.speed_field
@@ -468,36 +465,34 @@ class MechvizApp(Views):
                 initial_value=self.theme,
                 hint="Light or dark page; the scene's colours read on both (also on a projector)",
             )
-        self._on(w["theme"], lambda v: self.enqueue("app", {"op": "theme", "value": v}))
+        self._on(w["theme"], lambda v: self.enqueue("app", ac.Theme(v)))
 
         @w["present"].on_update
         def _(event) -> None:
             if not self._syncing:
-                self.enqueue(
-                    "app", {"op": "present", "value": w["present"].value, "client": event.client}
-                )
+                self.enqueue("app", ac.Present(w["present"].value, event.client))
 
         self._on(
             w["chart_window"],
-            lambda v: self.enqueue("app", {"op": "chart_window", "value": CHART_WINDOWS.get(v, v)}),
+            lambda v: self.enqueue("app", ac.ChartWindow(CHART_WINDOWS.get(v, v))),
         )
-        w["play"].on_click(lambda _: self._click({"op": "toggle"}))
-        w["step"].on_click(lambda _: self._click({"op": "step"}))
-        w["reset"].on_click(lambda _: self._click({"op": "reset"}))
+        w["play"].on_click(lambda _: self._click(ac.Toggle()))
+        w["step"].on_click(lambda _: self._click(ac.Step()))
+        w["reset"].on_click(lambda _: self._click(ac.ResetAll()))
 
         @w["view"].on_click
         def _(event) -> None:
             view = w["view"].value
             if view == "Frame":  # the view in force, framed again
                 view = HOME if self.stage is None else self.exhibits[self.stage].name
-            self.enqueue("app", {"op": "camera", "view": view, "client": event.client})
+            self.enqueue("app", ac.Camera(view, event.client))
 
         @w["stage"].on_click
         def _(event) -> None:
             if self._syncing:  # viser calls this for the loop's own setting of the value too
                 return
             self.typing.left()  # the person moved on: a box typed in shows the value in force
-            self.enqueue("app", {"op": "stage", "value": w["stage"].value, "client": event.client})
+            self.enqueue("app", ac.Stage(w["stage"].value, event.client))
 
         self._build_leave()
 
@@ -569,16 +564,17 @@ class MechvizApp(Views):
             if not (force or k == slot):
                 continue
             ex = self.exhibits[key]
-            shown = self._shown.get(key)
-            if not force and shown == (ex.revision, ex.chart_version()):
+            charted = self._charted.get(key)
+            if not force and key not in self._to_show and charted == ex.chart_version():
                 continue  # nothing new to show (e.g. paused)
+            self._to_show.discard(key)
             self.w[f"{key}.readout"].content = ex.readout()
             if key == self.stage:
                 self._show_figures()
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or shown is None or shown[1] != ex.chart_version():
+            if force or charted != ex.chart_version():
                 chart = self.w[f"{key}.chart"]
                 data = ex.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
@@ -586,7 +582,7 @@ class MechvizApp(Views):
                     self.panels[key].keep_time_axis(
                         "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._shown[key] = (ex.revision, ex.chart_version())
+            self._charted[key] = ex.chart_version()
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -11,6 +11,7 @@ paused, and nothing is lost.
 
 from __future__ import annotations
 
+from .app_commands import Scrub
 from .model.rewind import SECONDS
 from .scene.fields import NumberField
 from .scene.panel import parse_number
@@ -33,7 +34,7 @@ class RewindControl:
             gui,
             LABEL,
             0.0,
-            read=lambda text: app.enqueue("app", {"op": "scrub", "value": text}),
+            read=lambda text: app.enqueue("app", Scrub(text)),
             current=lambda: -self.back,
             **app.field_hooks(),
             hint=(
@@ -42,7 +43,7 @@ class RewindControl:
                 "0 goes back to where it paused."
             ),
             track=(-SECONDS, 0.0, 0.1),
-            track_apply=lambda x: app.enqueue("app", {"op": "scrub", "value": x}),
+            track_apply=lambda x: app.enqueue("app", Scrub(x)),
         )
         app.w["rewind"], app.w["rewind_track"] = self.field.box, self.field.track
         app.number_fields["rewind"] = self.field

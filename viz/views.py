@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from .app_commands import Present, Reframe
 from .model.base import LOG_FLOOR
 from .scene import EXHIBITS, framing
 from .scene.stage_chart import StageChart, min_width
@@ -176,9 +177,9 @@ class Views:
             size = page_size(client)
             if shapes.get(client.client_id) != size:
                 shapes[client.client_id] = size
-                self.enqueue("app", {"op": "reframe", "client": client})
+                self.enqueue("app", Reframe(client))
 
-        self.enqueue("app", {"op": "reframe", "client": client})
+        self.enqueue("app", Reframe(client))
 
     # ------------------------------------------------------------------ cameras
     def camera_preset(
@@ -402,7 +403,7 @@ class Views:
             np.allclose(a, b) for a, b in zip(bounds, framed, strict=True)
         ):
             self._framed_bounds = bounds
-            self.enqueue("app", {"op": "reframe"})
+            self.enqueue("app", Reframe())
         self.charts[self.stage].update(self.chart_window, self.playing)
 
     # ------------------------------------------------------------------ the stage
@@ -493,7 +494,7 @@ class Views:
 
         def leave(_event) -> None:
             if self.presenting is not None:
-                self.enqueue("app", {"op": "present", "value": "Off"})
+                self.enqueue("app", Present("Off"))
 
         gui.add_command(
             "Leave presentation", description="Back home, the panel open", hotkey="escape"

@@ -16,7 +16,7 @@ the recorder, the notebook and the tests run the model alone. Every model has
 - ``state``, ``sample``, ``t``, ``paused``, ``failure``, ``measured()`` (the figures measured
   from the motion, by name, from :mod:`mechviz.dynamics.measure`), ``chart_data()``, ``runs()`` (the
   simulations a recording traces, by role),
-- ``revision``: bumped by every change; while unchanged, a view would show the same thing,
+- ``observe(callback)``: ``callback(model)`` after every change (:mod:`.observed`); ``revision`` counts them,
 - ``plot_variables(config)``, ``plot_curves(config, x, y, samples)``, ``pictures(config)``
   and ``default_plot(config)``: what a plot of any variable against any other and a recording's
   pictures draw (:mod:`mechviz.viz.model.plot`); ``plot_samples()`` the main run's samples over the
@@ -259,7 +259,7 @@ class ExhibitModel(Rewinding, SystemHooks):
         self._advance(lambda sim: sim.advance_to(max(t, sim.t)), measure, t - self.t)
 
     def _advance(self, move, measure: bool, shown: float) -> None:
-        self.revision += 1
+        self.changed()
         steps_before = self.sim.steps
         for sim in self.simulations():
             try:
@@ -317,7 +317,7 @@ class ExhibitModel(Rewinding, SystemHooks):
         self.chart_window = float(seconds)
         self.history.clear()
         self.trace.clear()
-        self.revision += 1
+        self.changed()
 
     def _record(self) -> None:
         self.long_history.keep(self.t, self._chart_values(), force=self.paused)
@@ -395,10 +395,11 @@ class ExhibitModel(Rewinding, SystemHooks):
         it does not take or an invalid value raises ``ValueError`` naming it, changing nothing."""
         if not isinstance(command, self.commands):
             raise refused(self.key, self.commands, command)
-        self.revision += 1
         if self.scrubbed is not None:  # a change goes on from the moment shown
             self.resume_here()
-        return self._apply_command(command)
+        done = self._apply_command(command)
+        self.changed()  # after: a refused command changed nothing, so nothing to draw anew
+        return done
 
     def _apply_command(self, command: Command) -> str:
         """Reset and Set; an exhibit's override handles its own commands and passes on the rest."""
@@ -411,8 +412,7 @@ class ExhibitModel(Rewinding, SystemHooks):
         raise refused(self.key, self.commands, command)  # in ``commands`` but handled nowhere
 
     def set(self, **changes) -> str:
-        """Change config fields (validated first; the running simulation is kept on error)."""
-        self.revision += 1
+        """Change config fields (validated first; the run is kept on error); ``apply`` notifies."""
         fields = {f.name for f in dataclasses.fields(self.config)}
         for name in changes:
             if name not in fields:
@@ -480,7 +480,7 @@ class ExhibitModel(Rewinding, SystemHooks):
         raise NotImplementedError
 
     def reset(self) -> None:
-        self.revision += 1
+        self.changed()
         self._start()
 
     def _reset_common(self) -> None:

@@ -351,7 +351,7 @@ class CyclotronModel(ExhibitModel):
             }
         for sim in self.simulations():
             sim.jump(np.array([cy.radial_kick(p, s, dv)[0] for s in sim.state]))
-        self.revision += 1
+        self.changed()
         self._sample = self._compare_sample = None
         self._begin_segment()
         return out

@@ -210,7 +210,7 @@ class HoopModel(ExhibitModel):
         s0 = self.config.initial_state()
         for sim in self.simulations():
             sim.jump(s0)
-        self.revision += 1
+        self.changed()
         self._sample = self._compare_sample = None
         self._jumped()
         self.forget_figures()

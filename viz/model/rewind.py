@@ -20,6 +20,7 @@ import numpy as np
 from mechviz.dynamics import snapshot as snap
 
 from .history import Ring
+from .observed import Observed
 
 SECONDS = 60.0  # s of the show kept
 RATE = 60.0  # rows per second of the show at most (the viewer's frame rate)
@@ -100,7 +101,7 @@ class Rewind:
         self._last = self.clock
 
 
-class Rewinding:
+class Rewinding(Observed):
     """What an exhibit's model (:class:`mechviz.viz.model.base.ExhibitModel`) gets to go back in its run:
     ``scrub(seconds_back)`` shows the runs as they were that long ago in the show (the
     simulations themselves are put back, so everything drawn and read out from them, ``t`` first,
@@ -136,7 +137,7 @@ class Rewinding:
             self.rewind.add(sims, force=True)
         self.scrubbed = self.rewind.restore(sims, seconds_back)
         self._sample = self._compare_sample = None
-        self.revision += 1
+        self.changed()
         self._rewound()
         return self.scrubbed
 
@@ -154,7 +155,7 @@ class Rewinding:
         err = self.failure_error
         if err is not None and err.t > t:  # the blow-up lies after the moment gone back to
             self.paused, self.failure, self.failure_error = False, None, None
-        self.revision += 1
+        self.changed()
         self._rewound()
 
     def _timed_samples(self) -> list:

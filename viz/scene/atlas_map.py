@@ -18,6 +18,7 @@ import atexit
 import numpy as np
 
 from .. import geometry as geo
+from ..app_commands import Stage
 from ..model.atlas_map import (
     CHAOS_DURATION,
     CHAOS_METHOD,
@@ -250,7 +251,7 @@ class HoopMapsView:
         """The panel's "Look at the map": the hoop on stage, the camera in front of its map."""
         # the map stands on the hoop's stage only: the stage first, then the camera on the map
         # (the app applies the two in this order, in its own thread)
-        self.app.enqueue("app", {"op": "stage", "value": self.exhibit.name, "client": event.client})
+        self.app.enqueue("app", Stage(self.exhibit.name, event.client))
         self.app.enqueue("call", lambda _app: self.look_at_map(event.client))
 
     def look_at_map(self, client) -> None:
