@@ -12,8 +12,9 @@ ensemble, so that load on a shared machine falls on both alike:
 - ``rk4``: fixed steps of the product's RK4 step, generated
   (:data:`~mechviz.dynamics.integrators.kernels.RK4`), and of the hand-written one it replaced;
 - ``taylor``: Taylor's method (:func:`~mechviz.dynamics.integrators.taylor.run_taylor_with`, one
-  driver) with the hand-written expansion or the generated one, at the order the product uses
-  (the product uses the generated one on the free body, the hand-written ones elsewhere).
+  driver) with the hand-written expansion (:data:`.handwritten.EXPANDS`) or the generated one,
+  at the order the product uses (the product uses the generated ones on the free body and the
+  hoop).
   (The product's charge takes its steps in closed form, :mod:`~mechviz.dynamics.integrators.
   taylor_linear`; its expansion is compared all the same.)
 
@@ -98,7 +99,6 @@ def _calls(problem, members: int, tol: float) -> dict[str, tuple[Call, Call]]:
     Y0 = ensemble(problem, members)
     t_end = problem.t_end
     n_fixed = 2000  # RK4 steps of a call, over a tenth of the span
-    hand_expand = taylor.EXPANDS[sys_id][0]
     return {
         "rhs": (
             _dop853(handwritten.RHS[sys_id], Y0, p, t_end, tol),
@@ -109,7 +109,7 @@ def _calls(problem, members: int, tol: float) -> dict[str, tuple[Call, Call]]:
             _rk4(kernels.RK4[sys_id], Y0, p, 0.1 * t_end / n_fixed, n_fixed),
         ),
         "taylor series": (
-            _taylor(hand_expand, taylor.N_ROWS, sys_id, Y0, p, t_end, tol),
+            _taylor(handwritten.EXPANDS[sys_id], taylor.N_ROWS, sys_id, Y0, p, t_end, tol),
             _taylor(*generated_expand(eq), sys_id, Y0, p, t_end, tol),
         ),
     }

@@ -1,8 +1,10 @@
-"""The hand-written compiled right-hand sides and RK4 steps that the generated ones replaced.
+"""The hand-written compiled right-hand sides, RK4 steps and Taylor expansions that the
+generated ones replaced.
 
 The product's right-hand sides and classical RK4 steps are generated from the equations written
 once (:mod:`mechviz.dynamics.codegen`; :data:`mechviz.dynamics.integrators.kernels.RHS` and
-``RK4``). These are the forms written by hand before, kept for two uses: the generated-cost
+``RK4``; the hoop's Taylor recurrences, :mod:`mechviz.dynamics.integrators.taylor`). These are
+the forms written by hand before, kept for two uses: the generated-cost
 benchmark (:mod:`.generated_cost`) times the product's forms against them, and the tests check
 the generated forms against them to round-off (an independent writing of the same equations).
 The peers (:mod:`.peers`, :mod:`.fast_peers`) call the scalar forms (``*_acceleration``,
@@ -24,6 +26,7 @@ import math
 
 from mechviz.dynamics._jit import njit
 from mechviz.dynamics.ids import CYCLOTRON, FREE_BODY, HOOP
+from mechviz.dynamics.integrators import taylor
 
 
 # --------------------------------------------------------------------------- the charge
@@ -197,6 +200,117 @@ def free_rk4_step(y, p, h):
     y[5] = a5 + c * (b5 + 2.0 * (c5 + d5) + e5)
     y[6] = a6 + c * (b6 + 2.0 * (c6 + d6) + e6)
     return 4
+
+
+# --------------------------------------------------------------------------- Taylor series
+# The hoop's hand-written Taylor recurrences, replaced by those generated from its mass matrix's
+# system (:mod:`mechviz.dynamics.codegen.series`). Its sums may be reassociated (the order of a
+# Cauchy product's terms is arbitrary) and contracted, as the generated ones'.
+@njit(fastmath={"reassoc", "contract"})
+def hoop_expand(A, p, order):
+    """Taylor coefficients of the hoop and bead (:func:`mechviz.dynamics.codegen.equations.hoop`),
+    in the convention of :func:`mechviz.dynamics.integrators.taylor.run_taylor_with` (14 rows): with
+    ``u = th1 - th2``, ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``,
+    ``r2 = sin(u) w1^2 - (g/a) sin th2``, the accelerations solve the mass-matrix system
+    ``(2M + m) w1' + m cos(u) w2' = r1``, ``cos(u) w1' + w2' = r2``.
+
+    The series are taken of that system rather than of its solved form (the quotients by
+    ``det = 2M + m - m cos(u)^2``): order ``k`` of each line is the order-``k`` accelerations
+    times the matrix at the step's start, plus the products of the higher orders of ``cos u``
+    with the lower orders of the accelerations, so order ``k`` is one 2x2 solve with the matrix
+    inverted once per step. That takes two Cauchy products per order (``cos(u) w2'``,
+    ``cos(u) w1'``) where the quotients took four and the square ``cos(u)^2``: a fifth fewer
+    multiply-adds a step.
+
+    Per order three loops, each accumulating several independent sums (the sums are chains of
+    dependent additions; interleaving them keeps the floating-point units busy): the three
+    sine/cosine pairs; the squares ``w2^2``, ``w1^2`` (over half the terms, by symmetry); the
+    products with ``sin u`` and ``cos u``.
+    """
+    M, m, ga = p[0], p[1], p[3] / p[2]
+    m11 = 2.0 * M + m
+    mg = (M + m) * ga
+    # rows 0-3: th1, th2, w1, w2
+    SU, CU, S1, C1, S2, C2, Q1, Q2, A1, A2 = range(4, 14)
+    i11 = i12 = i21 = i22 = 0.0  # the inverse of the matrix at the step's start
+    for k in range(order):
+        if k == 0:
+            s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
+            s2, c2 = math.sin(A[1, 0]), math.cos(A[1, 0])
+            A[S1, 0], A[C1, 0], A[S2, 0], A[C2, 0] = s1, c1, s2, c2
+            su = s1 * c2 - c1 * s2  # sin(th1 - th2): two library calls fewer per step
+            cu = c1 * c2 + s1 * s2
+            A[SU, 0] = su
+            A[CU, 0] = cu
+            inv_det = 1.0 / (m11 - m * cu * cu)
+            i11, i12, i21, i22 = inv_det, -m * cu * inv_det, -cu * inv_det, m11 * inv_det
+        else:
+            su = cu = s1 = c1 = s2 = c2 = 0.0
+            for j in range(1, k + 1):
+                t1 = A[2, j - 1]  # j th1^[j] = w1^[j-1]: th1' = w1
+                t2 = A[3, j - 1]
+                tu = t1 - t2
+                i = k - j
+                su += tu * A[CU, i]
+                cu += tu * A[SU, i]
+                s1 += t1 * A[C1, i]
+                c1 += t1 * A[S1, i]
+                s2 += t2 * A[C2, i]
+                c2 += t2 * A[S2, i]
+            inv = 1.0 / k
+            A[SU, k] = su * inv
+            A[CU, k] = -cu * inv
+            A[S1, k] = s1 * inv
+            A[C1, k] = -c1 * inv
+            A[S2, k] = s2 * inv
+            A[C2, k] = -c2 * inv
+        # squares: (uu)^[k] = 2 sum_{j < k/2} u_j u_(k-j) (+ u_(k/2)^2 for even k)
+        q1 = q2 = 0.0
+        for j in range((k + 1) // 2):
+            i = k - j
+            q1 += A[3, j] * A[3, i]
+            q2 += A[2, j] * A[2, i]
+        q1 *= 2.0
+        q2 *= 2.0
+        if k % 2 == 0:
+            h = k // 2
+            q1 += A[3, h] * A[3, h]
+            q2 += A[2, h] * A[2, h]
+        A[Q1, k] = q1
+        A[Q2, k] = q2
+        # the terms j = 1 ... k, which use only lower orders of the squares and accelerations
+        s1 = s2 = n1 = n2 = 0.0
+        for j in range(1, k + 1):
+            i = k - j
+            su = A[SU, j]
+            cu = A[CU, j]
+            s1 += su * A[Q1, i]
+            s2 += su * A[Q2, i]
+            n1 += cu * A[A2, i]
+            n2 += cu * A[A1, i]
+        s1 += A[SU, 0] * q1
+        s2 += A[SU, 0] * q2
+        b1 = -m * s1 - mg * A[S1, k] - m * n1
+        b2 = s2 - ga * A[S2, k] - n2
+        a1 = i11 * b1 + i12 * b2
+        a2 = i21 * b1 + i22 * b2
+        A[A1, k] = a1
+        A[A2, k] = a2
+        inv = 1.0 / (k + 1)
+        A[0, k + 1] = A[2, k] * inv
+        A[1, k + 1] = A[3, k] * inv
+        A[2, k + 1] = a1 * inv
+        A[3, k + 1] = a2 * inv
+
+
+#: The hand-written Taylor expansions by system id: the hoop's here, the charge's and the free
+#: body's where the product keeps them (:data:`mechviz.dynamics.integrators.taylor.EXPANDS`).
+EXPANDS = {
+    CYCLOTRON: taylor.charge_expand,
+    HOOP: hoop_expand,
+    FREE_BODY: taylor.free_body_expand,
+}
+EXPAND_ROWS = 14  # the rows hoop_expand's array needs (the others need fewer)
 
 
 # Per system (index = system id), as :data:`mechviz.dynamics.integrators.kernels.RHS` and ``RK4``.

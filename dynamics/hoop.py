@@ -228,7 +228,7 @@ def verlet_step(y, p, h):
     ``H(q, p)`` is not separable (the mass matrix depends on ``th1 - th2``), so the half kick and
     the drift are implicit; both are solved by fixed-point iteration to ``VERLET_TOL``. Returns
     the number of partial evaluations used, or ``-1`` if an iteration did not converge in
-    ``VERLET_MAX_ITER`` sweeps (the caller turns that into an error).
+    ``VERLET_MAX_ITER`` sweeps or diverged to an overflow (the caller turns that into an error).
     """
     M, m, a, g = p[0], p[1], p[2], p[3]
     th1, th2 = y[0], y[1]
@@ -246,7 +246,10 @@ def verlet_step(y, p, h):
         f1, f2 = _force(M, m, a, g, th1, th2, w1, w2)
         n1, n2 = p1 + half * f1, p2 + half * f2
         evals += 1
-        if abs(n1 - q1) + abs(n2 - q2) <= VERLET_TOL * (1.0 + abs(n1) + abs(n2)):
+        size = abs(n1) + abs(n2)
+        # An iterate that overflowed is no fixed point (inf <= inf would pass): the iteration
+        # diverged, which is the failure to report, not a step to a non-finite state.
+        if abs(n1 - q1) + abs(n2 - q2) <= VERLET_TOL * (1.0 + size) and size < math.inf:
             q1, q2 = n1, n2
             converged = True
             break
@@ -261,7 +264,8 @@ def verlet_step(y, p, h):
         u1, u2 = _velocities(M, m, a, n_th1, n_th2, q1, q2)
         t1, t2 = th1 + half * (v1 + u1), th2 + half * (v2 + u2)
         evals += 1
-        if abs(t1 - n_th1) + abs(t2 - n_th2) <= VERLET_TOL * (1.0 + abs(t1) + abs(t2)):
+        size = abs(t1) + abs(t2)
+        if abs(t1 - n_th1) + abs(t2 - n_th2) <= VERLET_TOL * (1.0 + size) and size < math.inf:
             n_th1, n_th2 = t1, t2
             converged = True
             break

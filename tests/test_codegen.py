@@ -10,9 +10,10 @@ import sys
 
 import numpy as np
 import pytest
+import sympy as sp
 
-from mechviz.bench.handwritten import RHS, RK4
-from mechviz.dynamics.codegen.equations import EQUATIONS
+from mechviz.bench.handwritten import EXPANDS, RHS, RK4
+from mechviz.dynamics.codegen.equations import EQUATIONS, Equations
 from mechviz.dynamics.codegen.rhs import generated_rhs
 from mechviz.dynamics.codegen.series import generated_expand
 from mechviz.dynamics.codegen.steps import generated_rk4
@@ -70,7 +71,7 @@ def test_the_generated_taylor_coefficients_are_the_hand_written_ones_to_round_of
     compared on the scale of its largest coefficient (the orders span many decades)."""
     eq = EQUATIONS[sys_id]()
     expand, rows = generated_expand(eq)
-    hand, _ = taylor.EXPANDS[sys_id]
+    hand = EXPANDS[sys_id]
     for y, p in _random_cases(sys_id, n=10):
         y = 0.5 * y  # the hoop's determinant stays away from 0 (its m cos^2 < 2M + m anyway)
         new = _coefficients(expand, rows, y, p)
@@ -88,9 +89,9 @@ def _run(expand, rows, sys_id, Y, p, tol):
     return steps
 
 
-# the expansion the product's Taylor method uses on each system (the free body's is generated)
+# the expansion the product's Taylor method uses on each system (both generated)
 IN_USE = {
-    HOOP: (taylor.hoop_expand, taylor.N_ROWS),
+    HOOP: (taylor.hoop_generated, taylor.N_ROWS),
     FREE_BODY: (taylor.free_body_generated, taylor.N_ROWS),
 }
 
@@ -113,22 +114,71 @@ def test_taylor_with_generated_coefficients_runs_as_the_hand_written_method(sys_
     assert _run(*IN_USE[sys_id], sys_id, in_use, p, tol) == n_product
     np.testing.assert_array_equal(in_use, product)
     hand_run = Y0.copy()
-    n_hand = _run(taylor.EXPANDS[sys_id][0], taylor.N_ROWS, sys_id, hand_run, p, tol)
+    n_hand = _run(EXPANDS[sys_id], taylor.N_ROWS, sys_id, hand_run, p, tol)
     new_run = Y0.copy()
     n_new = _run(*generated_expand(eq), sys_id, new_run, p, tol)
     assert n_new == n_hand
     assert np.max(np.abs(new_run - hand_run)) < 1e-12 * (1.0 + np.max(np.abs(hand_run)))
 
 
-def test_the_free_body_expansion_in_use_is_its_generated_one():
-    """The product's free body expands with the code generated from its equations (the same
-    source text as a test-defined system's would be, so the same coefficients bit for bit)."""
-    eq = EQUATIONS[FREE_BODY]()
+@pytest.mark.parametrize("sys_id", [HOOP, FREE_BODY])
+def test_the_taylor_expansion_in_use_is_the_generated_one(sys_id):
+    """The product's free body and hoop expand with the code generated from their equations (the
+    same source text as a test-defined system's would be, so the same coefficients bit for
+    bit)."""
+    eq = EQUATIONS[sys_id]()
     expand, rows = generated_expand(eq)
-    for y, p in _random_cases(FREE_BODY, n=3):
+    for y, p in _random_cases(sys_id, n=3):
         np.testing.assert_array_equal(
-            _coefficients(taylor.free_body_generated, rows, y, p), _coefficients(expand, rows, y, p)
+            _coefficients(IN_USE[sys_id][0], rows, y, p), _coefficients(expand, rows, y, p)
         )
+
+
+def _mass_matrix_system(solved: bool) -> Equations:
+    """A made-up 2-DOF system ``M(x, y) (v', w') = f`` with every kind of mass entry (a
+    constant plus a square, a product of two series, a polynomial), as a mass-matrix system or
+    with its accelerations solved (quotients by the determinant)."""
+    x, y, v, w = sp.symbols("x y v w", real=True)
+    k = sp.Symbol("k", positive=True)
+    mass = sp.Matrix(
+        [[2 + sp.cos(x) ** 2, sp.sin(x) * sp.cos(y)], [sp.sin(x) * sp.cos(y), 1 + y**2]]
+    )
+    force = sp.Matrix([-k * sp.sin(x) - v * w, -y + k * v**2])
+    if solved:
+        rates = tuple(mass.adjugate() * force / mass.det())
+        return Equations("mass-solved", (x, y, v, w), (k,), (v, w, *rates))
+    return Equations(
+        "mass-matrix",
+        (x, y, v, w),
+        (k,),
+        (v, w),
+        mass=tuple(map(tuple, mass.tolist())),
+        force=tuple(force),
+    )
+
+
+def test_a_mass_matrix_system_has_the_series_of_its_solved_form():
+    """The recurrences solving ``M^[0] a^[k] = f^[k] - sum M^[j] a^[k-j]`` give the coefficients
+    the quotients of the solved accelerations give, to round-off; the right-hand side is the
+    solved form's."""
+    matrix, solved = _mass_matrix_system(False), _mass_matrix_system(True)
+    assert [sp.simplify(a - b) for a, b in zip(matrix.rhs, solved.rhs, strict=True)] == [0] * 4
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        y, p = rng.uniform(-1.5, 1.5, 4), rng.uniform(0.3, 3.0, 1)
+        new = _coefficients(*generated_expand(matrix), y, p)
+        old = _coefficients(*generated_expand(solved), y, p)
+        assert np.all(np.isfinite(new))
+        scale = np.max(np.abs(old), axis=0) + 1e-300
+        assert np.max(np.abs(new - old) / scale) < 1e-12, (y, p)
+
+
+def test_a_mass_matrix_must_be_square_with_one_force_a_row():
+    x, v = sp.symbols("x v", real=True)
+    with pytest.raises(ValueError, match="n x n"):
+        Equations("bad", (x, v), (), (v,), mass=((1, 2),), force=(x,))
+    with pytest.raises(ValueError, match="mass matrix"):
+        Equations("bad", (x, v), (), (v, x), mass=((1,),), force=(x,))
 
 
 @pytest.mark.parametrize("sys_id", sorted(EQUATIONS))

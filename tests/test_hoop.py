@@ -243,3 +243,16 @@ def test_mode1_floquet_multiplier_predicts_how_a_departure_from_mode1_grows(bead
     else:
         assert lam == pytest.approx(1.0, abs=1e-4)
         assert growth < 20.0
+
+
+def test_the_verlet_step_never_takes_an_overflowed_iterate_for_a_fixed_point():
+    """A drift whose iterate overflows is a diverged iteration (-1: "did not converge"), not a
+    step to a non-finite state: ``inf <= tol (1 + inf)`` alone would pass the convergence test.
+    (A bead at ~1e180 rad/s and a step of ~1e128 s: the first drift lands at ~1e308 rad and the
+    next one overflows.)"""
+    y = np.array(
+        [0.331150757626947, -1.1150804016081923, 3.341131007789588e94, 2.93136057891846e180]
+    )
+    p = HoopParams().kernel_params()
+    assert hoop.verlet_step(y, p, 5.947227314873471e127) == -1
+    assert np.all(np.isfinite(y))  # a step that fails leaves the state as it was

@@ -7,6 +7,13 @@ the code generator makes (:mod:`.rhs`, the right-hand side; :mod:`.series`, the 
 coefficients' recurrences) is derived from these expressions; a system defined anywhere else
 (a test's, say) is an :class:`Equations` too.
 
+A mechanical system's equations may be given as a mass-matrix system: the rates of the last
+``n`` state components (the velocities' accelerations ``a``) solve ``M(y) a = f(y)``, with
+``M`` an ``n x n`` matrix and ``f`` the ``n`` forces as expressions (the hoop's Euler-Lagrange
+equations). The right-hand side is then that solution (Cramer's rule: the adjugate over the
+determinant), and the Taylor recurrences solve the series of the system itself
+(:mod:`.series`), which costs a fraction of the solved form's quotients.
+
 Units: SI, as each system's module documents (:mod:`mechviz.dynamics.cyclotron`,
 :mod:`mechviz.dynamics.hoop`, :mod:`mechviz.dynamics.disk`). The equations are autonomous (no
 ``t``), as every system here is; a driven system would carry its phase as a state component.
@@ -26,24 +33,46 @@ from ..ids import CYCLOTRON, FREE_BODY, HOOP, NAMES
 class Equations:
     """``y' = f(y; p)``: ``state`` and ``params`` symbols, ``rhs`` one expression per state
     component. ``name`` is a system's name, letters, digits, ``_`` and ``-`` (it names the
-    generated module on disk, with ``-`` as ``_``)."""
+    generated module on disk, with ``-`` as ``_``).
+
+    With a ``mass`` matrix (``n x n``, rows of expressions) and ``force`` (``n`` expressions),
+    ``rhs`` gives the rates of the first ``d - n`` components only; the last ``n`` rates solve
+    ``mass @ y'[d - n:] = force`` and are appended to ``rhs`` (module docstring)."""
 
     name: str
     state: tuple[sp.Symbol, ...]
     params: tuple[sp.Symbol, ...]
     rhs: tuple[sp.Expr, ...]
+    mass: tuple[tuple[sp.Expr, ...], ...] = ()
+    force: tuple[sp.Expr, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.name.replace("-", "_").isidentifier():
             raise ValueError(f"the name {self.name!r}: letters, digits, _ and - only")
-        if len(self.rhs) != len(self.state):
-            raise ValueError(f"{self.name}: one right-hand side per state component")
+        n = len(self.mass)
+        if len(self.force) != n or any(len(row) != n for row in self.mass):
+            raise ValueError(f"{self.name}: the mass matrix is n x n, with n forces")
+        if len(self.rhs) + n != len(self.state):
+            raise ValueError(
+                f"{self.name}: one right-hand side per state component"
+                + (f", but for the last {n}, which solve the mass matrix's system" if n else "")
+            )
         known = set(self.state) | set(self.params)
-        for e in self.rhs:
+        mass = tuple(tuple(sp.sympify(e) for e in row) for row in self.mass)
+        force = tuple(sp.sympify(e) for e in self.force)
+        for e in (*self.rhs, *force, *(e for row in mass for e in row)):
             stray = sp.sympify(e).free_symbols - known
             if stray:
                 raise ValueError(f"{self.name}: unknown symbols {sorted(map(str, stray))}")
-        object.__setattr__(self, "rhs", tuple(sp.sympify(e) for e in self.rhs))
+        rhs = tuple(sp.sympify(e) for e in self.rhs)
+        if n:
+            matrix = sp.Matrix(mass)
+            # Cramer's rule, division-free up to the one quotient by the determinant
+            solved = matrix.adjugate() * sp.Matrix(force) / matrix.det(method="berkowitz")
+            rhs += tuple(solved)
+        object.__setattr__(self, "rhs", rhs)
+        object.__setattr__(self, "mass", mass)
+        object.__setattr__(self, "force", force)
 
     @property
     def dim(self) -> int:
@@ -53,7 +82,10 @@ class Equations:
     def key(self) -> str:
         """A digest of the equations (their exact expression trees): names the generated code,
         so an edited equation never runs stale code."""
-        text = repr((self.name, self.state, self.params, [sp.srepr(e) for e in self.rhs]))
+        exprs = [*self.rhs, *self.force, *(e for row in self.mass for e in row)]
+        text = repr(
+            (self.name, self.state, self.params, len(self.mass), list(map(sp.srepr, exprs)))
+        )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -68,21 +100,24 @@ def charge() -> Equations:
 
 
 def hoop() -> Equations:
-    """The hoop and bead (:mod:`mechviz.dynamics.hoop`): the Euler-Lagrange equations solved for
-    the accelerations (Cramer's rule on the 2x2 mass matrix), ``p = [M, m, a, g]``."""
+    """The hoop and bead (:mod:`mechviz.dynamics.hoop`): the Euler-Lagrange equations as a mass
+    matrix system for the accelerations ``(th1'', th2'')``, ``p = [M, m, a, g]``. The matrix is
+    the Lagrangian's divided by ``a^2`` and its second row by ``m``:
+    ``[[2M + m, m cos u], [cos u, 1]]`` with ``u = th1 - th2``; the forces
+    ``-m sin(u) w2^2 - (M + m)(g/a) sin th1`` and ``sin(u) w1^2 - (g/a) sin th2`` [1/s^2]."""
     th1, th2, w1, w2 = sp.symbols("theta1 theta2 omega1 omega2", real=True)
     M, m, a, g = sp.symbols("M m a g", positive=True)
     ga = g / a
     s, c = sp.sin(th1 - th2), sp.cos(th1 - th2)
     r1 = -m * s * w2**2 - (M + m) * ga * sp.sin(th1)
     r2 = s * w1**2 - ga * sp.sin(th2)
-    m11 = 2 * M + m
-    det = m11 - m * c**2
     return Equations(
         NAMES[HOOP],
         (th1, th2, w1, w2),
         (M, m, a, g),
-        (w1, w2, (r1 - m * c * r2) / det, (m11 * r2 - c * r1) / det),
+        (w1, w2),
+        mass=((2 * M + m, m * c), (c, 1)),
+        force=(r1, r2),
     )
 
 

@@ -18,7 +18,7 @@ subexpression met twice is one node (sympy's expressions are compared by structu
 
 The state's coefficients follow from ``y^[k+1] = f(y)^[k] / (k + 1)``. The generated
 ``expand(A, p, order)`` has the calling convention of the hand-written expansions
-(:func:`mechviz.dynamics.integrators.taylor.hoop_expand`): ``A`` (rows, >= order + 1) with the
+(:func:`mechviz.dynamics.integrators.taylor.charge_expand`): ``A`` (rows, >= order + 1) with the
 state's order-0 coefficients in ``A[:d, 0]``; it fills orders 1 ... ``order`` of the state's
 rows and orders 0 ... ``order - 1`` of the auxiliary rows after them (:data:`ROWS` in the
 generated module: the rows ``A`` must have).
@@ -27,6 +27,7 @@ generated module: the rows ``A`` must have).
 from __future__ import annotations
 
 import functools
+import re
 
 import sympy as sp
 from sympy.printing.pycode import pycode
@@ -56,6 +57,7 @@ class _Graph:
         self.ops: list[tuple] = []  # (kind, out row(s), operands...) in dependency order
         self.sincos: dict[sp.Expr, tuple[int, int]] = {}
         self.depth: dict[int, int] = dict.fromkeys(range(len(ys)), 0)
+        self.needs: dict[int, tuple[int, ...]] = {}  # a node's operands (rows)
 
     # ---- nodes
     def const(self, e: sp.Expr) -> str:
@@ -72,6 +74,7 @@ class _Graph:
         self.rows[e] = r
         self.ops.append((op[0], r, *op[1:]))
         self.depth[r] = 1 + max((self.depth[a] for a in operands), default=0)
+        self.needs[r] = operands
         return r
 
     def is_const(self, e: sp.Expr) -> bool:
@@ -211,6 +214,7 @@ class _Graph:
             self.rows[sp.cos(u)] = s + 1
             self.ops.append(("sincos", (s, s + 1), a))
             self.depth[s] = self.depth[s + 1] = self.depth[a] + 1
+            self.needs[s] = (a,)
             self.sincos[u] = (s, s + 1)
         return self.sincos[u]
 
@@ -249,6 +253,125 @@ def _lin_group(ops: list[tuple]) -> list[str]:
     if loop:
         out += ["for j in range(k + 1):", "    i = k - j", *loop]
     return out + finish
+
+
+def _square_group(ops: list[tuple]) -> list[str]:
+    """Order ``k`` of independent squares in one loop over half the terms (by symmetry)."""
+    out = [f"q{r} = 0.0" for _, r, _ in ops]
+    out += ["for j in range((k + 1) // 2):", "    i = k - j"]
+    out += [f"    q{r} += A[{a}, j] * A[{a}, i]" for _, r, a in ops]
+    out += ["if k % 2 == 0:", "    h = k // 2"]
+    out += [f"    A[{r}, k] = 2.0 * q{r} + A[{a}, h] * A[{a}, h]" for _, r, a in ops]
+    out += ["else:"] + [f"    A[{r}, k] = 2.0 * q{r}" for _, r, _ in ops]
+    return out
+
+
+def _sincos_group(ops: list[tuple], slopes: dict[int, str], angles: dict[int, tuple]) -> list[str]:
+    """Order ``k`` of independent sine/cosine pairs in one loop. ``slopes[a]``: ``j u^[j]`` of
+    an argument ``u`` (row ``a``) as its derivative's order ``j - 1`` where that is known (the
+    hoop's ``th1' = w1``: no multiplication by ``j``, and no rounding of it); ``angles[a]``:
+    ``(sign, pair, sign, pair)`` for an argument ``+-x +- y`` whose two pairs are computed first,
+    its order 0 then by the addition formulas (no library call)."""
+    first = [op for op in ops if op[2] not in angles] + [op for op in ops if op[2] in angles]
+    out = ["if k == 0:"]
+    for _, (s_, c_), a in first:
+        if a in angles:
+            # sin(sx x + sy y) = sx sin x cos y + sy cos x sin y, cos(...) = cos x cos y -
+            # sx sy sin x sin y, with the signs sx, sy +-1
+            sx, (sa, ca), sy, (sb, cb) = angles[a]
+            sin_xy = _term(sx, None, f"A[{sa}, 0] * A[{cb}, 0]")
+            sin_xy += " " + _term(sy, None, f"A[{ca}, 0] * A[{sb}, 0]")
+            cos_xy = f"A[{ca}, 0] * A[{cb}, 0] " + _term(-sx * sy, None, f"A[{sa}, 0] * A[{sb}, 0]")
+            out.append(f"    A[{s_}, 0] = {sin_xy.lstrip('+ ')}")
+            out.append(f"    A[{c_}, 0] = {cos_xy}")
+        else:
+            out.append(f"    A[{s_}, 0] = math.sin(A[{a}, 0])")
+            out.append(f"    A[{c_}, 0] = math.cos(A[{a}, 0])")
+    out.append("else:")
+    for _, (s_, _), _ in ops:
+        out.append(f"    s{s_} = c{s_} = 0.0")
+    out += ["    for j in range(1, k + 1):", "        i = k - j"]
+    for _, (s_, c_), a in ops:
+        t = slopes.get(a, f"j * A[{a}, j]")
+        out += [
+            f"        t = {t}",
+            f"        s{s_} += t * A[{c_}, i]",
+            f"        c{s_} += t * A[{s_}, i]",
+        ]
+    out.append("    inv_k = 1.0 / k")
+    for _, (s_, c_), _ in ops:
+        out += [f"    A[{s_}, k] = s{s_} * inv_k", f"    A[{c_}, k] = -c{s_} * inv_k"]
+    return out
+
+
+def _slopes(g: _Graph, rates: dict[int, int]) -> dict[int, str]:
+    """``j u^[j] = u'^[j-1]`` of the rows whose derivative is a known row: a state component
+    whose rate is a row (``rates``), or a sum of such components with coefficients +-1."""
+    out = {r: f"A[{q}, j - 1]" for r, q in rates.items()}
+    for op in g.ops:
+        if op[0] == "lin" and not op[4] and op[3]:
+            _, r, _, lin, _ = op
+            if all(name is None and a in rates for _, name, a in lin):
+                parts = [_term(sign, None, f"A[{rates[a]}, j - 1]") for sign, _, a in lin]
+                out[r] = " ".join(parts).lstrip("+ ")
+    return out
+
+
+def _angles(g: _Graph) -> dict[int, tuple]:
+    """The sine/cosine arguments ``+-x +- y`` whose ``x`` and ``y`` have pairs of their own
+    (the hoop's ``th1 - th2``): ``{row: (sign, pair of x, sign, pair of y)}``."""
+    pairs = {op[2]: op[1] for op in g.ops if op[0] == "sincos"}
+    out = {}
+    for op in g.ops:
+        if op[0] == "lin" and op[1] in pairs and op[2] is None and not op[4] and len(op[3]) == 2:
+            (sx, nx, x), (sy, ny, y) = op[3]
+            if nx is None and ny is None and x in pairs and y in pairs:
+                out[op[1]] = (sx, pairs[x], sy, pairs[y])
+    return out
+
+
+def _read(g: _Graph, skip: set[int], text: list[str]) -> list[tuple]:
+    """The nodes some statement reads (a sine/cosine pair whose order 0 and slopes come from
+    elsewhere, ``skip``, does not read its argument: the hoop's ``th1 - th2`` is then no row),
+    with ``text`` the statements outside the nodes (the solve, the outputs)."""
+    ops = list(g.ops)
+    outside = {int(r) for line in text for r in re.findall(r"A\[(\d+), ", line)}
+    while True:
+        reads = set(outside)
+        for op in ops:
+            if not (op[0] == "sincos" and op[2] in skip):
+                reads.update(g.needs[_out(op)])
+        unread = [op for op in ops if op[0] == "lin" and op[1] not in reads]
+        if not unread:
+            return ops
+        ops = [op for op in ops if op not in unread]
+
+
+def _schedule(g: _Graph, ops: list[tuple], computed: set[int]) -> list[list[tuple]]:
+    """The nodes in groups of one kind whose members are independent, each group computable
+    from the rows before it. In waves: the linear combinations without products that are
+    ready first (each costs a few operations and may make others ready, as ``th1 - th2``
+    makes its sine and cosine), else every ready node, one group per kind in the order met."""
+    todo = list(ops)
+    groups: list[list[tuple]] = []
+    while todo:
+        ready = [op for op in todo if set(g.needs[_out(op)]) <= computed]
+        if not ready:  # a node needing a row no node computes: a bug here, not a hang
+            raise AssertionError(f"{len(todo)} nodes cannot be computed: {todo[0]}")
+        wave = [op for op in ready if op[0] == "lin" and not op[4]] or ready
+        kinds: dict[str, list[tuple]] = {}
+        for op in wave:
+            key = op[0] if op[0] in ("lin", "square", "sincos") else f"{op[0]}{_out(op)}"
+            kinds.setdefault(key, []).append(op)
+        groups += kinds.values()
+        for op in wave:
+            todo.remove(op)
+            computed.update(op[1] if op[0] == "sincos" else (op[1],))
+    return groups
+
+
+def _out(op: tuple) -> int:
+    return op[1][0] if op[0] == "sincos" else op[1]
 
 
 def _emit(op: tuple) -> list[str]:
@@ -328,25 +451,131 @@ def _emit(op: tuple) -> list[str]:
     raise AssertionError(kind)
 
 
+def _entry(g: _Graph, e: sp.Expr) -> tuple[sp.Expr | str | None, list[tuple[int, str | None, int]]]:
+    """A mass matrix entry as ``(constant part, [(sign, name, row)])``: its order 0 is the
+    constant plus the rows' order 0, its higher orders the rows' (an entry with products of
+    series is one row of its own). A constant entry is ``(a number or the constant's symbol,
+    [])``, which the closed-form inverse simplifies with (the hoop's 1)."""
+    if g.is_const(e):
+        return (e if e.is_Number else sp.Symbol(g.const(e))), []
+    consts, lin, prods = g.terms(e)
+    if prods:
+        return None, [(1, None, g.series(e))]
+    c = g.const(sp.Add(*consts)) if consts else None
+    return c, [(*g.coefficient(k), a) for k, a in lin]
+
+
+def _mass_solve(g: _Graph, mass: list[list[sp.Expr]], force: list[sp.Expr]) -> tuple[list, list]:
+    """The statements solving ``M^[0] a^[k] = f^[k] - sum_{1<=j<=k} M^[j] a^[k-j]`` for order
+    ``k`` of the accelerations ``a`` (rows of their own), ``M^[0]`` inverted once per step (at
+    ``k = 0``, in closed form): ``(the statements before the loop, in it)``; the accelerations'
+    rows are the last of ``g``.
+
+    The force's products are not rows: their terms ``j >= 1`` are summed in the loop over ``j``
+    that sums the matrix's, into one accumulator per equation and coefficient (the hoop's
+    ``-m sin(u) w2^2`` and ``-m cos(u) a2`` share one), and their term ``j = 0`` after it."""
+    n = len(mass)
+    entries = [[_entry(g, e) for e in row] for row in mass]
+    forces = [g.terms(f) for f in force]
+    forces = [
+        (
+            g.const(sp.Add(*consts)) if consts else None,
+            [(*g.coefficient(k), a) for k, a in lin],
+            [(*g.coefficient(k), a, b) for k, a, b in prods],
+        )
+        for consts, lin, prods in forces
+    ]
+    first = len(set(g.rows.values()))
+    acc = list(range(first, first + n))
+    for i, r in enumerate(acc):
+        g.rows[sp.Symbol(f"_acceleration{i}")] = r
+    # the inverse of M^[0] from the entries' order 0 (numbers where an entry is one)
+    sym = [[sp.Symbol(f"e{i}_{l}") for l in range(n)] for i in range(n)]
+    values = []
+    for i in range(n):
+        for l in range(n):
+            c, rows = entries[i][l]
+            if not rows:
+                sym[i][l] = c
+                continue
+            parts = [_term(sign, name, f"A[{r}, 0]") for sign, name, r in rows]
+            values.append(f"e{i}_{l} = {' '.join(parts).lstrip('+ ')}" + (f" + {c}" if c else ""))
+    matrix = sp.Matrix(sym)
+    det_inv = sp.Symbol("det_inv")
+    adj = matrix.adjugate()
+    inverse = [f"det_inv = 1.0 / ({pycode(matrix.det(method='berkowitz'))})"]
+    inverse += [f"i{i}_{l} = {pycode(adj[i, l] * det_inv)}" for i in range(n) for l in range(n)]
+    before = [" = ".join([f"i{i}_{l}" for i in range(n) for l in range(n)] + ["0.0"])]
+    body = ["if k == 0:", *(f"    {x}" for x in values + inverse)]
+    # sums over j >= 1, one accumulator per (equation, coefficient)
+    accs: list[dict[str | None, list[str]]] = [{} for _ in range(n)]
+    zero: list[dict[str | None, list[str]]] = [{} for _ in range(n)]
+    for i, (_, _, prods) in enumerate(forces):
+        for sign, name, a, b in prods:
+            accs[i].setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, j] * A[{b}, i]")
+            zero[i].setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, 0] * A[{b}, k]")
+    for i in range(n):
+        for l in range(n):
+            for sign, name, r in entries[i][l][1]:  # subtracted: the opposite sign
+                term = f"{'+' if sign < 0 else '-'} A[{r}, j] * A[{acc[l]}, i]"
+                accs[i].setdefault(name, []).append(term)
+    loop, finish = [], []
+    for i in range(n):
+        parts = []
+        for m_, (name, terms) in enumerate(accs[i].items()):
+            name_ = f"b{i}_{m_}"
+            body.append(f"{name_} = 0.0")
+            loop.append(f"    {name_} += {' '.join(terms).lstrip('+ ')}")
+            if name in zero[i]:
+                finish.append(f"{name_} += {' '.join(zero[i][name]).lstrip('+ ')}")
+            parts.append(_term(1, name, name_))
+        c, lin, _ = forces[i]
+        parts += [_term(sign, name, f"A[{a}, k]") for sign, name, a in lin]
+        finish.append(f"b{i} = {' '.join(parts).lstrip('+ ') or '0.0'}")
+        if c is not None:
+            finish += ["if k == 0:", f"    b{i} += {c}"]
+    if loop:
+        body += ["for j in range(1, k + 1):", "    i = k - j", *loop]
+    body += finish
+    for i in range(n):
+        solve = " + ".join(f"i{i}_{l} * b{l}" for l in range(n))
+        body += [f"a{i} = {solve}", f"A[{acc[i]}, k] = a{i}"]
+    return before, body
+
+
 def series_source(eq: Equations) -> str:
     """The generated module's body: ``ROWS`` and ``expand(A, p, order)``."""
     ys, ps, exprs = plain(eq)
     g = _Graph(ys, ps)
-    outs = [g.output(e) for e in exprs]  # f(y)^[k], in the state's order
+    n = len(eq.mass)
+    d = eq.dim
+    outs = [g.output(e) for e in exprs[: d - n]]  # f(y)^[k], in the state's order
+    before, solve = [], []
+    if n:  # the last n rates solve the mass matrix's system (module docstring)
+        rename = dict(zip(eq.state, ys, strict=True)) | dict(zip(eq.params, ps, strict=True))
+        mass = [[e.xreplace(rename) for e in row] for row in eq.mass]
+        before, solve = _mass_solve(g, mass, [f.xreplace(rename) for f in eq.force])
+        outs += [f"a{i} * inv" for i in range(n)]
     body = []
-    # By depth in the graph (nodes of one depth are independent), the linear combinations of
-    # one depth summed in one loop.
-    ops = sorted(g.ops, key=lambda op: g.depth[op[1][0] if op[0] == "sincos" else op[1]])
-    group: list[tuple] = []
-    for op in ops:
-        if group and (op[0] != "lin" or g.depth[op[1]] != g.depth[group[0][1]]):
+    rates = {i: g.rows[e] for i, e in enumerate(exprs[: d - n]) if e in g.rows}
+    rates |= {d - n + i: len(set(g.rows.values())) - n + i for i in range(n)}
+    slopes, angles = _slopes(g, rates), _angles(g)
+    skip = set(slopes) & set(angles)
+    ops = _read(g, skip, solve + outs)
+    for op in ops:  # such a pair needs what the pairs of its order 0 need, no more
+        if op[0] == "sincos" and op[2] in skip:
+            _, x, _, y = angles[op[2]]
+            g.needs[op[1][0]] = g.needs[x[0]] + g.needs[y[0]]
+    for group in _schedule(g, ops, set(range(d))):
+        if group[0][0] == "lin":
             body += _lin_group(group)
-            group = []
-        if op[0] == "lin":
-            group.append(op)
+        elif group[0][0] == "square":
+            body += _square_group(group)
+        elif group[0][0] == "sincos":
+            body += _sincos_group(group, slopes, angles)
         else:
-            body += _emit(op)
-    body += _lin_group(group) if group else []
+            body += _emit(group[0])
+    body += solve
     body += [f"A[{i}, k + 1] = {x}" for i, x in enumerate(outs)]
     lines = [
         f"ROWS = {len(set(g.rows.values()))}",
@@ -358,6 +587,7 @@ def series_source(eq: Equations) -> str:
     ]
     lines += [f"    {s} = p[{j}]" for j, s in enumerate(ps)]
     lines += g.const_lines
+    lines += [f"    {line}" for line in before]
     lines += ["    for k in range(order):", "        inv = 1.0 / (k + 1)"]
     lines += [f"        {line}" for line in body]
     return "\n".join(lines) + "\n"

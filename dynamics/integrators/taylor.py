@@ -6,11 +6,11 @@ component are generated from ``y^[0] = y(t)`` by the recurrences of automatic di
 ``y^[k+1] = f(y)^[k] / (k + 1)``, and ``f(y)^[k]`` is built from sums, Cauchy products
 ``(uv)^[k] = sum_j u^[j] v^[k-j]``, linear solves and the coupled sine/cosine recurrence
 ``S^[k] = (1/k) sum_j j u^[j] C^[k-j]``, ``C^[k] = -(1/k) sum_j j u^[j] S^[k-j]``. Each system
-has its own expansion (``*_expand``), written for its right-hand side: the charge's is linear,
-the free body's quadratic, the hoop's has three sine/cosine pairs and a 2x2 solve per order.
-The free body's in use is generated from its equations (:mod:`mechviz.dynamics.codegen.series`,
-as fast); the one written here is its check. A system known only by its equations runs with
-its generated expansion through :func:`run_taylor_with`.
+has its own expansion: the charge's is linear (written here), the free body's quadratic, the
+hoop's has three sine/cosine pairs and a 2x2 solve per order. The free body's and the hoop's in
+use are generated from their equations (:mod:`mechviz.dynamics.codegen.series`, as fast as
+written by hand); the free body's written here is its check. A system known only by its
+equations runs with its generated expansion through :func:`run_taylor_with`.
 
 Step size as Jorba and Zou's (and heyoka's): ``h = rho e^-a exp(-0.7 / (p - 1))`` with ``rho``
 the smaller of ``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and
@@ -54,7 +54,7 @@ from .taylor_linear import charge_eval, charge_steps, two_sum
 # fast-math licence: inf and nan still propagate, so a blow-up is still reported.
 FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
-N_ROWS = 14  # series per member: the state and the hoop's 10 auxiliary functions
+N_ROWS = 15  # series per member: the state and the hoop's 11 auxiliary functions
 # Ensembles of at least PARALLEL_MIN members run their members on numba's threads
 # (:func:`run_taylor_parallel`, bitwise the serial result). On idle cores that pays from small
 # ensembles on, but on cores busy with other jobs a thread that loses its core holds the whole
@@ -121,111 +121,21 @@ def free_body_expand(A, p, order):
         A[6, k + 1] = b3 * h
 
 
-@njit(cache=True, fastmath=SUMS)
-def hoop_expand(A, p, order):
-    """The hoop and bead (:func:`mechviz.dynamics.codegen.equations.hoop`): with
-    ``u = th1 - th2``, ``r1 = -m sin(u) w2^2 - (M + m)(g/a) sin th1``,
-    ``r2 = sin(u) w1^2 - (g/a) sin th2``, the accelerations solve the mass-matrix system
-    ``(2M + m) w1' + m cos(u) w2' = r1``, ``cos(u) w1' + w2' = r2``.
-
-    The series are taken of that system rather than of its solved form (the quotients by
-    ``det = 2M + m - m cos(u)^2``): order ``k`` of each line is the order-``k`` accelerations
-    times the matrix at the step's start, plus the products of the higher orders of ``cos u``
-    with the lower orders of the accelerations, so order ``k`` is one 2x2 solve with the matrix
-    inverted once per step. That takes two Cauchy products per order (``cos(u) w2'``,
-    ``cos(u) w1'``) where the quotients took four and the square ``cos(u)^2``: a fifth fewer
-    multiply-adds a step.
-
-    Per order three loops, each accumulating several independent sums (the sums are chains of
-    dependent additions; interleaving them keeps the floating-point units busy): the three
-    sine/cosine pairs; the squares ``w2^2``, ``w1^2`` (over half the terms, by symmetry); the
-    products with ``sin u`` and ``cos u``.
-    """
-    M, m, ga = p[0], p[1], p[3] / p[2]
-    m11 = 2.0 * M + m
-    mg = (M + m) * ga
-    # rows 0-3: th1, th2, w1, w2
-    SU, CU, S1, C1, S2, C2, Q1, Q2, A1, A2 = range(4, 14)
-    i11 = i12 = i21 = i22 = 0.0  # the inverse of the matrix at the step's start
-    for k in range(order):
-        if k == 0:
-            s1, c1 = math.sin(A[0, 0]), math.cos(A[0, 0])
-            s2, c2 = math.sin(A[1, 0]), math.cos(A[1, 0])
-            A[S1, 0], A[C1, 0], A[S2, 0], A[C2, 0] = s1, c1, s2, c2
-            su = s1 * c2 - c1 * s2  # sin(th1 - th2): two library calls fewer per step
-            cu = c1 * c2 + s1 * s2
-            A[SU, 0] = su
-            A[CU, 0] = cu
-            inv_det = 1.0 / (m11 - m * cu * cu)
-            i11, i12, i21, i22 = inv_det, -m * cu * inv_det, -cu * inv_det, m11 * inv_det
-        else:
-            su = cu = s1 = c1 = s2 = c2 = 0.0
-            for j in range(1, k + 1):
-                t1 = A[2, j - 1]  # j th1^[j] = w1^[j-1]: th1' = w1
-                t2 = A[3, j - 1]
-                tu = t1 - t2
-                i = k - j
-                su += tu * A[CU, i]
-                cu += tu * A[SU, i]
-                s1 += t1 * A[C1, i]
-                c1 += t1 * A[S1, i]
-                s2 += t2 * A[C2, i]
-                c2 += t2 * A[S2, i]
-            inv = 1.0 / k
-            A[SU, k] = su * inv
-            A[CU, k] = -cu * inv
-            A[S1, k] = s1 * inv
-            A[C1, k] = -c1 * inv
-            A[S2, k] = s2 * inv
-            A[C2, k] = -c2 * inv
-        # squares: (uu)^[k] = 2 sum_{j < k/2} u_j u_(k-j) (+ u_(k/2)^2 for even k)
-        q1 = q2 = 0.0
-        for j in range((k + 1) // 2):
-            i = k - j
-            q1 += A[3, j] * A[3, i]
-            q2 += A[2, j] * A[2, i]
-        q1 *= 2.0
-        q2 *= 2.0
-        if k % 2 == 0:
-            h = k // 2
-            q1 += A[3, h] * A[3, h]
-            q2 += A[2, h] * A[2, h]
-        A[Q1, k] = q1
-        A[Q2, k] = q2
-        # the terms j = 1 ... k, which use only lower orders of the squares and accelerations
-        s1 = s2 = n1 = n2 = 0.0
-        for j in range(1, k + 1):
-            i = k - j
-            su = A[SU, j]
-            cu = A[CU, j]
-            s1 += su * A[Q1, i]
-            s2 += su * A[Q2, i]
-            n1 += cu * A[A2, i]
-            n2 += cu * A[A1, i]
-        s1 += A[SU, 0] * q1
-        s2 += A[SU, 0] * q2
-        b1 = -m * s1 - mg * A[S1, k] - m * n1
-        b2 = s2 - ga * A[S2, k] - n2
-        a1 = i11 * b1 + i12 * b2
-        a2 = i21 * b1 + i22 * b2
-        A[A1, k] = a1
-        A[A2, k] = a2
-        inv = 1.0 / (k + 1)
-        A[0, k + 1] = A[2, k] * inv
-        A[1, k + 1] = A[3, k] * inv
-        A[2, k + 1] = a1 * inv
-        A[3, k + 1] = a2 * inv
+# The free body's and the hoop's expansions in use are generated from their equations
+# (:mod:`..codegen.series`; the hoop's solves its mass matrix's system per order): per step
+# each costs what the hand-written one did (``mechviz bench --generated-cost``). The free body's
+# hand-written one stays here as a check (the tests compare the two to round-off), the hoop's is
+# the benchmark's baseline (:mod:`mechviz.bench.handwritten`). The charge's stays hand-written:
+# its steps are taken in closed form (:mod:`.taylor_linear`).
+def _generated(sys_id: int):
+    module = product_module(sys_id, "series")
+    if module.ROWS > N_ROWS:
+        raise ImportError(f"the generated expansion needs {module.ROWS} rows, N_ROWS is {N_ROWS}")
+    return module.expand
 
 
-# The free body's expansion in use is generated from its equations (:mod:`..codegen.series`):
-# per step it costs what free_body_expand above does (``mechviz bench --generated-cost``), which
-# stays as its check (the tests compare the two to round-off). The hoop's and the charge's stay
-# hand-written: the hoop's (a 2x2 solve per order) costs less than half the generated one's
-# quotients, and the charge's steps are taken in closed form (:mod:`.taylor_linear`).
-_GENERATED = product_module(FREE_BODY, "series")
-if _GENERATED.ROWS > N_ROWS:
-    raise ImportError(f"the generated expansion needs {_GENERATED.ROWS} rows, N_ROWS is {N_ROWS}")
-free_body_generated = _GENERATED.expand
+free_body_generated = _generated(FREE_BODY)
+hoop_generated = _generated(HOOP)
 
 
 @njit(cache=True)
@@ -233,7 +143,7 @@ def _expand(sys_id, A, p, order):
     if sys_id == CYCLOTRON:
         charge_expand(A, p, order)
     elif sys_id == HOOP:
-        hoop_expand(A, p, order)
+        hoop_generated(A, p, order)
     else:
         free_body_generated(A, p, order)
 
@@ -454,12 +364,11 @@ def run_taylor_with(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, sta
     return total
 
 
-# the hand-written expansions and the product's right-hand sides (generated from the same
+# the hand-written expansions here and the product's right-hand sides (generated from the same
 # equations) they are written for: the tests compare the two, and the generated expansions with
-# the hand-written ones
+# the hand-written ones (the hoop's: :data:`mechviz.bench.handwritten.EXPANDS`)
 EXPANDS = {
     CYCLOTRON: (charge_expand, RHS[CYCLOTRON]),
-    HOOP: (hoop_expand, RHS[HOOP]),
     FREE_BODY: (free_body_expand, RHS[FREE_BODY]),
 }
 
