@@ -480,7 +480,7 @@ class DiskExhibit(DiskModel, Exhibit):
 
     def on_stage(self, shown: bool) -> None:
         self.poinsot.stage(shown)
-        self.revision += 1  # drawn again where it now stands
+        self.changed()  # drawn again where it now stands
 
     @property
     def camera(self):
