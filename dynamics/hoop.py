@@ -119,10 +119,18 @@ def normal_modes(p: HoopParams) -> tuple[np.ndarray, np.ndarray]:
     ``omega_2 = sqrt((1 + m/M) g/a)``, shape ``(m, -(M + m)) / (M + m)``: out of phase, the bead
     swinging wider.
     """
-    M, m, a, g = p.hoop_mass, p.bead_mass, p.radius, p.gravity
-    freqs = np.array([math.sqrt(g / (2 * a)), math.sqrt((1 + m / M) * g / a)])
+    M, m = p.hoop_mass, p.bead_mass
+    freqs = np.array(mode_frequencies(p))
     shapes = np.array([[1.0, 1.0], [m / (M + m), -1.0]])
     return freqs, shapes
+
+
+def mode_frequencies(p: HoopParams) -> tuple[float, float]:
+    """``(omega_1, omega_2)`` [rad/s] of :func:`normal_modes`, as floats: the driver asks for
+    the higher one at the start of every adaptive run, where building arrays would cost more
+    than the run's own setup."""
+    M, m, a, g = p.hoop_mass, p.bead_mass, p.radius, p.gravity
+    return math.sqrt(g / (2 * a)), math.sqrt((1 + m / M) * g / a)
 
 
 def mode_state(p: HoopParams, amplitudes: tuple[float, float]) -> np.ndarray:

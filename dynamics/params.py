@@ -109,6 +109,10 @@ def blamed(
 
 def finite(name: str, value: Any) -> float:
     """``value`` as a finite float (:func:`parse_number`), else :class:`SettingError`."""
+    if type(value) is float and (TINY <= abs(value) < math.inf or value == 0.0):
+        # the common case, a plain float that passes every check below, decided in one test:
+        # the tolerances of every solve come through here, and the general path costs 0.4 us
+        return value
     try:
         x = float(value) if not isinstance(value, str | bool) else value
     except (TypeError, ValueError):

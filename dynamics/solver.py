@@ -26,7 +26,7 @@ from .integrators.kernels import OK
 from .integrators.taylor import _advance_member, controls, order_for
 from .params import SettingError
 from .spec import checked_state
-from .systems import System
+from .systems import System, shared_kernel_params
 
 __all__ = ["Solver", "solve_taylor"]
 
@@ -58,6 +58,27 @@ def solve_taylor(sys_id, y0, p, t_end, rtol, atol, order, a, out):
     return stats[0, 1] if code == OK else -1
 
 
+#: What a :class:`Solver` takes from its system and tolerances, by (system, rtol, atol) given
+#: as plain floats or ``None``: ``(system, sys_id, rtol, atol, order, a)``, validated when first
+#: made. A new Solver of a system and tolerances already seen (a user who builds one per
+#: problem) takes it as it is. Keyed by the system's identity; the entry holds the system, so
+#: that its identity is not reused while it is stored.
+_PLANS: dict[tuple, tuple] = {}
+_PLAIN = (float, type(None))
+
+
+def _plan(system: System, rtol: float | None, atol: float | None) -> tuple:
+    """``(system, sys_id, rtol, atol, order, a)``, the settings checked (``SettingError``
+    naming the field)."""
+    rtol = 1e-9 if rtol is None else _v.positive("rtol", rtol)
+    atol = rtol if atol is None else _v.positive("atol", atol)
+    if system.sys_id is None:
+        raise SettingError("method", f"Taylor's method does not apply to {system.name}")
+    sys_id = int(system.sys_id)
+    order, a = order_for(float(rtol), float(atol), sys_id)
+    return system, sys_id, float(rtol), float(atol), order, a
+
+
 class Solver:
     """Solve ``system``'s equations with Taylor's method at ``rtol``, ``atol`` (default ``1e-9``
     and ``rtol``), from any start and with any parameters of that system kind.
@@ -68,6 +89,11 @@ class Solver:
     solver's own and is overwritten by the next solve (copy it to keep it). ``steps`` is the
     last solve's step count. A start or parameters of the wrong size, or not finite, raise
     ``ValueError``; a solve whose state stops being finite raises ``FloatingPointError``.
+
+    Once a Solver of the same system object and tolerances has been built, building another
+    costs about a microsecond, half of building the first: what depends only on them is kept,
+    checked, from the first, so a Solver per problem costs little more than handing a kept one
+    a new start.
     """
 
     def __init__(
@@ -77,14 +103,17 @@ class Solver:
         rtol: float | None = None,
         atol: float | None = None,
     ) -> None:
-        rtol = 1e-9 if rtol is None else _v.positive("rtol", rtol)
-        atol = rtol if atol is None else _v.positive("atol", atol)
-        if system.sys_id is None:
-            raise SettingError("method", f"Taylor's method does not apply to {system.name}")
-        self.system = system
-        self.sys_id = int(system.sys_id)
-        self.rtol, self.atol = float(rtol), float(atol)
-        self.order, self.a = order_for(self.rtol, self.atol, self.sys_id)
+        if type(rtol) in _PLAIN and type(atol) in _PLAIN:  # hashable, and compared as numbers
+            key = (id(system), rtol, atol)
+            plan = _PLANS.get(key)
+            if plan is None or plan[0] is not system:
+                plan = _plan(system, rtol, atol)
+                if len(_PLANS) >= 1024:  # a scan over tolerances: keep the table bounded
+                    _PLANS.clear()
+                _PLANS[key] = plan
+        else:
+            plan = _plan(system, rtol, atol)
+        self.system, self.sys_id, self.rtol, self.atol, self.order, self.a = plan
         self._out = np.empty(len(system.state_names))
         self._state0: np.ndarray | None = None  # the defaults, worked out when first used
         self._params: np.ndarray | None = None
@@ -100,9 +129,10 @@ class Solver:
 
     @property
     def params(self) -> np.ndarray:
-        """The system's kernel parameters (used when ``solve`` is given none)."""
+        """The system's kernel parameters (used when ``solve`` is given none; shared with every
+        run of the same system: read, never write)."""
         if self._params is None:
-            self._params = np.ascontiguousarray(self.system.kernel_params(), dtype=np.float64)
+            self._params = shared_kernel_params(self.system)
         return self._params
 
     @staticmethod

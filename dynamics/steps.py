@@ -81,3 +81,30 @@ def step_control(
             return Exact()
         raise _v.SettingError("dt", f"dt is required for the fixed-step method {method.name}")
     return Fixed(dt)
+
+
+#: The step controls already made, by (method, dt, rtol, atol) given as plain floats or ``None``:
+#: a step control is frozen and was validated when first made, so a new run at the same settings
+#: (a scan of starts, a benchmark building one per solve) takes it as it is instead of checking
+#: it again. Keyed by the method's identity (its fields are many and slow to hash); the entry
+#: holds the method, so that identity is not reused while it is stored.
+_STEPS: dict[tuple, tuple[Method, Step]] = {}
+_PLAIN = (float, type(None))
+
+
+def shared_step_control(
+    method: Method, dt: float | None = None, rtol: float | None = None, atol: float | None = None
+) -> Step:
+    """:func:`step_control`, made once per method and settings (settings other than floats or
+    ``None``, a string or a NumPy scalar, are checked every time)."""
+    if type(dt) not in _PLAIN or type(rtol) not in _PLAIN or type(atol) not in _PLAIN:
+        return step_control(method, dt, rtol, atol)
+    key = (id(method), dt, rtol, atol)
+    entry = _STEPS.get(key)
+    if entry is not None and entry[0] is method:
+        return entry[1]
+    step = step_control(method, dt, rtol, atol)  # raises, naming the field, before storing
+    if len(_STEPS) >= 4096:  # a long scan over tolerances: keep the table bounded
+        _STEPS.clear()
+    _STEPS[key] = (method, step)
+    return step

@@ -240,8 +240,9 @@ class Hoop(_Adapter):
     def time_scale(self, states: np.ndarray) -> float:
         """The period of the faster normal mode, or the time the fastest angle takes to turn
         once if that is shorter (a hoop set whirling)."""
-        rate = float(np.max(np.abs(np.atleast_2d(states)[:, 2:4]), initial=0.0))
-        return min(_period(hoop.normal_modes(self.params)[0][-1]), _period(rate))
+        # the array's own max, not np.max: the wrapper costs more than a few states' work
+        rate = float(np.abs(np.atleast_2d(states)[:, 2:4]).max(initial=0.0))
+        return min(_period(hoop.mode_frequencies(self.params)[1]), _period(rate))
 
     def fastest_frequency(self, state: np.ndarray | None = None) -> float:
         """The higher normal mode ``sqrt((1 + m/M) g / a)`` [rad/s] (the linearisation about
@@ -329,7 +330,7 @@ class ReleasedDisk(_Adapter):
     def time_scale(self, states: np.ndarray) -> float:
         """The period of the fastest body-frame angular velocity component."""
         w = np.abs(np.atleast_2d(states)[:, :3])
-        return _period(float(np.max(w)) if w.size else 0.0)
+        return _period(float(w.max()) if w.size else 0.0)
 
     def fastest_frequency(self, state: np.ndarray | None = None) -> float:
         """The spectral radius [rad/s] of the Jacobian of the right-hand side at ``state``
@@ -458,3 +459,24 @@ System = Cyclotron | Hoop | ReleasedDisk | DrivenDisk
 # Every system by the name the methods and the driver know it by (the one registry,
 # :mod:`mechviz.dynamics.registry`, looks them up by name).
 SYSTEMS: dict[str, type] = {s.name: s for s in (Cyclotron, Hoop, ReleasedDisk, DrivenDisk)}
+
+#: Each system's kernel parameters, by the adapter's identity. An adapter of these kinds is
+#: frozen, so they never change: a new run or solver of a system already seen takes the same
+#: array instead of working it out again. The entry holds the adapter, so that its identity is
+#: not reused while it is stored. The array is shared: the compiled kernels only read it.
+_KERNEL_PARAMS: dict[int, tuple[System, np.ndarray]] = {}
+_FROZEN_KINDS = frozenset((Cyclotron, Hoop, ReleasedDisk, DrivenDisk))
+
+
+def shared_kernel_params(system: System) -> np.ndarray:
+    """``system.kernel_params()`` as a contiguous float64 array, worked out once per adapter of
+    the four kinds above (another kind, a subclass included, every time). Not to be written."""
+    entry = _KERNEL_PARAMS.get(id(system))
+    if entry is not None and entry[0] is system:
+        return entry[1]
+    p = np.ascontiguousarray(system.kernel_params(), dtype=np.float64)
+    if type(system) in _FROZEN_KINDS:
+        if len(_KERNEL_PARAMS) >= 1024:  # a scan over parameters: keep the table bounded
+            _KERNEL_PARAMS.clear()
+        _KERNEL_PARAMS[id(system)] = (system, p)
+    return p
