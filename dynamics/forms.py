@@ -28,6 +28,11 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # sympy only where the forms are generated
     from .codegen.equations import Equations
 
+#: The Taylor cost model [ns] a registered system takes unless it measures its own: one step as
+#: ``c0 + c1 p + c2 p^2`` at order ``p``, between the shipped hoop's and free body's
+#: (:data:`mechviz.dynamics.ids.COMPILED`); only the ratios choose the order.
+TAYLOR_COST = (60.0, 8.0, 1.0)
+
 
 @dataclass(frozen=True, eq=False)
 class SystemForms:
@@ -45,8 +50,8 @@ class SystemForms:
       fixed step (None: none);
     - ``taylor_cost`` [ns]: one Taylor step as ``c0 + c1 p + c2 p^2`` at order ``p``, the cost
       model from which Taylor's method picks its order (:func:`~mechviz.dynamics.taylor_order.
-      order_for`; only the ratios matter: the default is between the shipped hoop's and free
-      body's); ``entire``: its solutions are entire with coefficients falling as ``1/k!``.
+      order_for`; default :data:`TAYLOR_COST`); ``entire``: its solutions are entire with
+      coefficients falling as ``1/k!``.
 
     Compared and hashed by identity: two forms are the same only if they are one object (a
     loop compiled for one is not reused for another)."""
@@ -59,7 +64,7 @@ class SystemForms:
     rows: int = 0
     symmetric2: Callable[..., Any] | None = None
     exact_step: Callable[..., Any] | None = None
-    taylor_cost: tuple[float, float, float] = (60.0, 8.0, 1.0)
+    taylor_cost: tuple[float, float, float] = TAYLOR_COST
     entire: bool = False
 
     def __post_init__(self) -> None:
@@ -83,7 +88,7 @@ class SystemForms:
         *,
         symmetric2: Callable[..., Any] | None = None,
         exact_step: Callable[..., Any] | None = None,
-        taylor_cost: tuple[float, float, float] = (60.0, 8.0, 1.0),
+        taylor_cost: tuple[float, float, float] = TAYLOR_COST,
         entire: bool = False,
     ) -> SystemForms:
         """Every form the generator makes from ``eq`` (:mod:`mechviz.dynamics.codegen`: the
