@@ -517,7 +517,9 @@ def step_functions(method: Method, sys_id: int | SystemForms):
     if kind == "symmetric2":
         return _k.SYMMETRIC2[sys_id], None
     if kind == "exact":
-        return _k.cyclotron.exact_step, None
+        if _k.EXACT[sys_id] is None:
+            raise ValueError(f"system {sys_id} has no compiled exact flow")
+        return _k.EXACT[sys_id], None
     if kind == "yoshida4":
         return _k.yoshida4_step, _k.SYMMETRIC2[sys_id]
     step = {"euler": _k.euler_step, "midpoint": _k.midpoint_step}[kind]

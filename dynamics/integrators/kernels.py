@@ -187,6 +187,8 @@ _IDS = (CYCLOTRON, HOOP, FREE_BODY)
 RHS = tuple(product_module(i, "rhs").rhs for i in _IDS)
 SYMMETRIC2 = (cyclotron.boris_step, hoop.verlet_step, disk.splitting_step)
 RK4 = tuple(product_module(i, "step").rk4_step for i in _IDS)
+#: The compiled exact flows ``step(y, p, h)``, by id: the charge's only (None: none).
+EXACT = (cyclotron.exact_step, None, None)
 
 
 def rhs_of(sys_id: int | SystemForms):
