@@ -141,3 +141,17 @@ def test_heyoka_parameters_are_the_rk4_steps_constants():
     M, m, a, g = 1.3, 0.7, 0.9, 9.81
     got = peer_equations.heyoka_pars(HOOP, np.array([M, m, a, g]))
     assert list(got) == [-m, 2 * M + m, -g / a, -g * (M + m) / a]
+
+
+@pytest.mark.parametrize("sys_id", SYSTEMS)
+def test_mpmath_reference_equations_are_ours(sys_id):
+    """The right-hand side mpmath's 25-digit references integrate, at 25 digits, rounds to
+    ours (which forms its constants in double: round-off apart)."""
+    mpmath = pytest.importorskip("mpmath")
+    from mechviz.bench.problems import mpmath_rhs
+
+    with mpmath.workdps(25):
+        for y, p in _cases(sys_id):
+            f = mpmath_rhs(sys_id, p)
+            got = np.array([float(v) for v in f(0, [mpmath.mpf(float(v)) for v in y])])
+            assert _close(got, _ours(sys_id, y, p))
