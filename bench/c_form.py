@@ -22,10 +22,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mechviz.dynamics.ids import CYCLOTRON, FREE_BODY, HOOP
+from mechviz.dynamics.ids import NAMES
 
-#: The C functions' name of each system (``rk4_charge``, ...), as ``c_steps.c`` calls them.
-C_NAMES = {CYCLOTRON: "charge", HOOP: "hoop", FREE_BODY: "free"}
+#: The C functions' name of each system: its equations' name, ``-`` as ``_``
+#: (``rk4_cyclotron``, ``rk4_hoop``, ``rk4_free_body``, as ``c_steps.c`` calls them).
+C_NAMES = {sys_id: name.replace("-", "_") for sys_id, name in NAMES.items()}
 
 
 def _c(e) -> str:

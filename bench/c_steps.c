@@ -1,8 +1,8 @@
 /* The compiled steps of mechviz written in C, to measure what "the same step costs in C".
  *
- * The RK4 kernels (rk4_charge, rk4_hoop, rk4_free) are generated from the equations written
- * once, into c_rk4_generated.h (bench/c_form.py), from the benchmark problems' starts and
- * parameters; the symmetric methods' kernels (Boris, the free body's splitting) are the
+ * The RK4 kernels (rk4_cyclotron, rk4_hoop, rk4_free_body) are generated from the equations
+ * written once, into c_rk4_generated.h (bench/c_form.py), from the benchmark problems' starts
+ * and parameters; the symmetric methods' kernels (Boris, the free body's splitting) are the
  * methods' own maps, written here by hand as the product's are (dynamics/cyclotron.py,
  * disk.py). Scalar locals, the whole time loop inside one function, IEEE semantics (no
  * -ffast-math). The state lives in locals across steps, which is the fastest shape C allows;
@@ -76,7 +76,7 @@ int main(int argc, char **argv) {
     long n = argc > 1 ? atol(argv[1]) : 1000000;
     int reps = argc > 2 ? atoi(argv[2]) : 5;
     const char *names[] = {"rk4-charge", "boris-charge", "rk4-hoop", "rk4-free-body", "splitting-free-body"};
-    kernel ks[] = {rk4_charge, boris, rk4_hoop, rk4_free, splitting};
+    kernel ks[] = {rk4_cyclotron, boris, rk4_hoop, rk4_free_body, splitting};
     double hs[] = {0.01, 0.01, 0.001, 0.001, 0.001};
     long scale[] = {1, 1, 8, 4, 8}; /* fewer steps for the expensive kernels */
     for (int i = 0; i < 5; i++) {

@@ -29,7 +29,7 @@ from mechviz.dynamics.integrators.base import IntegrationError
 from mechviz.dynamics.simulation import Simulation
 from mechviz.dynamics.systems import Cyclotron, Hoop
 
-from .c_form import C_NAMES, c_rk4_header
+from .c_form import c_rk4_header
 from .problems import PROBLEMS
 
 # ----------------------------------------------------------------------------- long runs
@@ -203,7 +203,7 @@ def c_cases() -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Each system's ``(kernel parameters, start)`` of its benchmark problem, which the
     generated C RK4 loops start from (as the numba steps measured beside them do)."""
     out = {}
-    for sys_id in C_NAMES:
+    for sys_id in sorted({case[2] for case in STEP_CASES}):
         pb = problem_of(sys_id)
         out[sys_id] = (pb.system.kernel_params(), pb.y0)
     return out

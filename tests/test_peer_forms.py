@@ -76,9 +76,10 @@ def c_library(tmp_path_factory):
     if cc is None:
         pytest.skip("no C compiler")
     tmp = tmp_path_factory.mktemp("c_form")
-    (tmp / experiments.C_HEADER).write_text(c_form.c_rk4_header(experiments.c_cases()))
+    cases = experiments.c_cases()
+    (tmp / experiments.C_HEADER).write_text(c_form.c_rk4_header(cases))
     wrappers = [f'#include "{experiments.C_HEADER}"']
-    for name in c_form.C_NAMES.values():
+    for name in (c_form.C_NAMES[sys_id] for sys_id in cases):
         wrappers.append(
             f"void call_rhs_{name}(const double *y, const double *p, double *o)"
             f" {{ rhs_{name}(y, p, o); }}\n"
