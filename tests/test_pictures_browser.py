@@ -81,7 +81,7 @@ def _save(img: np.ndarray, name: str, tmp_path) -> None:
 
 def _choose(app, key: str, x: str, y: str) -> None:
     ex = app.exhibits[key]
-    variables = ex.plot_variables(ex.config)
+    variables = ex.model.plot_variables(ex.model.config)
     app.w[f"{key}.plot_x"].value = variables[x].label  # as the dropdowns do
     app.w[f"{key}.plot_y"].value = variables[y].label
 
@@ -113,7 +113,7 @@ def test_the_plot_shows_the_motion_and_its_exact_curve(
     frames_later(app, 2)  # the commands are applied at the start of a frame
     _choose(app, key, *pair)
     # 200 points are 600 frames (a point each measured frame, every third): 10 s at 60 fps
-    wait_until(lambda: len(app.exhibits[key].trace) >= 200, 60, "the path to grow")
+    wait_until(lambda: len(app.exhibits[key].model.trace) >= 200, 60, "the path to grow")
     img = _plot(page, tab)
     assert app.panels[key].plot_choice == pair
     _save(img, name, tmp_path)

@@ -255,7 +255,7 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     out, results = recorded
     demo = results["beam"].demo
     live = CyclotronExhibit(server)
-    live.apply(
+    live.model.apply(
         Set(
             fields={
                 "method": demo.method,
@@ -270,8 +270,8 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     rows = list(csv.DictReader(io.StringIO((out / "beam.csv").read_text())))
     names = dynamics.SYSTEMS["cyclotron"].state_names
     first = np.array([[float(r[n]) for n in names] for r in rows if float(r["t"]) == 0.0])
-    assert first.shape == live.beam.state.shape == (12, 6)
-    np.testing.assert_allclose(first, live.beam.state, rtol=1e-9, atol=1e-12)
+    assert first.shape == live.model.beam.state.shape == (12, 6)
+    np.testing.assert_allclose(first, live.model.beam.state, rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize(

@@ -46,7 +46,7 @@ def test_pausing_and_scrubbing_back_moves_the_time_and_the_exhibits_back():
             "the page's time to go 5 s back",
         )
         assert not app.playing
-        hoop = app.exhibits["hoop"]
+        hoop = app.exhibits["hoop"].model
         assert hoop.scrubbed == pytest.approx(5.0, abs=0.02)
         # the hoop's readout on its tab says the same time
         page.get_by_role("tab", name="Hoop").click()
