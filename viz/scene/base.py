@@ -44,6 +44,7 @@ from ..model.base import (  # noqa: F401  (re-exported for the scenes)
     log10_abs,
     positive,
 )
+from ..model.observed import Event
 
 
 def brief(x, digits: int = 4) -> str:
@@ -129,7 +130,7 @@ class Exhibit:
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
     caption: ClassVar[str] = ""  # "what you see", shown on the exhibit's stage
     # what the view does when the model announces it, beyond drawing again: a method's name
-    listens: ClassVar[dict[str, str]] = {"started": "_started"}
+    listens: ClassVar[dict[Event, str]] = {"started": "_started"}
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)

@@ -22,7 +22,7 @@ from mechviz.dynamics import cyclotron as cy
 from .. import geometry as geo
 from ..model.commands import Kick
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
-from .base import Exhibit, against_theory, fmt
+from .base import Event, Exhibit, against_theory, fmt
 
 
 class BeamTrails:
@@ -76,7 +76,7 @@ class CyclotronExhibit(Exhibit):
     model_type = CyclotronModel
     icon = "ATOM"
     caption = "every orbit takes 2πm/|q|B, whatever its speed"
-    listens: ClassVar[dict[str, str]] = {
+    listens: ClassVar[dict[Event, str]] = {
         "started": "_started",
         "segment": "_segment_started",
         "rewound": "_rewound",

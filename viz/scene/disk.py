@@ -25,7 +25,7 @@ from mechviz.dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
-from .base import Exhibit, against_theory, error_text, fmt
+from .base import Event, Exhibit, against_theory, error_text, fmt
 from .poinsot import LIFT, P, PoinsotPicture, to_world
 
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
@@ -40,7 +40,7 @@ class DiskExhibit(Exhibit):
     while driven, the Poinsot construction once released."""
 
     model_type = DiskModel
-    listens: ClassVar[dict[str, str]] = {"started": "_started", "rewound": "_rewound"}
+    listens: ClassVar[dict[Event, str]] = {"started": "_started", "rewound": "_rewound"}
     icon = "DISC"
     caption = "L is not along ω: held, the bearings push; free, it tumbles"
 

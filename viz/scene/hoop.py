@@ -24,7 +24,7 @@ from mechviz.dynamics.results import EXACT_FLOW
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import MAP_SIZE, add_maps
-from .base import Exhibit, against_theory, error_text, fmt
+from .base import Event, Exhibit, against_theory, error_text, fmt
 
 
 @functools.lru_cache(maxsize=64)
@@ -126,7 +126,7 @@ class HoopExhibit(Exhibit):
     the configuration-space square."""
 
     model_type = HoopModel
-    listens: ClassVar[dict[str, str]] = {
+    listens: ClassVar[dict[Event, str]] = {
         "started": "_started",
         "rewound": "_rewound",
         "jumped": "_jumped",
