@@ -97,7 +97,11 @@ def test_csv_holds_every_run_member_and_frame(recorded, name):
     ghost = res.frames if demo.ghost else 0
     assert len(rows) == runs * members * res.frames + ghost
     first = rows[0]
-    system = "driven-disk" if demo.motion == "driven" else EXHIBITS[demo.exhibit].Config.system_name
+    system = (
+        "driven-disk"
+        if demo.motion == "driven"
+        else EXHIBITS[demo.exhibit].model_type.Config.system_name
+    )
     names = dynamics.SYSTEMS[system].state_names
     assert list(first)[:3] == ["run", "member", "t"] and all(n in first for n in names)
     assert float(first["t"]) == 0.0 and float(first["energy_error"]) == 0.0
