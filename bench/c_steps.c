@@ -1,11 +1,15 @@
 /* The compiled steps of mechviz written in C, to measure what "the same step costs in C".
  *
- * Each kernel has the arithmetic of its numba counterpart (dynamics/cyclotron.py, hoop.py,
- * disk.py): scalar locals, the whole time loop inside one function, IEEE semantics (no
+ * The RK4 kernels (rk4_cyclotron, rk4_hoop, rk4_free_body) are generated from the equations
+ * written once, into c_rk4_generated.h (bench/c_form.py), from the benchmark problems' starts
+ * and parameters; the symmetric methods' kernels (Boris, the free body's splitting) are the
+ * methods' own maps, written here by hand as the product's are (dynamics/cyclotron.py,
+ * disk.py). Scalar locals, the whole time loop inside one function, IEEE semantics (no
  * -ffast-math). The state lives in locals across steps, which is the fastest shape C allows;
  * numba's kernels store it back to the caller's array every step.
  *
- * Built and run by dynamics/bench/percost.py:  gcc -O2 c_steps.c -lm ; ./a.out N REPEATS
+ * Built and run by bench/experiments.py (the header written beside it first):
+ *   gcc -O2 -I<folder of c_rk4_generated.h> c_steps.c -lm ; ./a.out N REPEATS
  * Prints one line per kernel: name, median ns/step, and a checksum of the final state.
  */
 #include <math.h>
@@ -13,31 +17,12 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "c_rk4_generated.h"
+
 static double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static double rk4_charge(long n, double h) {
-    double w = 1.0, x = 1, y = 0, z = 0, u = 0, v = 1, vz = 0.1;
-    for (long k = 0; k < n; k++) {
-        double a1u = w * v, a1v = -w * u;
-        double u1 = u + 0.5 * h * a1u, v1 = v + 0.5 * h * a1v;
-        double a2u = w * v1, a2v = -w * u1;
-        double u2 = u + 0.5 * h * a2u, v2 = v + 0.5 * h * a2v;
-        double a3u = w * v2, a3v = -w * u2;
-        double u3 = u + h * a3u, v3 = v + h * a3v;
-        double a4u = w * v3, a4v = -w * u3;
-        double c = h / 6.0;
-        x = x + c * (u + 2.0 * (u1 + u2) + u3);
-        y = y + c * (v + 2.0 * (v1 + v2) + v3);
-        z = z + h * vz;
-        double nu = u + c * (a1u + 2.0 * (a2u + a3u) + a4u);
-        v = v + c * (a1v + 2.0 * (a2v + a3v) + a4v);
-        u = nu;
-    }
-    return x + y + z + u + v;
 }
 
 static double boris(long n, double h) {
@@ -50,64 +35,6 @@ static double boris(long n, double h) {
         x += half * vx; y += half * vy; z += half * vz;
     }
     return x + y + z + vx + vy;
-}
-
-static inline void hoop_acc(double th1, double th2, double w1, double w2, double M, double m,
-                            double ga, double *o1, double *o2) {
-    double s = sin(th1 - th2), c = cos(th1 - th2);
-    double r1 = -m * s * w2 * w2 - (M + m) * ga * sin(th1);
-    double r2 = s * w1 * w1 - ga * sin(th2);
-    double m11 = 2.0 * M + m, det = m11 - m * c * c;
-    *o1 = (r1 - m * c * r2) / det;
-    *o2 = (m11 * r2 - c * r1) / det;
-}
-
-static double rk4_hoop(long n, double h) {
-    double M = 1.0, m = 0.5, ga = 9.81, q1 = 0.5, q2 = -0.3, u1 = 0, u2 = 0;
-    for (long k = 0; k < n; k++) {
-        double a1, b1, a2, b2, a3, b3, a4, b4, hh = 0.5 * h;
-        hoop_acc(q1, q2, u1, u2, M, m, ga, &a1, &b1);
-        double u1b = u1 + hh * a1, u2b = u2 + hh * b1;
-        hoop_acc(q1 + hh * u1, q2 + hh * u2, u1b, u2b, M, m, ga, &a2, &b2);
-        double u1c = u1 + hh * a2, u2c = u2 + hh * b2;
-        hoop_acc(q1 + hh * u1b, q2 + hh * u2b, u1c, u2c, M, m, ga, &a3, &b3);
-        double u1d = u1 + h * a3, u2d = u2 + h * b3;
-        hoop_acc(q1 + h * u1c, q2 + h * u2c, u1d, u2d, M, m, ga, &a4, &b4);
-        double c = h / 6.0;
-        q1 = q1 + c * (u1 + 2.0 * (u1b + u1c) + u1d);
-        q2 = q2 + c * (u2 + 2.0 * (u2b + u2c) + u2d);
-        u1 = u1 + c * (a1 + 2.0 * (a2 + a3) + a4);
-        u2 = u2 + c * (b1 + 2.0 * (b2 + b3) + b4);
-    }
-    return q1 + q2 + u1 + u2;
-}
-
-#define RATES(o, w1, w2, w3, q0, q1, q2, q3)                 \
-    o[0] = k1 * (w2) * (w3);                                 \
-    o[1] = k2 * (w3) * (w1);                                 \
-    o[2] = k3 * (w1) * (w2);                                 \
-    o[3] = 0.5 * (-(q1) * (w1) - (q2) * (w2) - (q3) * (w3)); \
-    o[4] = 0.5 * ((q0) * (w1) + (q2) * (w3) - (q3) * (w2));  \
-    o[5] = 0.5 * ((q0) * (w2) + (q3) * (w1) - (q1) * (w3));  \
-    o[6] = 0.5 * ((q0) * (w3) + (q1) * (w2) - (q2) * (w1));
-
-static double rk4_free(long n, double h) {
-    double i1 = 0.25, i2 = 29.0 / 36.0, i3 = 19.0 / 18.0;
-    double a[7] = {0.01, 1.0, 0.01, 1.0, 0.0, 0.0, 0.0};
-    for (long k = 0; k < n; k++) {
-        double k1 = (i2 - i3) / i1, k2 = (i3 - i1) / i2, k3 = (i1 - i2) / i3, hh = 0.5 * h;
-        double b[7], c[7], d[7], e[7], t[7];
-        RATES(b, a[0], a[1], a[2], a[3], a[4], a[5], a[6]);
-        for (int j = 0; j < 7; j++) t[j] = a[j] + hh * b[j];
-        RATES(c, t[0], t[1], t[2], t[3], t[4], t[5], t[6]);
-        for (int j = 0; j < 7; j++) t[j] = a[j] + hh * c[j];
-        RATES(d, t[0], t[1], t[2], t[3], t[4], t[5], t[6]);
-        for (int j = 0; j < 7; j++) t[j] = a[j] + h * d[j];
-        RATES(e, t[0], t[1], t[2], t[3], t[4], t[5], t[6]);
-        double cc = h / 6.0;
-        for (int j = 0; j < 7; j++) a[j] = a[j] + cc * (b[j] + 2.0 * (c[j] + d[j]) + e[j]);
-    }
-    return a[0] + a[1] + a[2] + a[3] + a[4] + a[5] + a[6];
 }
 
 /* Exact flow of L_i^2 / 2 I_i, as mechviz.dynamics.disk._rotation (two libm calls). */
@@ -149,7 +76,7 @@ int main(int argc, char **argv) {
     long n = argc > 1 ? atol(argv[1]) : 1000000;
     int reps = argc > 2 ? atoi(argv[2]) : 5;
     const char *names[] = {"rk4-charge", "boris-charge", "rk4-hoop", "rk4-free-body", "splitting-free-body"};
-    kernel ks[] = {rk4_charge, boris, rk4_hoop, rk4_free, splitting};
+    kernel ks[] = {rk4_cyclotron, boris, rk4_hoop, rk4_free_body, splitting};
     double hs[] = {0.01, 0.01, 0.001, 0.001, 0.001};
     long scale[] = {1, 1, 8, 4, 8}; /* fewer steps for the expensive kernels */
     for (int i = 0; i < 5; i++) {

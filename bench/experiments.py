@@ -6,7 +6,8 @@
   beside the closed forms of :mod:`mechviz.dynamics.stability`.
 - :func:`per_step_costs`: ns per compiled step of the direct kernels through
   :func:`mechviz.dynamics.integrators.kernels.run_direct`, and the same steps written in C
-  (``c_steps.c``, built with gcc ``-O2`` when a compiler is found), measured in the same run.
+  (``c_steps.c``, its RK4 loops generated from the equations by :mod:`.c_form`, built with gcc
+  ``-O2`` when a compiler is found), measured in the same run.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from mechviz.dynamics.integrators.base import IntegrationError
 from mechviz.dynamics.simulation import Simulation
 from mechviz.dynamics.systems import Cyclotron, Hoop
 
+from .c_form import c_rk4_header
 from .problems import PROBLEMS
 
 # ----------------------------------------------------------------------------- long runs
@@ -168,6 +170,7 @@ def stability_points(progress=None) -> dict:
 
 # ----------------------------------------------------------------------------- per-step cost
 C_SOURCE = Path(__file__).with_name("c_steps.c")
+C_HEADER = "c_rk4_generated.h"  # what C_SOURCE includes: its RK4 loops, generated (.c_form)
 STEP_CASES = (
     # name, table, system id (the problem of that system runs), h, steps
     ("rk4-charge", kernels.RK4, kernels.CYCLOTRON, 0.01, 1_000_000),
@@ -194,6 +197,16 @@ def problem_of(sys_id: int):
         if pb.system.sys_id == sys_id:
             return pb
     raise KeyError(f"no benchmark problem of the compiled system {sys_id}")
+
+
+def c_cases() -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Each system's ``(kernel parameters, start)`` of its benchmark problem, which the
+    generated C RK4 loops start from (as the numba steps measured beside them do)."""
+    out = {}
+    for sys_id in sorted({case[2] for case in STEP_CASES}):
+        pb = problem_of(sys_id)
+        out[sys_id] = (pb.system.kernel_params(), pb.y0)
+    return out
 
 
 def _numba_cost(table, sys_id, h, n, repeats) -> tuple[float, float]:
@@ -224,9 +237,10 @@ def _c_costs(n: int, repeats: int) -> dict[str, float] | str:
         return "no C compiler found"
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(tmp) / "c_steps"
+        (Path(tmp) / C_HEADER).write_text(c_rk4_header(c_cases()), encoding="utf-8")
         try:
             subprocess.run(
-                [cc, "-O2", str(C_SOURCE), "-lm", "-o", str(exe)],
+                [cc, "-O2", f"-I{tmp}", str(C_SOURCE), "-lm", "-o", str(exe)],
                 check=True,
                 capture_output=True,
                 timeout=60,
@@ -262,7 +276,7 @@ def per_step_costs(quick: bool = False, progress=None) -> dict:
             row["within_2x_of_c"] = row["ratio_to_c"] <= 2.0
     return {
         "rows": rows,
-        "c": "gcc -O2, same arithmetic, state in locals (bench/c_steps.c)"
+        "c": "gcc -O2, same arithmetic, state in locals (bench/c_steps.c, RK4 generated)"
         if isinstance(c, dict)
         else c,
         "note": "numba steps run through kernels.run_direct on one trajectory (state stored to its "

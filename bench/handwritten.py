@@ -7,8 +7,8 @@ once (:mod:`mechviz.dynamics.codegen`; :data:`mechviz.dynamics.integrators.kerne
 the forms written by hand before, kept for two uses: the generated-cost
 benchmark (:mod:`.generated_cost`) times the product's forms against them, and the tests check
 the generated forms against them to round-off (an independent writing of the same equations).
-The peers (:mod:`.peers`, :mod:`.fast_peers`) call the scalar forms (``*_acceleration``,
-:func:`free_derivatives`) from their own callbacks.
+The peers' right-hand sides no longer use them: theirs are generated too (:mod:`.peers`,
+:mod:`.fast_peers`, :mod:`.peer_equations`).
 
 Conventions: ``rhs(y, p, out)`` writes ``dy/dt`` into ``out``; ``rk4_step(y, p, h)`` advances
 ``y`` by ``h`` [s] in place and returns the evaluations used (4). ``p`` is the system's

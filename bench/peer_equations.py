@@ -1,61 +1,120 @@
-"""Our right-hand sides in heyoka's expression system, written once for every heyoka run.
+"""Our right-hand sides in heyoka's expression system, generated from the equations written once.
 
-The parameters enter as the combinations the right-hand sides use (:func:`heyoka_pars`), as
-heyoka's runtime parameters ``hy.par[i]``: one compiled integrator then serves every case of a
-system. The combinations are formed in double precision, as our kernels form them, so that a
-run in extended precision (the references) solves the very equations our methods solve. The
-equations are those of :mod:`mechviz.dynamics.cyclotron`, :mod:`mechviz.dynamics.hoop` and the free body of
-:mod:`mechviz.dynamics.disk` (kernel parameters as in :mod:`mechviz.dynamics.integrators.kernels`).
+The expressions are those of :data:`mechviz.dynamics.codegen.equations.EQUATIONS`, in the form
+the product's RK4 steps are printed from (:func:`mechviz.dynamics.codegen.steps.hoisted`): every
+constant of the parameters (the hoop's ``2M + m``, ``-(g/a)``, ``-(M + m) g/a``; the free body's
+``(I2 - I3)/I1``) is one of heyoka's runtime parameters ``hy.par[i]``, so one compiled integrator
+serves every case of a system and heyoka's Taylor decomposition has no expression of parameters
+to expand at every step. :func:`heyoka_pars` forms those constants from our kernel parameters in
+double precision, with the very expressions our RK4 steps form them with, so that a run in
+extended precision (the references) solves the equations our methods solve.
+
+The translation walks sympy's tree: sums (terms with a minus sign subtracted), products (a
+factor with a negative integer power becomes a division, which heyoka's decomposition takes as
+one quotient rather than a power), integer powers (a square as a product), ``sin`` and ``cos``;
+anything else raises (a system with another function would extend :func:`to_heyoka`). sympy's
+common subexpressions enter as shared heyoka expressions.
 """
 
 from __future__ import annotations
 
+import functools
+import math
+
 import numpy as np
 
-from mechviz.dynamics.integrators.kernels import CYCLOTRON, HOOP
+
+@functools.cache
+def _form(sys_id: int):
+    from mechviz.dynamics.codegen.equations import EQUATIONS
+    from mechviz.dynamics.codegen.steps import hoisted
+
+    return hoisted(EQUATIONS[sys_id]())
+
+
+@functools.cache
+def _constants(sys_id: int):
+    """``f(p) -> [k0, k1, ...]``: the constants as our RK4 step computes them (the same printed
+    expressions, in Python floats: the same IEEE double operations as the compiled step)."""
+    from sympy.printing.pycode import pycode
+
+    form = _form(sys_id)
+    lines = ["def constants(p):"]
+    lines += [f"    {s} = p[{j}]" for j, s in enumerate(form.ps)]
+    lines += [f"    {s} = {pycode(e)}" for s, e in form.consts]
+    lines.append(f"    return [{', '.join(map(str, form.ks))}]")
+    scope: dict = {"math": math}
+    exec("\n".join(lines), scope)  # text printed from our own equations
+    return scope["constants"]
 
 
 def heyoka_pars(sys_id: int, params: np.ndarray) -> np.ndarray:
-    """The runtime parameters of :func:`heyoka_equations` from our kernel parameters: the
-    combinations the right-hand side uses, so that no expression of parameters is expanded."""
-    p = np.asarray(params, dtype=float)
-    if sys_id == CYCLOTRON:
-        return np.array([p[0]])
-    if sys_id == HOOP:
-        M, m, ga = p[0], p[1], p[3] / p[2]
-        return np.array([m, ga, 2.0 * M + m, (M + m) * ga])
-    i1, i2, i3 = p
-    return np.array([(i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3])
+    """The runtime parameters of :func:`heyoka_equations` from our kernel parameters
+    ``params`` (the system's ``kernel_params()``): its constants, in double precision."""
+    p = [float(v) for v in np.asarray(params, dtype=float)]
+    return np.array(_constants(sys_id)(p), dtype=float)
 
 
-def heyoka_equations(sys_id: int):
-    """Our right-hand sides in heyoka's expressions, parameters as ``hy.par[i]``."""
+def to_heyoka(e, names: dict):
+    """The sympy expression ``e`` as a heyoka expression, ``names`` mapping its symbols to
+    heyoka expressions (variables, parameters, shared subexpressions)."""
     import heyoka as hy
+    import sympy as sp
 
-    par = hy.par
-    if sys_id == CYCLOTRON:
-        x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
-        return [(x, vx), (y, vy), (z, vz), (vx, par[0] * vy), (vy, -par[0] * vx), (vz, 0.0 * vz)]
-    if sys_id == HOOP:
-        th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
-        m, ga, m11, mg = par[0], par[1], par[2], par[3]
-        s, c = hy.sin(th1 - th2), hy.cos(th1 - th2)
-        r1 = -m * s * w2 * w2 - mg * hy.sin(th1)
-        r2 = s * w1 * w1 - ga * hy.sin(th2)
-        det = m11 - m * c * c
-        return [
-            (th1, w1),
-            (th2, w2),
-            (w1, (r1 - m * c * r2) / det),
-            (w2, (m11 * r2 - c * r1) / det),
-        ]
-    w1, w2, w3, q0, q1, q2, q3 = hy.make_vars("w1", "w2", "w3", "q0", "q1", "q2", "q3")
-    return [
-        (w1, par[0] * w2 * w3),
-        (w2, par[1] * w3 * w1),
-        (w3, par[2] * w1 * w2),
-        (q0, 0.5 * (-q1 * w1 - q2 * w2 - q3 * w3)),
-        (q1, 0.5 * (q0 * w1 + q2 * w3 - q3 * w2)),
-        (q2, 0.5 * (q0 * w2 + q3 * w1 - q1 * w3)),
-        (q3, 0.5 * (q0 * w3 + q1 * w2 - q2 * w1)),
-    ]
+    if e.is_Symbol:
+        return names[e]
+    if e.is_Number:
+        return hy.expression(float(e))
+    if e.is_Add:  # a term with a minus sign is subtracted, not negated and added
+        plus = [a for a in e.args if not a.could_extract_minus_sign()]
+        minus = [to_heyoka(-a, names) for a in e.args if a.could_extract_minus_sign()]
+        out = (
+            functools.reduce(lambda a, b: a + b, [to_heyoka(a, names) for a in plus])
+            if plus
+            else -minus.pop(0)
+        )
+        return functools.reduce(lambda a, b: a - b, minus, out)
+    if e.is_Mul:
+        num, den = [], []
+        for a in e.args:
+            if a.is_Pow and a.exp.is_Integer and a.exp < 0:
+                den.append(to_heyoka(a.base**-a.exp, names))
+            else:
+                num.append(to_heyoka(a, names))
+        top = functools.reduce(lambda a, b: a * b, num) if num else hy.expression(1.0)
+        return top / functools.reduce(lambda a, b: a * b, den) if den else top
+    if e.is_Pow and e.exp.is_Integer:
+        if e.exp < 0:
+            return 1.0 / to_heyoka(e.base**-e.exp, names)
+        if e.exp == 2:  # one product: cheaper in heyoka's Taylor recurrences than a power
+            base = to_heyoka(e.base, names)
+            return base * base
+        return to_heyoka(e.base, names) ** int(e.exp)
+    if isinstance(e, sp.sin):
+        return hy.sin(to_heyoka(e.args[0], names))
+    if isinstance(e, sp.cos):
+        return hy.cos(to_heyoka(e.args[0], names))
+    raise NotImplementedError(f"no heyoka form of {type(e).__name__}: {e}")
+
+
+def heyoka_equations(sys_id: int) -> list:
+    """Our right-hand sides in heyoka's expressions, ``[(variable, rate), ...]`` in the state's
+    order, the constants of :func:`heyoka_pars` as ``hy.par[i]``."""
+    import heyoka as hy
+    import sympy as sp
+
+    form = _form(sys_id)
+    ys = hy.make_vars(*map(str, form.ys))
+    ys = ys if isinstance(ys, list) else [ys]
+    names = dict(zip(form.ys, ys, strict=True))
+    names |= {k: hy.par[i] for i, k in enumerate(form.ks)}
+    # the rates whole, common factors out of sums (the free body's 1/2 once per rate), then
+    # their common subexpressions again (the hoop's reciprocal of the determinant once): of the
+    # arrangements measured, the one heyoka solved fastest, as fast as the hand-written one
+    rates = list(form.rates)
+    for s, e in reversed(form.temps):
+        rates = [r.xreplace({s: e}) for r in rates]
+    temps, rates = sp.cse([sp.factor_terms(r) for r in rates], symbols=sp.numbered_symbols("t"))
+    for s, e in temps:
+        names[s] = to_heyoka(e, names)
+    return [(y, to_heyoka(r, names)) for y, r in zip(ys, rates, strict=True)]

@@ -9,14 +9,16 @@
   built (compiled) once per tolerance, untimed, and each timed run resets time and state and
   calls ``propagate_until(T)``.
 
-Each peer integrates the same equations with the same parameters (the right-hand sides call our
-compiled scalar forms, :mod:`.handwritten`, or restate them in heyoka's expressions), from the same
-initial state over the same span; errors are measured against the same references. A peer that
+Each peer integrates the same equations with the same parameters (the right-hand sides call the
+product's generated right-hand side, or are heyoka's expressions generated from the same
+equations, :mod:`.peer_equations`), from the same initial state over the same span; errors are
+measured against the same references. A peer that
 is not installed is reported with the reason instead of run.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -99,45 +101,31 @@ def heyoka_run(problem: Problem, tol: float, *, fp_type=None) -> PeerRun:
 _CFUNCS: dict[int, object] = {}
 
 
+@functools.cache
+def _sizes(sys_id: int) -> tuple[int, int]:
+    """The state's dimension and the number of kernel parameters of the system ``sys_id``."""
+    from mechviz.dynamics.codegen.equations import EQUATIONS
+
+    eq = EQUATIONS[sys_id]()
+    return eq.dim, len(eq.params)
+
+
 def _cyrk_rhs(kind: int):
-    """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback)."""
-    import numba as nb
-
-    from mechviz.dynamics.integrators.kernels import CYCLOTRON, HOOP
-
-    from . import handwritten
-
+    """The right-hand side as ``f(dy, t, y, args)`` on raw pointers (CyRK's C callback): the
+    product's generated right-hand side (:data:`mechviz.dynamics.integrators.kernels.RHS`)
+    called on the pointers viewed as arrays, ``args`` the system's kernel parameters. A numba
+    ``cfunc``, so it needs numba alone (CyRK only to be called)."""
     if kind in _CFUNCS:
         return _CFUNCS[kind]
-    if kind == CYCLOTRON:
-        acc = handwritten.charge_acceleration
+    import numba as nb
 
-        def f(dy, t, y, args):
-            dy[0] = y[3]
-            dy[1] = y[4]
-            dy[2] = y[5]
-            a, b = acc(y[3], y[4], args[0])
-            dy[3] = a
-            dy[4] = b
-            dy[5] = 0.0
+    from mechviz.dynamics.integrators.kernels import RHS
 
-    elif kind == HOOP:
-        acc = handwritten.hoop_acceleration
+    rhs = RHS[kind]
+    d, n_p = _sizes(kind)
 
-        def f(dy, t, y, args):
-            dy[0] = y[2]
-            dy[1] = y[3]
-            a, b = acc(y[0], y[1], y[2], y[3], args[0], args[1], args[3] / args[2])
-            dy[2] = a
-            dy[3] = b
-
-    else:
-        der = handwritten.free_derivatives
-
-        def f(dy, t, y, args):
-            r = der(y[0], y[1], y[2], y[3], y[4], y[5], y[6], args[0], args[1], args[2])
-            for j in range(7):
-                dy[j] = r[j]
+    def f(dy, t, y, args):
+        rhs(nb.carray(y, (d,)), nb.carray(args, (n_p,)), nb.carray(dy, (d,)))
 
     sig = nb.types.void(
         nb.types.CPointer(nb.types.float64),

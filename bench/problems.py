@@ -29,6 +29,7 @@ from __future__ import annotations
 import json
 import platform
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -101,43 +102,45 @@ def _long_double_final(problem: Problem) -> tuple[np.ndarray, float]:
     return np.asarray(y, dtype=float), time.perf_counter() - t0
 
 
+def mpmath_rhs(sys_id: int, params: np.ndarray) -> Callable[[object, list], list]:
+    """``f(t, y) -> y'`` in mpmath's numbers, as ``odefun`` calls it: the system's equations
+    (:data:`mechviz.dynamics.codegen.equations.EQUATIONS`, the hoop's mass-matrix system solved
+    by Cramer's rule, exactly) printed for mpmath, the kernel parameters ``params`` taken as
+    exact binary numbers. The constants of the parameters (the form of the RK4 steps,
+    :func:`mechviz.dynamics.codegen.steps.hoisted`) are formed at the working precision of the
+    first call, then kept: call it inside ``mpmath.workdps``, as :func:`_mpmath_final` does."""
+    import mpmath
+    import sympy as sp
+
+    from mechviz.dynamics.codegen.equations import EQUATIONS
+    from mechviz.dynamics.codegen.steps import hoisted
+
+    form = hoisted(EQUATIONS[sys_id]())
+    exprs = list(form.rates)
+    for s, e in reversed(form.temps):
+        exprs = [r.xreplace({s: e}) for r in exprs]
+    # the free body's 1/2 once per rate, not per term; a constant rate an mpf, not an int
+    exprs = [sp.Float(r) if r.is_Number else sp.factor_terms(r) for r in exprs]
+    consts = sp.lambdify([form.ps], [e for _, e in form.consts], modules="mpmath")
+    rates = sp.lambdify([form.ys, form.ks], exprs, modules="mpmath", cse=True)
+    p = [mpmath.mpf(float(v)) for v in params]
+    ks: list = []
+
+    def f(t, y):
+        if not ks:
+            ks.extend(consts(p))
+        return rates(y, ks)
+
+    return f
+
+
 def _mpmath_final(problem: Problem, digits: int = MPMATH_DIGITS) -> tuple[np.ndarray, float]:
     """mpmath's ``odefun`` (a Taylor series method in arbitrary precision) to ``T``."""
     import mpmath
 
-    from mechviz.dynamics.integrators.kernels import FREE_BODY, HOOP
-
-    p = [mpmath.mpf(float(v)) for v in problem.system.kernel_params()]
-    if problem.system.sys_id == HOOP:
-        M, m, ga = p[0], p[1], p[3] / p[2]
-
-        def f(t, y):
-            th1, th2, w1, w2 = y
-            s, c = mpmath.sin(th1 - th2), mpmath.cos(th1 - th2)
-            r1 = -m * s * w2 * w2 - (M + m) * ga * mpmath.sin(th1)
-            r2 = s * w1 * w1 - ga * mpmath.sin(th2)
-            det = 2 * M + m - m * c * c
-            return [w1, w2, (r1 - m * c * r2) / det, ((2 * M + m) * r2 - c * r1) / det]
-
-    elif problem.system.sys_id == FREE_BODY:
-        i1, i2, i3 = p
-
-        def f(t, y):
-            w1, w2, w3, q0, q1, q2, q3 = y
-            return [
-                (i2 - i3) * w2 * w3 / i1,
-                (i3 - i1) * w3 * w1 / i2,
-                (i1 - i2) * w1 * w2 / i3,
-                (-q1 * w1 - q2 * w2 - q3 * w3) / 2,
-                (q0 * w1 + q2 * w3 - q3 * w2) / 2,
-                (q0 * w2 + q3 * w1 - q1 * w3) / 2,
-                (q0 * w3 + q1 * w2 - q2 * w1) / 2,
-            ]
-
-    else:
-        raise KeyError(problem.key)
-    t0 = time.perf_counter()
     with mpmath.workdps(digits):
+        f = mpmath_rhs(problem.system.sys_id, problem.system.kernel_params())
+        t0 = time.perf_counter()
         sol = mpmath.odefun(f, 0, [mpmath.mpf(float(v)) for v in problem.state0])
         y = np.array([float(v) for v in sol(mpmath.mpf(problem.t_end))])
     return y, time.perf_counter() - t0

@@ -3,9 +3,10 @@
 Modules: :mod:`.cyclotron`, :mod:`.disk`, :mod:`.hoop` (one system each: parameters, equations of
 motion, invariants, exact and analytic results); :mod:`.integrators` (methods as data, compiled
 kernels, scipy behind the same interface); :mod:`.registry` (the one registry of systems: each
-described once, :data:`SPECS`), :mod:`.spec` (what a description holds) and :mod:`.systems` (each
-system as the driver sees it, :data:`SYSTEMS`); :mod:`.steps` (step
-control as one value); :mod:`.params` (one error type and one rule for typed numbers);
+described once, :data:`SPECS`; :func:`register` adds one at run time, its compiled forms
+:class:`SystemForms` generated from its equations), :mod:`.spec` (what a description
+holds) and :mod:`.systems` (each system as the driver sees it, :data:`SYSTEMS`); :mod:`.steps`
+(step control as one value); :mod:`.params` (one error type and one rule for typed numbers);
 :mod:`.simulation` (the driver); :mod:`.measure` (estimators of sampled motion, shared by the
 viewer and the recorder).
 This package never imports viser.
@@ -23,8 +24,22 @@ _WHERE = {
     **dict.fromkeys(("Sample", "Simulation", "Trajectory"), ".simulation"),
     **dict.fromkeys(("Setting", "Setup", "SystemSpec"), ".spec"),
     **dict.fromkeys(("Exact", "Fixed", "Step", "Tolerance", "step_control"), ".steps"),
-    **dict.fromkeys(("SYSTEMS", "Cyclotron", "DrivenDisk", "Hoop", "ReleasedDisk"), ".systems"),
-    **dict.fromkeys(("SPECS", "BenchCase", "lookup", "spec_named", "system_named"), ".registry"),
+    **dict.fromkeys(
+        ("SYSTEMS", "Adapter", "Cyclotron", "DrivenDisk", "Hoop", "ReleasedDisk"), ".systems"
+    ),
+    **dict.fromkeys(
+        (
+            "SPECS",
+            "BenchCase",
+            "Registration",
+            "lookup",
+            "register",
+            "spec_named",
+            "system_named",
+        ),
+        ".registry",
+    ),
+    "SystemForms": ".forms",
 }
 
 
@@ -49,6 +64,7 @@ __all__ = [
     "METHODS",
     "SPECS",
     "SYSTEMS",
+    "Adapter",
     "BenchCase",
     "Cyclotron",
     "DrivenDisk",
@@ -57,6 +73,7 @@ __all__ = [
     "Hoop",
     "IntegrationError",
     "Method",
+    "Registration",
     "ReleasedDisk",
     "Sample",
     "Setting",
@@ -64,6 +81,7 @@ __all__ = [
     "Setup",
     "Simulation",
     "Step",
+    "SystemForms",
     "SystemSpec",
     "Tolerance",
     "Trajectory",
@@ -72,6 +90,7 @@ __all__ = [
     "measure",
     "methods_for",
     "parse_number",
+    "register",
     "spec_named",
     "step_control",
     "system_named",

@@ -58,7 +58,8 @@ from .registry import SPECS
 from .simulation import EXACT_FLOW, RESOLVED_FACTOR, Simulation, reference_description
 from .steps import Fixed
 
-#: The systems by the names the API, the command line and the demo files use.
+#: The shipped systems by the names the API, the command line and the demo files use (the API's
+#: functions also take a system registered since, :func:`mechviz.dynamics.register`).
 SYSTEM_NAMES = tuple(SPECS)
 
 __all__ = [

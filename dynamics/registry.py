@@ -9,24 +9,36 @@ random draw). Everything else asks these entries (:func:`spec_named`, :func:`sys
 :func:`lookup`) and never branches on a system's name: a name no entry has raises
 :class:`KeyError` naming it and the names there are.
 
-Adding a system: its physics module, its adapter in :mod:`.systems` (:data:`~.systems.SYSTEMS`;
-its compiled id in :mod:`.ids` if it has compiled kernels), its description here
-(:data:`SPECS`), and its model and exhibit classes (the model answering the hooks of
-:mod:`mechviz.viz.model.hooks`) listed in :data:`mechviz.viz.model.MODELS` and
+Adding a system to the product: its physics module, its adapter in :mod:`.systems`
+(:data:`~.systems.SYSTEMS`; its compiled id in :mod:`.ids` if it has compiled kernels), its
+description here (:data:`SPECS`), and its model and exhibit classes (the model answering the
+hooks of :mod:`mechviz.viz.model.hooks`) listed in :data:`mechviz.viz.model.MODELS` and
 :data:`mechviz.viz.scene.EXHIBITS`, which are keyed by this registry and refuse to load without
 one for each system.
+
+Adding a system at run time, without editing the product (a user's own, a test's):
+:func:`register` its description and its adapters. An adapter subclasses
+:data:`~.systems.Adapter` and carries as ``sys_id`` its own compiled forms
+(:class:`~mechviz.dynamics.forms.SystemForms`, generated from its equations by
+:meth:`~mechviz.dynamics.forms.SystemForms.from_equations`), which the integrators are handed
+instead of looking them up by id; every front door that asks this registry then knows it
+(:func:`mechviz.dynamics.api.simulate`, ``mechviz simulate``, the driver). The returned
+:class:`Registration` undoes it (:meth:`Registration.unregister`, or as a context manager), and
+also carries the entries of other tables keyed by this registry (:meth:`Registration.add`: the
+viewer's model of it, say), undone with it.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import TypeVar
+from collections.abc import Iterable, Mapping, MutableMapping
+from typing import Any, TypeVar
 
 import numpy as np
 
 from . import cyclotron, disk, hoop
 from . import params as _v
+from .forms import is_given
 from .ids import DISK_NAME
 from .spec import BenchCase, Setting, SystemSpec, param
 from .systems import (
@@ -34,6 +46,7 @@ from .systems import (
     DISK_EXTRA_SPIN,
     HOOP_MODES,
     SYSTEMS,
+    Adapter,
     Cyclotron,
     DrivenDisk,
     Hoop,
@@ -350,3 +363,87 @@ DISK = SystemSpec(
 
 #: Every system by the name a person uses (the CLI's, the API's and the demo files').
 SPECS: dict[str, SystemSpec] = {s.name: s for s in (CYCLOTRON, DISK, HOOP)}
+
+
+class Registration:
+    """A system registered by :func:`register`: its description and adapters, and the entries
+    added with it to other tables (:meth:`add`). :meth:`unregister` (or leaving a ``with``
+    block) takes every one of them out again, the last added first, so that a test that
+    registers a system leaves the product as it found it."""
+
+    def __init__(self, spec: SystemSpec, adapters: tuple[type, ...]) -> None:
+        self.spec = spec
+        self.adapters = adapters
+        self._entries: list[tuple[MutableMapping, str, Any]] = []
+        self.active = False
+
+    def add(self, table: MutableMapping[str, Any], key: str, value: Any) -> Registration:
+        """Put ``value`` in ``table`` under ``key`` until this registration is undone (a table
+        keyed by the registry: the viewer's models, its exhibits). ``key`` must be new there:
+        a registration never replaces what the product or another registration put."""
+        if not self.active:
+            raise RuntimeError(f"the registration of {self.spec.name!r} was undone")
+        if key in table:
+            raise KeyError(f"{key!r} is taken; a registration adds, it never replaces")
+        table[key] = value
+        self._entries.append((table, key, value))
+        return self
+
+    def unregister(self) -> None:
+        """Take out everything this registration put in (again: nothing more)."""
+        while self._entries:
+            table, key, value = self._entries.pop()
+            if table.get(key) is value:
+                del table[key]
+        self.active = False
+
+    def __enter__(self) -> Registration:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.unregister()
+
+
+def register(spec: SystemSpec, adapters: Iterable[type]) -> Registration:
+    """Make the system ``spec`` describes known to every part of the product that asks this
+    registry, with ``adapters``, the driver's classes its ``build`` returns (one or more: the
+    disk has two motions). Returns the :class:`Registration` that undoes it.
+
+    Checked before anything changes (``ValueError`` or ``TypeError`` naming what is wrong): the
+    names are new (neither a description's nor an adapter's), each adapter subclasses
+    :data:`~.systems.Adapter` and has its compiled forms of its own (a
+    :class:`~mechviz.dynamics.forms.SystemForms` as ``sys_id``, its dimension the state's) or
+    none (``sys_id`` None: the closed form only); the shipped tables' ids belong to the shipped
+    systems. And the description builds, from its defaults, one of ``adapters`` and a start of
+    its state's size."""
+    adapters = tuple(adapters)
+    if spec.name in SPECS:
+        raise ValueError(f"a system {spec.name!r} is registered already")
+    if not adapters:
+        raise ValueError(f"{spec.name}: at least one adapter (the driver's class of it)")
+    for cls in adapters:
+        if not (isinstance(cls, type) and issubclass(cls, Adapter)):
+            raise TypeError(f"{spec.name}: {cls!r} is not an adapter (subclass systems.Adapter)")
+        if cls.name in SYSTEMS:
+            raise ValueError(f"{spec.name}: an adapter {cls.name!r} is registered already")
+        sys_id = cls.sys_id
+        if sys_id is not None and not is_given(sys_id):
+            raise TypeError(
+                f"{cls.name}: sys_id must be its own SystemForms (or None), not {sys_id!r}: "
+                "the compiled ids index the shipped systems' tables"
+            )
+        if sys_id is not None and sys_id.dim != len(cls.state_names):
+            raise ValueError(
+                f"{cls.name}: forms of {sys_id.dim} components, state of {len(cls.state_names)}"
+            )
+    system, state = spec.build(spec.parameters(), spec.start_values())
+    if type(system) not in adapters or np.shape(state) != (len(system.state_names),):
+        raise ValueError(
+            f"{spec.name}: build must return one of the adapters given and a start of its state"
+        )
+    reg = Registration(spec, adapters)
+    reg.active = True
+    reg.add(SPECS, spec.name, spec)
+    for cls in adapters:
+        reg.add(SYSTEMS, cls.name, cls)
+    return reg

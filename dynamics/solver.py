@@ -22,8 +22,9 @@ import numpy as np
 
 from . import params as _v
 from ._jit import njit
+from .forms import SystemForms, is_given
 from .integrators.kernels import OK
-from .integrators.taylor import _advance_member, controls, order_for
+from .integrators.taylor import _advance_member, controls, order_for, run_taylor_given
 from .params import SettingError
 from .spec import checked_state
 from .systems import System, shared_kernel_params
@@ -59,7 +60,7 @@ def solve_taylor(sys_id, y0, p, t_end, rtol, atol, order, a, out):
 
 
 #: What a :class:`Solver` takes from its system and tolerances, by (system, rtol, atol) given
-#: as plain floats or ``None``: ``(system, sys_id, rtol, atol, order, a)``, validated when first
+#: as plain floats or ``None``: ``(system, sys_id, rtol, atol, order, a, solve)``, validated when first
 #: made. A new Solver of a system and tolerances already seen (a user who builds one per
 #: problem) takes it as it is. Keyed by the system's identity; the entry holds the system, so
 #: that its identity is not reused while it is stored.
@@ -68,15 +69,33 @@ _PLAIN = (float, type(None))
 
 
 def _plan(system: System, rtol: float | None, atol: float | None) -> tuple:
-    """``(system, sys_id, rtol, atol, order, a)``, the settings checked (``SettingError``
-    naming the field)."""
+    """``(system, sys_id, rtol, atol, order, a, solve)``, the settings checked (``SettingError``
+    naming the field); ``solve``: :func:`solve_taylor`, or for a registered system (its own
+    forms, :class:`~mechviz.dynamics.forms.SystemForms`) :func:`_solve_given`."""
     rtol = 1e-9 if rtol is None else _v.positive("rtol", rtol)
     atol = rtol if atol is None else _v.positive("atol", atol)
-    if system.sys_id is None:
+    if system.sys_id is None or (is_given(system.sys_id) and system.sys_id.expand is None):
         raise SettingError("method", f"Taylor's method does not apply to {system.name}")
-    sys_id = int(system.sys_id)
+    given = is_given(system.sys_id)
+    sys_id = system.sys_id if given else int(system.sys_id)
     order, a = order_for(float(rtol), float(atol), sys_id)
-    return system, sys_id, float(rtol), float(atol), order, a
+    solve = _solve_given if given else solve_taylor
+    return system, sys_id, float(rtol), float(atol), order, a, solve
+
+
+def _solve_given(forms: SystemForms, y0, p, t_end, rtol, atol, order, a, out) -> int:
+    """:func:`solve_taylor` for a registered system, with its own expansion
+    (:func:`~mechviz.dynamics.integrators.taylor.run_taylor_given`: the same steps)."""
+    if not (math.isfinite(t_end) and np.isfinite(y0).all() and np.isfinite(p).all()):
+        return -2
+    d = y0.size
+    Y = np.array(y0, dtype=np.float64).reshape(1, d)
+    stats, status = np.zeros((1, 3), np.int64), np.zeros(3, np.int64)
+    carry = (np.empty((1, d, order + 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.empty((1, d)))
+    args = (Y, p, 0.0, t_end, rtol, atol, order, a, stats, status, carry)
+    run_taylor_given(forms.expand, forms.rows, *args)
+    out[:] = Y[0]
+    return int(stats[0, 1]) if status[0] == OK else -1
 
 
 class Solver:
@@ -113,7 +132,7 @@ class Solver:
                 _PLANS[key] = plan
         else:
             plan = _plan(system, rtol, atol)
-        self.system, self.sys_id, self.rtol, self.atol, self.order, self.a = plan
+        self.system, self.sys_id, self.rtol, self.atol, self.order, self.a, self._solve = plan
         self._out = np.empty(len(system.state_names))
         self._state0: np.ndarray | None = None  # the defaults, worked out when first used
         self._params: np.ndarray | None = None
@@ -145,7 +164,7 @@ class Solver:
     def solve(self, t_end: float, state=None, params=None) -> np.ndarray:
         y0 = self.state0 if state is None else self._array("state", state, self._out.size)
         p = self.params if params is None else self._array("params", params, self.params.size)
-        steps = solve_taylor(
+        steps = self._solve(
             self.sys_id, y0, p, float(t_end), self.rtol, self.atol, self.order, self.a, self._out
         )
         if steps == -2:

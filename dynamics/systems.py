@@ -26,6 +26,7 @@ from typing import ClassVar
 import numpy as np
 
 from . import cyclotron, disk, hoop, measure
+from .forms import is_given
 from .ids import DRIVEN_DISK, NAMES
 from .integrators import kernels
 
@@ -53,9 +54,9 @@ class _Adapter:
     general methods.
     """
 
-    #: The system's name (from its compiled id, :data:`mechviz.dynamics.ids.NAMES`, unless it says one)
-    #: and its parameter dataclass (the type of its default ``params``): both derived when the
-    #: adapter is defined.
+    #: The system's name (from its compiled id, :data:`mechviz.dynamics.ids.NAMES`, or its own
+    #: forms' name, unless it says one) and its parameter dataclass (the type of its default
+    #: ``params``): both derived when the adapter is defined.
     name: ClassVar[str]
     Params: ClassVar[type]
     #: Each state component's label with its unit, in state order (a plot's axis, a CSV
@@ -92,7 +93,8 @@ class _Adapter:
         super().__init_subclass__(**kwargs)
         # a subclass of an adapter keeps what it does not say anew
         if "name" not in cls.__dict__ and "sys_id" in cls.__dict__:
-            cls.name = NAMES[cls.sys_id]
+            sys_id = cls.__dict__["sys_id"]
+            cls.name = sys_id.name if is_given(sys_id) else NAMES[sys_id]
         if "params" in cls.__dict__:
             cls.Params = type(cls.__dict__["params"])
         labels = cls.__dict__.get("state_labels") or {n: n for n in cls.state_names}
@@ -107,6 +109,17 @@ class _Adapter:
     def report(self, t: float) -> dict[str, list[float]]:
         """Figures beyond the state for a run's summary at time ``t`` [s]: none."""
         return {}
+
+
+#: The base of every adapter, a registered system's too (:func:`mechviz.dynamics.registry.
+#: register`). Besides what :class:`_Adapter` defaults, an adapter states ``params`` (a frozen
+#: parameter dataclass with ``kernel_params()``, or its own :meth:`~_Adapter.kernel_params`),
+#: ``sys_id`` (a compiled id of the shipped tables, a
+#: :class:`~mechviz.dynamics.forms.SystemForms` of its own, or None for no compiled form),
+#: ``state_names``, and ``default_state``, ``energy``, ``energy_floor``, ``energy_above_floor``,
+#: ``time_scale``, ``fastest_frequency``, ``invariants``, ``has_exact``, ``exact`` and ``error``
+#: (as the three systems' below).
+Adapter = _Adapter
 
 
 def _relative(y: np.ndarray, ref: np.ndarray) -> np.ndarray:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import math
 
+from .forms import SystemForms
 from .ids import COMPILED, HOOP
 
 MAX_ORDER = 40
@@ -27,7 +28,7 @@ TIGHT_A_MIN = 1.25
 
 
 @functools.lru_cache(maxsize=1024)
-def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> tuple[int, float]:
+def order_for(rtol: float, atol: float, sys_id: int | SystemForms = HOOP) -> tuple[int, float]:
     """``(p, a)``: the order and the step ``rho exp(-a)`` that make the work over a span least.
 
     Jorba and Zou's argument: the error estimate is ``(h / rho)^(p-1) = tol``, so with
@@ -41,15 +42,20 @@ def order_for(rtol: float, atol: float, sys_id: int = HOOP) -> tuple[int, float]
     matters, and on a long step of an entire solution (the charge's sines, whose estimated radius
     grows with the order) the terms grow before they fall and cancel (the untuned charge's error
     stopped at 3e-12 with a = 1, 5e-13 with 1.25).
+
+    ``sys_id``: a compiled id, or a registered system's forms, which state their own cost model
+    (:class:`~mechviz.dynamics.forms.SystemForms`).
     """
     tol = min(rtol, atol)
-    c0, c1, c2 = STEP_COST[sys_id]
+    given = type(sys_id) is SystemForms
+    c0, c1, c2 = sys_id.taylor_cost if given else STEP_COST[sys_id]
+    entire = sys_id.entire if given else sys_id in ENTIRE
     L = -math.log(tol)
     a_min = 1.0 if tol >= TIGHT_TOL else TIGHT_A_MIN
 
     def work(p: int) -> float:
         steps = math.exp(max(a_min, L / (p - 1)))
-        if sys_id in ENTIRE:  # the radius estimate grows as (p!)^(1/p): longer steps
+        if entire:  # the radius estimate grows as (p!)^(1/p): longer steps
             steps /= math.exp(math.lgamma(p + 1.0) / p)
         return (c0 + c1 * p + c2 * p * p) * steps
 

@@ -1,52 +1,23 @@
-"""A fourth system defined here only, by its equations (:class:`~mechviz.dynamics.codegen.
-equations.Equations`): the spherical pendulum. Every compiled form comes from the generator,
-and it runs through the product's integrators: the tableau runner's pairs, the fixed-step
-drivers (Euler, implicit midpoint, a generated RK4) and Taylor's method with generated
-recurrences. The physics checked: energy and ``L_z`` kept to the tolerance, orders of
-convergence, and the methods agreeing with one another.
-
-A point on a rod of length ``l`` [m] under gravity ``g`` [m/s^2], per unit mass, in spherical
-angles: ``theta`` [rad] from the downward vertical, ``phi`` [rad] about it, ``omega = theta'``,
-``nu = phi'`` [rad/s]. From ``L = l^2 (theta'^2 + sin^2 theta phi'^2) / 2 + g l cos theta``::
-
-    theta'' = sin theta cos theta phi'^2 - (g / l) sin theta
-    phi''   = -2 cos theta theta' phi' / sin theta
-
-regular away from the poles; with ``L_z = l^2 sin^2 theta phi' != 0`` the motion keeps off them
-(the centrifugal barrier). Conserved: ``E = l^2 (omega^2 + sin^2 theta nu^2) / 2 - g l cos theta``
-and ``L_z``, neither of them a state component.
+"""A fourth system defined in the test suite only, by its equations (:class:`~mechviz.dynamics.
+codegen.equations.Equations`): the spherical pendulum (:mod:`spherical` has its equations and
+physics). Every compiled form comes from the generator, and it runs through the product's
+integrators directly: the tableau runner's pairs, the fixed-step drivers (Euler, implicit
+midpoint, a generated RK4) and Taylor's method with generated recurrences. The physics checked:
+energy and ``L_z`` kept to the tolerance, orders of convergence, and the methods agreeing with
+one another. (Through the registry and the product's front doors: :mod:`test_fourth_system_registered`.)
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-import sympy as sp
+from spherical import EQ
 
-from mechviz.dynamics.codegen.equations import Equations
 from mechviz.dynamics.codegen.rhs import generated_rhs
 from mechviz.dynamics.codegen.series import generated_expand
 from mechviz.dynamics.codegen.steps import generated_rk4
 from mechviz.dynamics.integrators import kernels, rk, taylor
 
-
-def spherical_pendulum() -> Equations:
-    th, ph, om, nu = sp.symbols("theta phi omega nu", real=True)
-    length, g = sp.symbols("l g", positive=True)
-    return Equations(
-        "spherical_pendulum",
-        (th, ph, om, nu),
-        (length, g),
-        (
-            om,
-            nu,
-            sp.sin(th) * sp.cos(th) * nu**2 - g / length * sp.sin(th),
-            -2 * sp.cos(th) * om * nu / sp.sin(th),
-        ),
-    )
-
-
-EQ = spherical_pendulum()
 P = np.array([1.3, 9.81])  # l [m], g [m/s^2]
 Y0 = np.array([1.0, 0.2, 0.3, 1.7])  # a tilted, precessing swing: theta between ~0.6 and ~1.6
 

@@ -408,3 +408,18 @@ def test_the_benchmark_lists_are_read_from_the_methods():
     assert {"dop853", "vern6", "vern7", "vern8", "vern9", "taylor"} <= set(problems.ADAPTIVE_OURS)
     assert all(METHODS[m].backend == "scipy" for m in problems.ADAPTIVE_SCIPY)
     assert "vern8" in fastest.OURS
+
+
+def test_a_fixed_step_method_finds_each_systems_own_compiled_step_or_refuses():
+    """The compiled steps are looked up in tables by system id: the exact flow is the charge's
+    only, and asked of another system it is refused, never another system's flow."""
+    from mechviz.dynamics.integrators import METHODS, kernels
+    from mechviz.dynamics.integrators.base import step_functions
+
+    exact = next(m for m in METHODS.values() if m.kernel == "exact")
+    assert step_functions(exact, kernels.CYCLOTRON) == (kernels.cyclotron.exact_step, None)
+    for sys_id in (kernels.HOOP, kernels.FREE_BODY):
+        with pytest.raises(ValueError, match="no compiled exact flow"):
+            step_functions(exact, sys_id)
+    rk4 = next(m for m in METHODS.values() if m.kernel == "rk4")
+    assert [step_functions(rk4, i)[0] for i in range(3)] == list(kernels.RK4)

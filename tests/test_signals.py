@@ -164,10 +164,11 @@ def test_a_signal_inside_a_long_atlas_chunk_ends_it_within_two_seconds(tmp_path,
     assert not (out / "atlas.zarr").with_name("atlas.zarr.partial").exists()
 
 
-def test_ctrl_c_while_the_atlas_cluster_starts_ends_the_run_once_it_is_up(tmp_path):
+def test_ctrl_c_while_the_atlas_cluster_starts_ends_the_run_within_a_second(tmp_path):
     """A terminal's Ctrl-C the moment the first worker process is spawned (the cluster still
-    starting): the run is interrupted as soon as the cluster is up, with the usual message and
-    exit status, no traceback from a worker, and nothing left behind."""
+    starting, which takes seconds): the start is cut short and the run ends within about a
+    second (scaled by the load), with the usual message and exit status, no traceback from a
+    worker, every process it spawned gone and nothing left behind."""
     import time
 
     proc, _, tmp = _long_atlas(tmp_path, workers=2)
@@ -190,8 +191,8 @@ def test_ctrl_c_while_the_atlas_cluster_starts_ends_the_run_once_it_is_up(tmp_pa
     assert proc.returncode == 128 + signal.SIGINT, err[-2000:]
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
     assert "interrupted" in err and "--resume" in err, err[-2000:]
-    # the cluster's start (two interpreters importing numpy and Dask) and its shutdown
-    assert took < scaled(6.0), f"{took:.2f} s"
+    # not the cluster's start (two interpreters importing numpy and Dask: seconds)
+    assert took < scaled(1.5), f"{took:.2f} s"
     print(f"Ctrl-C while the cluster starts: ended in {took:.2f} s")
     wait_until(lambda: not alive(seen), 10, f"the command's processes to end: {seen}")
     assert [p.name for p in tmp.iterdir()] == []

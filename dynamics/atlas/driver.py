@@ -112,13 +112,14 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
             client.close()
         return
     n = workers or os.cpu_count() or 1
-    scratch = tempfile.mkdtemp(prefix="mechviz-atlas-")
-    _LIVE_SCRATCH.append(scratch)
-    cluster = client = None
-    try:
+    scratch = cluster = client = None
+    try:  # (from before the folder is made: a Ctrl-C may now come at any instruction)
+        scratch = tempfile.mkdtemp(prefix="mechviz-atlas-")
+        _LIVE_SCRATCH.append(scratch)
         # the workers' interpreter ignores Ctrl-C for the cluster's whole life: a nanny starts a
         # lost worker again with it
         with spawned_workers_ignore_ctrl_c(scratch):
+            before = _children()
             try:
                 # the scheduler's scratch folder too (it reads the configuration, not an argument)
                 with dask.config.set({"temporary-directory": scratch}):
@@ -130,18 +131,60 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
                         worker_dashboard_address=None,
                         silence_logs=logging.ERROR,
                         local_directory=scratch,
+                        # set up as each worker starts (registering it on the client instead is
+                        # a broadcast that a Ctrl-C could cut in the middle)
+                        plugins={_IgnoreCtrlC()},
                     )
                 _LIVE_CLUSTERS.append(cluster)
                 client = Client(cluster)
-                client.register_plugin(_IgnoreCtrlC())  # and a scheduler elsewhere's workers
+            except BaseException:
+                # a start cut short (Ctrl-C, or a worker that failed): its processes, those of
+                # workers not yet registered included, go before their folder
+                _kill_new_children(before)
+                _shut_down(client, cluster)
+                raise
+            try:
                 yield client
             finally:
                 _shut_down(client, cluster)
     finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
         with contextlib.suppress(ValueError):
             _LIVE_CLUSTERS.remove(cluster)
-        _LIVE_SCRATCH.remove(scratch)
+        with contextlib.suppress(ValueError):
+            _LIVE_SCRATCH.remove(scratch)
+
+
+def _children() -> set[int]:
+    """The pids of this process's children, grandchildren and so on."""
+    import psutil
+
+    return {p.pid for p in psutil.Process().children(recursive=True)}
+
+
+def _kill_new_children(before: set[int]) -> None:
+    """SIGKILL every descendant of this process not in ``before`` but multiprocessing's resource
+    tracker (one a process keeps for its life: killed, it is started again and prints a
+    traceback for each name it was not told of). The cluster's start tasks whose worker died
+    fail unread: the ``asyncio`` log's "Task exception was never retrieved" for them is dropped,
+    as the interruption is said in its own line."""
+    import psutil
+
+    for pid in _children() - before:
+        with contextlib.suppress(OSError, psutil.Error):
+            if "resource_tracker" not in " ".join(psutil.Process(pid).cmdline()):
+                os.kill(pid, signal.SIGKILL)
+    logging.getLogger("asyncio").addFilter(_start_cut_short)
+
+
+def _start_cut_short(record: logging.LogRecord) -> bool:
+    """False for the ``asyncio`` log's record of a cluster start task that failed unread."""
+    exc = record.exc_info[1] if record.exc_info else None
+    return not (
+        record.getMessage().startswith("Task exception was never retrieved")
+        and "failed to start" in str(exc)
+    )
 
 
 def _worker_pids(cluster) -> list[int]:
@@ -286,6 +329,7 @@ def _run(
     try:
         if client is None:
             try:
+                signals.at_once = True
                 client = stack.enter_context(dask_client(scheduler, workers))
             except Exception:
                 # a Ctrl-C in the instant between a worker's fork and its first instruction
@@ -294,6 +338,8 @@ def _run(
                 if signals:
                     raise KeyboardInterrupt from None
                 raise
+            finally:
+                signals.at_once = False
         if signals:
             raise KeyboardInterrupt
         report.workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
@@ -385,20 +431,28 @@ _LIVE_CLUSTERS: list = []
 _LIVE_SCRATCH: list[str] = []
 
 
+class _Signals(list):
+    """The signals a run received, first first. ``at_once``: a signal raises
+    :class:`KeyboardInterrupt` where the main thread is (while a cluster starts there is no
+    chunk to finish, and the start can take seconds)."""
+
+    at_once = False
+
+
 @contextlib.contextmanager
 def _signals_between_chunks():
     """Ctrl-C, SIGTERM and SIGHUP are recorded, and the run stops at its next look (every
     :data:`POLL_SECONDS`): an exception raised inside a chunk's write (the Zarr store waits on
     its own event loop, which can hold the exception until the write is done) would otherwise
     let every finished result be written before the run stops. A second signal raises at once."""
-    signals: list[int] = []  # the signals received, first first
+    signals = _Signals()  # the signals received, first first
     if threading.current_thread() is not threading.main_thread():
         yield signals
         return
 
     def on_signal(signum, frame) -> None:
         signals.append(signum)
-        if len(signals) > 1:
+        if signals.at_once or len(signals) > 1:
             raise KeyboardInterrupt
 
     wanted = [

@@ -46,16 +46,25 @@ CHAOS_SECTIONS = {
 #: Where each coordinate sits in the hoop's state.
 HOOP_COORDINATES = {"theta1": 0, "theta2": 1, "omega1": 2, "omega2": 3}
 KINDS: tuple[str, ...] = ("stability", "chaos", "accuracy")
-#: The systems an atlas can map: those with a compiled right-hand side, those with a chaos map
-#: (the adapter's ``chaos_map``) first.
-SYSTEM_NAMES = tuple(
-    sorted(
-        (n for n, s in SYSTEMS.items() if s.sys_id is not None),
-        key=lambda n: not SYSTEMS[n].chaos_map,
+
+
+def system_names() -> tuple[str, ...]:
+    """The systems an atlas can map, as the registry has them now (a system registered at run
+    time too, :func:`mechviz.dynamics.registry.register`): those with a compiled right-hand side
+    and a family of starts by amplitude (the adapter's ``amplitude``), those with a chaos map
+    (the adapter's ``chaos_map``) first."""
+    return tuple(
+        sorted(
+            (n for n, s in SYSTEMS.items() if s.sys_id is not None and s.amplitude is not None),
+            key=lambda n: not SYSTEMS[n].chaos_map,
+        )
     )
-)
-#: The systems whose start plane the chaos map covers (:attr:`_Adapter.chaos_map`).
-CHAOS_SYSTEMS = tuple(n for n in SYSTEM_NAMES if SYSTEMS[n].chaos_map)
+
+
+def chaos_systems() -> tuple[str, ...]:
+    """The systems whose start plane the chaos map covers (:attr:`_Adapter.chaos_map`)."""
+    return tuple(n for n in system_names() if SYSTEMS[n].chaos_map)
+
 
 #: The tightest tolerance an accuracy map takes (``simulate``'s ``MIN_COMPARED_TOL``).
 MIN_RTOL = 1e-12
@@ -101,7 +110,7 @@ class AtlasSpec:
     cluster it runs on).
 
     kind : ``"stability"``, ``"chaos"`` or ``"accuracy"`` (module docstring).
-    system : a name in :data:`SYSTEM_NAMES` (chaos: the hoop only).
+    system : a name in :func:`system_names` (chaos: :func:`chaos_systems`).
     params : the system's parameters by field name (its dataclass validates them).
     methods : method names; stability: fixed-step methods; chaos: one fixed-step method.
     y, x : the axes (names as in the module docstring).
@@ -131,13 +140,13 @@ class AtlasSpec:
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
-        if self.system not in SYSTEM_NAMES:
+        names = system_names()
+        if self.system not in names:
+            raise ValueError(f"system must be one of {', '.join(names)}, got {self.system!r}")
+        chaos = chaos_systems()
+        if self.kind == "chaos" and self.system not in chaos:
             raise ValueError(
-                f"system must be one of {', '.join(SYSTEM_NAMES)}, got {self.system!r}"
-            )
-        if self.kind == "chaos" and self.system not in CHAOS_SYSTEMS:
-            raise ValueError(
-                f"system: the chaos map is of the start plane of {', '.join(CHAOS_SYSTEMS)} only"
+                f"system: the chaos map is of the start plane of {', '.join(chaos)} only"
             )
         object.__setattr__(
             self, "params", tuple(sorted((str(k), float(v)) for k, v in self.params))

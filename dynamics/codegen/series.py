@@ -96,7 +96,7 @@ class _Graph:
         parts = [_term(*self.coefficient(c), f"A[{a}, k]", scale="inv") for c, a in lin]
         if consts:
             parts.append(f"+ ({self.const(sp.Add(*consts))} * inv if k == 0 else 0.0)")
-        return " ".join(parts).lstrip("+ ")
+        return _sum(parts)
 
     def coefficient(self, c: sp.Expr) -> tuple[int, str | None]:
         """``(sign, name)`` of a constant factor; ``name`` None for a factor of 1."""
@@ -223,6 +223,27 @@ def _is_denominator(e: sp.Expr) -> bool:
     return e.is_Pow and e.exp.is_Integer and e.exp < 0
 
 
+def _sum(terms: list[str]) -> str:
+    """Signed terms (``+ x``, ``- y``) as one expression, its leading ``+`` dropped."""
+    return " ".join(terms).lstrip("+ ")
+
+
+def _product(sign: int, a: int, b: int, j: str = "j", i: str = "i") -> str:
+    """``+ A[a, j] * A[b, i]`` (``-`` for a negative sign): one term of a Cauchy product."""
+    return f"{'-' if sign < 0 else '+'} A[{a}, {j}] * A[{b}, {i}]"
+
+
+def _accumulators(accs: dict, prefix: str, start: list[str], loop: list[str]) -> list[str]:
+    """An accumulator ``{prefix}{n}`` per factor of ``accs`` (its name or ``None``: its terms),
+    begun in ``start``, summed in ``loop``; returns the terms ``+ factor * accumulator``."""
+    parts = []
+    for n, (name, terms) in enumerate(accs.items()):
+        start.append(f"{prefix}{n} = 0.0")
+        loop.append(f"    {prefix}{n} += {_sum(terms)}")
+        parts.append(_term(1, name, f"{prefix}{n}"))
+    return parts
+
+
 def _term(sign: int, name: str | None, value: str, scale: str | None = None) -> str:
     """``+ name * value`` (``- ...`` for a negative sign), the factor ``(name * scale)``."""
     factor = name if scale is None else (scale if name is None else f"({name} * {scale})")
@@ -239,15 +260,10 @@ def _lin_group(ops: list[tuple]) -> list[str]:
     for _, r, c, lin, prods in ops:
         accs: dict[str | None, list[str]] = {}
         for sign, name, a, b in prods:
-            accs.setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, j] * A[{b}, i]")
-        parts = []
-        for n, (name, terms) in enumerate(accs.items()):
-            acc = f"s{r}_{n}"
-            out.append(f"{acc} = 0.0")
-            loop.append(f"    {acc} += {' '.join(terms).lstrip('+ ')}")
-            parts.append(_term(1, name, acc))
+            accs.setdefault(name, []).append(_product(sign, a, b))
+        parts = _accumulators(accs, f"s{r}_", out, loop)
         parts += [_term(sign, name, f"A[{a}, k]") for sign, name, a in lin]
-        finish.append(f"A[{r}, k] = {' '.join(parts).lstrip('+ ') or '0.0'}")
+        finish.append(f"A[{r}, k] = {_sum(parts) or '0.0'}")
         if c is not None:
             finish += ["if k == 0:", f"    A[{r}, 0] += {c}"]
     if loop:
@@ -282,7 +298,7 @@ def _sincos_group(ops: list[tuple], slopes: dict[int, str], angles: dict[int, tu
             sin_xy = _term(sx, None, f"A[{sa}, 0] * A[{cb}, 0]")
             sin_xy += " " + _term(sy, None, f"A[{ca}, 0] * A[{sb}, 0]")
             cos_xy = f"A[{ca}, 0] * A[{cb}, 0] " + _term(-sx * sy, None, f"A[{sa}, 0] * A[{sb}, 0]")
-            out.append(f"    A[{s_}, 0] = {sin_xy.lstrip('+ ')}")
+            out.append(f"    A[{s_}, 0] = {_sum([sin_xy])}")
             out.append(f"    A[{c_}, 0] = {cos_xy}")
         else:
             out.append(f"    A[{s_}, 0] = math.sin(A[{a}, 0])")
@@ -313,7 +329,7 @@ def _slopes(g: _Graph, rates: dict[int, int]) -> dict[int, str]:
             _, r, _, lin, _ = op
             if all(name is None and a in rates for _, name, a in lin):
                 parts = [_term(sign, None, f"A[{rates[a]}, j - 1]") for sign, _, a in lin]
-                out[r] = " ".join(parts).lstrip("+ ")
+                out[r] = _sum(parts)
     return out
 
 
@@ -375,21 +391,10 @@ def _out(op: tuple) -> int:
 
 
 def _emit(op: tuple) -> list[str]:
-    """The statements computing order ``k`` of one node (inside the loop over ``k``)."""
+    """The statements computing order ``k`` of one node of a kind that is not grouped (inside
+    the loop over ``k``; linear combinations, squares and sine/cosine pairs are emitted in
+    groups: :func:`_lin_group`, :func:`_square_group`, :func:`_sincos_group`)."""
     kind, r = op[0], op[1]
-    if kind == "lin":
-        return _lin_group([op])
-    if kind == "square":
-        a = op[2]
-        return [
-            "s = 0.0",
-            "for j in range((k + 1) // 2):",
-            f"    s += A[{a}, j] * A[{a}, k - j]",
-            "s *= 2.0",
-            "if k % 2 == 0:",
-            f"    s += A[{a}, k // 2] * A[{a}, k // 2]",
-            f"A[{r}, k] = s",
-        ]
     if kind == "div":
         (tk, top), b = op[2], op[3]
         first = f"A[{top}, k]" if tk == "s" else f"{top} if k == 0 else 0.0"
@@ -398,22 +403,6 @@ def _emit(op: tuple) -> list[str]:
             "for j in range(1, k + 1):",
             f"    s -= A[{b}, j] * A[{r}, k - j]",
             f"A[{r}, k] = s / A[{b}, 0]",
-        ]
-    if kind == "sincos":
-        (s_, c_), a = r, op[2]
-        return [
-            "if k == 0:",
-            f"    A[{s_}, 0] = math.sin(A[{a}, 0])",
-            f"    A[{c_}, 0] = math.cos(A[{a}, 0])",
-            "else:",
-            "    s = 0.0",
-            "    c = 0.0",
-            "    for j in range(1, k + 1):",
-            f"        t = j * A[{a}, j]",
-            f"        s += t * A[{c_}, k - j]",
-            f"        c += t * A[{s_}, k - j]",
-            f"    A[{s_}, k] = s / k",
-            f"    A[{c_}, k] = -c / k",
         ]
     if kind == "exp":
         a = op[2]
@@ -499,7 +488,7 @@ def _mass_solve(g: _Graph, mass: list[list[sp.Expr]], force: list[sp.Expr]) -> t
                 sym[i][l] = c
                 continue
             parts = [_term(sign, name, f"A[{r}, 0]") for sign, name, r in rows]
-            values.append(f"e{i}_{l} = {' '.join(parts).lstrip('+ ')}" + (f" + {c}" if c else ""))
+            values.append(f"e{i}_{l} = {_sum(parts)}" + (f" + {c}" if c else ""))
     matrix = sp.Matrix(sym)
     det_inv = sp.Symbol("det_inv")
     adj = matrix.adjugate()
@@ -512,26 +501,22 @@ def _mass_solve(g: _Graph, mass: list[list[sp.Expr]], force: list[sp.Expr]) -> t
     zero: list[dict[str | None, list[str]]] = [{} for _ in range(n)]
     for i, (_, _, prods) in enumerate(forces):
         for sign, name, a, b in prods:
-            accs[i].setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, j] * A[{b}, i]")
-            zero[i].setdefault(name, []).append(f"{'-' if sign < 0 else '+'} A[{a}, 0] * A[{b}, k]")
+            accs[i].setdefault(name, []).append(_product(sign, a, b))
+            zero[i].setdefault(name, []).append(_product(sign, a, b, "0", "k"))
     for i in range(n):
         for l in range(n):
             for sign, name, r in entries[i][l][1]:  # subtracted: the opposite sign
-                term = f"{'+' if sign < 0 else '-'} A[{r}, j] * A[{acc[l]}, i]"
-                accs[i].setdefault(name, []).append(term)
+                accs[i].setdefault(name, []).append(_product(-sign, r, acc[l]))
     loop, finish = [], []
     for i in range(n):
-        parts = []
-        for m_, (name, terms) in enumerate(accs[i].items()):
-            name_ = f"b{i}_{m_}"
-            body.append(f"{name_} = 0.0")
-            loop.append(f"    {name_} += {' '.join(terms).lstrip('+ ')}")
+        parts = _accumulators(accs[i], f"b{i}_", body, loop)
+        # the order-0 products, which the loop over j >= 1 leaves out
+        for m_, name in enumerate(accs[i]):
             if name in zero[i]:
-                finish.append(f"{name_} += {' '.join(zero[i][name]).lstrip('+ ')}")
-            parts.append(_term(1, name, name_))
+                finish.append(f"b{i}_{m_} += {_sum(zero[i][name])}")
         c, lin, _ = forces[i]
         parts += [_term(sign, name, f"A[{a}, k]") for sign, name, a in lin]
-        finish.append(f"b{i} = {' '.join(parts).lstrip('+ ') or '0.0'}")
+        finish.append(f"b{i} = {_sum(parts) or '0.0'}")
         if c is not None:
             finish += ["if k == 0:", f"    b{i} += {c}"]
     if loop:

@@ -13,6 +13,7 @@ of a direct step (:mod:`mechviz.dynamics.integrators.kernels`): ``rk4_step(y, p,
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import sympy as sp
 from sympy.printing.pycode import pycode
@@ -58,12 +59,42 @@ def _number(e: sp.Expr) -> str:
     return repr(float(e)) if e.is_Number else pycode(e)
 
 
-def rk4_source(eq: Equations) -> str:
-    """The generated module's body: ``rates(y0, ..., k0, ...)`` and ``rk4_step(y, p, h)``."""
+@dataclass(frozen=True)
+class Hoisted:
+    """``eq``'s right-hand sides with every constant of the parameters named: the state ``ys``
+    (``y0, y1, ...``), the parameters ``ps`` (``p0, p1, ...``, the kernel-parameter order), the
+    constants ``consts`` (``k_i = expression of ps``, in the order they are used), and the rates
+    as common subexpressions ``temps`` (``t_j = expression``, each using the ``ys``, ``ks`` and
+    earlier ``t``) and ``rates`` (one expression per state component). The RK4 steps here and
+    the benchmark's peer forms (heyoka's expressions with the constants as its runtime
+    parameters, the C steps) are all printed from this one form, so each computes the
+    constants once, outside its inner loop, from the same expressions."""
+
+    ys: list[sp.Symbol]
+    ps: list[sp.Symbol]
+    consts: list[tuple[sp.Symbol, sp.Expr]]
+    temps: list[tuple[sp.Symbol, sp.Expr]]
+    rates: list[sp.Expr]
+
+    @property
+    def ks(self) -> list[sp.Symbol]:
+        """The constants' symbols ``k0, k1, ...``."""
+        return [s for s, _ in self.consts]
+
+
+def hoisted(eq: Equations) -> Hoisted:
+    """:class:`Hoisted` of ``eq``."""
     ys, ps, exprs = plain(eq)
     consts, exprs = hoist_constants(exprs, set(ps))
-    ks = [s for s, _ in consts]
     temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t"))
+    return Hoisted(ys, ps, consts, temps, reduced)
+
+
+def rk4_source(eq: Equations) -> str:
+    """The generated module's body: ``rates(y0, ..., k0, ...)`` and ``rk4_step(y, p, h)``."""
+    form = hoisted(eq)
+    ys, ps, consts, temps, reduced = form.ys, form.ps, form.consts, form.temps, form.rates
+    ks = form.ks
     d = eq.dim
     args = ", ".join(map(str, ys + ks))
     lines = ["@njit(cache=True)", f"def rates({args}):", '    """y\' as a tuple."""']

@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from ..forms import SystemForms, forms_needed
 from . import kernels as _k
 from . import limits as _lim
 
@@ -503,20 +504,41 @@ METHODS: dict[str, Method] = {
 }
 
 
-def step_functions(method: Method, sys_id: int):
+def step_functions(method: Method, sys_id: int | SystemForms):
     """``(step, inner)`` for this method on this system; ``inner`` is ``None`` for a direct step
-    (``kernels.run_direct``) and the right-hand side or base step for a composed one."""
+    (``kernels.run_direct``) and the right-hand side or base step for a composed one. ``sys_id``
+    is a compiled id (the kernels' tables) or a registered system's own
+    :class:`~mechviz.dynamics.forms.SystemForms`."""
+    if type(sys_id) is SystemForms:
+        return _given_step_functions(method, sys_id)
     kind = method.kernel
     if kind == "rk4":
         return _k.RK4[sys_id], None
     if kind == "symmetric2":
         return _k.SYMMETRIC2[sys_id], None
     if kind == "exact":
-        return _k.cyclotron.exact_step, None
+        if _k.EXACT[sys_id] is None:
+            raise ValueError(f"system {sys_id} has no compiled exact flow")
+        return _k.EXACT[sys_id], None
     if kind == "yoshida4":
         return _k.yoshida4_step, _k.SYMMETRIC2[sys_id]
     step = {"euler": _k.euler_step, "midpoint": _k.midpoint_step}[kind]
     return step, _k.RHS[sys_id]
+
+
+def _given_step_functions(method: Method, forms: SystemForms):
+    """:func:`step_functions` from a system's own compiled forms."""
+    kind = method.kernel
+    if kind == "rk4":
+        return forms.rk4, None
+    if kind == "symmetric2":
+        return forms_needed(forms, "symmetric step", forms.symmetric2), None
+    if kind == "exact":
+        return forms_needed(forms, "exact step", forms.exact_step), None
+    if kind == "yoshida4":
+        return _k.yoshida4_step, forms_needed(forms, "symmetric step", forms.symmetric2)
+    step = {"euler": _k.euler_step, "midpoint": _k.midpoint_step}[kind]
+    return step, forms.rhs
 
 
 def get_method(name: str) -> Method:

@@ -32,6 +32,7 @@ import numpy as np
 from .. import cyclotron, disk, hoop
 from .._jit import njit
 from ..codegen.product import product_module
+from ..forms import SystemForms
 from ..ids import CYCLOTRON, FREE_BODY, HOOP  # (also re-exported)
 
 # System ids (:mod:`mechviz.dynamics.ids`): index into the tables at the bottom.
@@ -186,3 +187,11 @@ _IDS = (CYCLOTRON, HOOP, FREE_BODY)
 RHS = tuple(product_module(i, "rhs").rhs for i in _IDS)
 SYMMETRIC2 = (cyclotron.boris_step, hoop.verlet_step, disk.splitting_step)
 RK4 = tuple(product_module(i, "step").rk4_step for i in _IDS)
+#: The compiled exact flows ``step(y, p, h)``, by id: the charge's only (None: none).
+EXACT = (cyclotron.exact_step, None, None)
+
+
+def rhs_of(sys_id: int | SystemForms):
+    """The compiled right-hand side of system ``sys_id``: a compiled id's from :data:`RHS`, a
+    registered system's from its own forms (:class:`~mechviz.dynamics.forms.SystemForms`)."""
+    return sys_id.rhs if type(sys_id) is SystemForms else RHS[sys_id]

@@ -47,6 +47,7 @@ from numba import types
 from numba.extending import overload, register_jitable
 
 from .._jit import njit
+from ..forms import SystemForms
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, RHS, TOO_SMALL_STEP, report
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
@@ -513,8 +514,11 @@ def _arrays(pair: Pair) -> tuple:
 
 
 def runner_for(pair: Pair, sys_id, d: int):
-    """The compiled loop of ``pair`` for system ``sys_id`` (an id, or a compiled
-    ``rhs(y, p, out)``) and states of ``d`` components."""
+    """The compiled loop of ``pair`` for system ``sys_id`` (an id, a compiled
+    ``rhs(y, p, out)``, or a registered system's :class:`~mechviz.dynamics.forms.SystemForms`,
+    whose right-hand side it takes) and states of ``d`` components."""
+    if type(sys_id) is SystemForms:
+        sys_id = sys_id.rhs
     return _runner(
         sys_id if callable(sys_id) else int(sys_id),
         int(d),

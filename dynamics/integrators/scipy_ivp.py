@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels import RHS
+from ..forms import SystemForms
+from .kernels import rhs_of
 
 
-def _make_fun(sys_id: int, p: np.ndarray, d: int):
-    rhs = RHS[sys_id]
+def _make_fun(sys_id: int | SystemForms, p: np.ndarray, d: int):
+    rhs = rhs_of(sys_id)
     rhs(np.zeros(d), p, np.empty(d))  # compile (or load) before scipy's first call
 
     def fun(t, y):
@@ -29,7 +30,7 @@ def _make_fun(sys_id: int, p: np.ndarray, d: int):
 
 def advance_scipy(
     name: str,
-    sys_id: int,
+    sys_id: int | SystemForms,
     p: np.ndarray,
     Y: np.ndarray,
     t0: float,

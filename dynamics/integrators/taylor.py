@@ -38,6 +38,7 @@ from numba import prange
 
 from .._jit import njit
 from ..codegen.product import product_module
+from ..forms import SystemForms, forms_needed
 from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     ENTIRE,
     MAX_ORDER,
@@ -364,6 +365,79 @@ def run_taylor_with(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, sta
     return total
 
 
+@njit  # takes a compiled function: never disk-cached (see mechviz.dynamics.integrators.kernels)
+def _advance_given(expand, rows, i, Y, p, t0, t1, order, ctl, stats, carry):
+    """:func:`_advance_member` with a given ``expand(A, p, order)`` filling ``rows`` rows (a
+    registered system's, :class:`~mechviz.dynamics.forms.SystemForms`): the same step rule,
+    time sums and kept step, so the same steps and bits as the shipped loop given the same
+    coefficients."""
+    kept, base, comp, span, last = carry
+    d = Y.shape[1]
+    y = Y[i]
+    K = kept[i]
+    same = span[i] > 0.0 and base[i] <= t0 <= base[i] + span[i]
+    if same:
+        for j in range(d):
+            if y[j] != last[i, j]:
+                same = False
+    if same and t1 <= base[i] + span[i]:
+        _horner(K, d, order, (t1 - base[i]) - comp[i], y)
+    else:
+        if same:  # finish the kept step, then go on from its end
+            t, c = two_sum(base[i], span[i])
+            c += comp[i]
+            _horner(K, d, order, span[i], y)
+        else:
+            t = t0
+            c = 0.0
+        A = np.empty((rows, order + 1))
+        while True:
+            for j in range(d):
+                A[j, 0] = y[j]
+            expand(A, p, order)
+            h = _step_size(A, d, order, ctl)
+            stats[i, 0] += 1
+            stats[i, 1] += 1
+            if not (h > 0.0 and t + h > t):  # nan, or a step lost in round-off
+                return NONFINITE
+            rest = (t1 - t) - c
+            if h >= rest:
+                base[i] = t
+                comp[i] = c
+                span[i] = h
+                for j in range(d):
+                    for k in range(order + 1):
+                        K[j, k] = A[j, k]
+                _horner(A, d, order, rest, y)
+                break
+            _horner(A, d, order, h, y)
+            t, e = two_sum(t, h)
+            c += e
+    finite = True
+    for j in range(d):
+        last[i, j] = y[j]
+        if not math.isfinite(y[j]):
+            finite = False
+    return OK if finite else NONFINITE
+
+
+@njit  # takes a compiled function: never disk-cached (see mechviz.dynamics.integrators.kernels)
+def run_taylor_given(expand, rows, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry):
+    """:func:`run_taylor_compiled` with a given expansion (:func:`_advance_given`), members one
+    after another: what :func:`run_taylor` runs for a registered system."""
+    ctl = controls(rtol, atol, order, a)
+    status[0] = OK
+    total = 0
+    for i in range(Y.shape[0]):
+        before = stats[i, 1]
+        code = _advance_given(expand, rows, i, Y, p, t0, t1, order, ctl, stats, carry)
+        total += stats[i, 1] - before
+        if code != OK:
+            report(status, code, stats[i, 1], i)
+            break
+    return total
+
+
 # the hand-written expansions here and the product's right-hand sides (generated from the same
 # equations) they are written for: the tests compare the two, and the generated expansions with
 # the hand-written ones (the hoop's: :data:`mechviz.bench.handwritten.EXPANDS`)
@@ -396,7 +470,13 @@ class TaylorCarry:
 def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
     """Advance every row of ``Y`` from ``t0`` to ``t1`` with the system's expansion; returns the
     steps taken (summed over the members). An ensemble of at least :data:`PARALLEL_MIN` members
-    (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``)."""
+    (``MECHVIZ_PARALLEL_MIN``) runs on numba's threads (``NUMBA_NUM_THREADS``). ``sys_id``: a
+    compiled id, or a registered system's forms (:class:`~mechviz.dynamics.forms.SystemForms`),
+    whose expansion runs serially (:func:`run_taylor_given`)."""
     order, a = order_for(rtol, atol, sys_id)
+    if type(sys_id) is SystemForms:
+        expand = forms_needed(sys_id, "Taylor expansion", sys_id.expand)
+        args = (Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.arrays)
+        return run_taylor_given(expand, sys_id.rows, *args)
     run = run_taylor_parallel if len(Y) >= PARALLEL_MIN and _THREADS > 1 else run_taylor_compiled
     return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, carry.arrays)

@@ -21,7 +21,7 @@ import sys
 from dataclasses import fields
 from pathlib import Path
 
-from mechviz.dynamics.atlas.grid import SYSTEM_NAMES
+from mechviz.dynamics.atlas.grid import system_names
 from mechviz.dynamics.systems import SYSTEMS
 
 from .atlas_checks import (  # noqa: F401  (the checks, re-exported for the tests)
@@ -235,10 +235,11 @@ def add_commands(sub) -> None:
         help="refuse an atlas estimated to take more compiled steps than this, all its cells "
         f"together (default {DEFAULT_MAX_STEPS:g})",
     )
+    names = system_names()  # the registry's now: a system registered at run time too
     p.add_argument(
         "--system",
-        choices=SYSTEM_NAMES,
-        help=f"stability and accuracy: the system (default and chaos: the {SYSTEM_NAMES[0]})",
+        choices=names,
+        help=f"stability and accuracy: the system (default and chaos: the {names[0]})",
     )
     p.add_argument(
         "--param",
@@ -246,9 +247,7 @@ def add_commands(sub) -> None:
         action="append",
         metavar="NAME=VALUE",
         help="a system parameter by its field name ("
-        + "; ".join(
-            f"{n}: {', '.join(f.name for f in fields(SYSTEMS[n].Params))}" for n in SYSTEM_NAMES
-        )
+        + "; ".join(f"{n}: {', '.join(f.name for f in fields(SYSTEMS[n].Params))}" for n in names)
         + "); repeat for more",
     )
     p.add_argument(
@@ -265,9 +264,7 @@ def add_commands(sub) -> None:
         "--amplitude",
         type=_axis_text,
         metavar="START:STOP:N[:log]",
-        help="amplitude axis ("
-        + "; ".join(f"{n}: {SYSTEMS[n].amplitude[1]}" for n in SYSTEM_NAMES)
-        + ")",
+        help="amplitude axis (" + "; ".join(f"{n}: {SYSTEMS[n].amplitude[1]}" for n in names) + ")",
     )
     p.add_argument(
         "--theta1",

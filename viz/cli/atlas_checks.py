@@ -10,7 +10,7 @@ import math
 import os
 import re
 
-from mechviz.dynamics.atlas.grid import SYSTEM_NAMES
+from mechviz.dynamics.atlas.grid import chaos_systems, system_names
 from mechviz.dynamics.params import parse_number
 
 #: Default of ``--max-steps``: the most compiled member-steps an atlas may take, some 500 times
@@ -151,12 +151,10 @@ def check_flags_apply(args: argparse.Namespace) -> None:
         if getattr(args, name, None) is None or args.kind in kinds:
             continue
         if name == "system" and args.kind == "chaos":
-            from mechviz.dynamics.atlas.grid import CHAOS_SYSTEMS
-
-            if args.system in CHAOS_SYSTEMS:
+            if args.system in chaos_systems():
                 continue
             raise ValueError(
-                f"system {args.system}: the chaos map is of the {', '.join(CHAOS_SYSTEMS)} only"
+                f"system {args.system}: the chaos map is of the {', '.join(chaos_systems())} only"
             )
         which = " and ".join(kinds)
         raise ValueError(f"{name}: the {which} map's flag; the {args.kind} map takes none")
@@ -167,14 +165,14 @@ def check_flags_apply(args: argparse.Namespace) -> None:
 def build_spec(args: argparse.Namespace):
     """The :class:`mechviz.dynamics.atlas.AtlasSpec` the flags describe (``ValueError`` naming the flag)."""
     from mechviz.dynamics import SYSTEMS, methods_for
-    from mechviz.dynamics.atlas.grid import CHAOS_SYSTEMS, AtlasSpec, Axis
+    from mechviz.dynamics.atlas.grid import AtlasSpec, Axis
     from mechviz.dynamics.atlas.theory import make_system, start_states
 
     check_flags_apply(args)
     if args.kind == "chaos":
-        system_name = args.system or CHAOS_SYSTEMS[0]
+        system_name = args.system or chaos_systems()[0]
     else:
-        system_name = args.system or SYSTEM_NAMES[0]
+        system_name = args.system or system_names()[0]
     params = dict(args.param or ())
     for name, value in params.items():
         if not math.isfinite(value):
