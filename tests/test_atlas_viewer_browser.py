@@ -22,7 +22,7 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 @pytest.fixture(scope="module")
 def viewer():
     with browser.open_viewer() as (app, page):
-        page.get_by_role("tab", name=app.exhibits["hoop"].name).click()
+        page.get_by_role("tab", name=app.exhibits["hoop"].model.name).click()
         yield app, page
 
 
@@ -62,12 +62,13 @@ def test_a_click_on_the_chaos_map_starts_the_hoop_at_rest_at_the_clicked_angles(
         page.mouse.click(box["x"] + x, box["y"] + y)
         wait_until(
             lambda t=target: (
-                ex.config.mode == "custom" and np.allclose(ex.config.angles, t, atol=0.05)
+                ex.model.config.mode == "custom"
+                and np.allclose(ex.model.config.angles, t, atol=0.05)
             ),
             20,
             f"the hoop to start at {target}",
         )
-        start = ex.sim.state0[0]  # where the running simulation started: there, at rest
+        start = ex.model.sim.state0[0]  # where the running simulation started: there, at rest
         assert np.allclose(start[:2], target, atol=0.05) and np.all(start[2:] == 0.0)
 
 
@@ -89,7 +90,7 @@ def test_the_stability_map_marks_the_current_step(viewer):
         box = browser.number_box(page, "Step dt")
         box.fill(dt)
         box.press("Enter")  # a typed number applies on Enter, never half-typed
-        wait_until(lambda d=float(dt): ex.config.dt == d, 20, f"dt = {dt}")
+        wait_until(lambda d=float(dt): ex.model.config.dt == d, 20, f"dt = {dt}")
         drawn = wait_until(
             lambda d=float(dt): (
                 view.step_drawn if view.step_drawn and view.step_drawn[1] == d else None

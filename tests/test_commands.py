@@ -122,3 +122,48 @@ def test_a_view_observing_a_model_is_told_of_every_change_and_of_none_after_it_s
     hoop.advance(0.05)
     hoop.apply(Reset())
     assert len(told) == n
+
+
+def test_each_view_is_built_over_its_model_sees_what_is_done_to_the_model_alone_until_closed(
+    server,
+):
+    """A view is not its model: every exhibit of the registry draws a model of the class the
+    models' registry names for its system, kept as ``model`` (the view answers none of the
+    model's calls). A step or a command given to the model alone marks the view to draw, and a
+    new start is built into the view at once (the hoop's body for its new radius); once the
+    view is closed, nothing done to the model reaches it."""
+    from mechviz.viz.model import MODELS, ExhibitModel
+    from mechviz.viz.scene import EXHIBITS
+
+    for key, cls in EXHIBITS.items():
+        assert not issubclass(cls, ExhibitModel), key
+        assert cls.model_type is MODELS[key], key
+        model = MODELS[key]()
+        view = cls(server, model)
+        assert view.model is model and type(view.model) is MODELS[key], key
+        assert not any(hasattr(view, name) for name in ("advance", "apply", "state", "t")), key
+        assert view.draw_if_changed() and not view.to_draw, key  # drawn once, then up to date
+        model.advance(0.05)
+        assert view.to_draw, key
+        view.draw_if_changed()
+        model.apply(Reset())
+        assert view.to_draw and view.draw_if_changed(), key
+        view.close()
+        model.advance(0.05)
+        model.apply(Reset())
+        assert not view.to_draw, key
+
+    hoop = HoopModel()
+    view = EXHIBITS[hoop.key](server, hoop)
+    radius = hoop.params.radius
+    hoop.apply(Set(params={"radius": 2 * radius}))
+    assert view._built_radius == 2 * radius  # the view built the new start's hoop
+    view.close()
+    hoop.apply(Set(params={"radius": radius}))
+    assert view._built_radius == 2 * radius  # closed: the model's new start is not its own
+
+    cyclotron = CyclotronModel()
+    view = EXHIBITS[cyclotron.key](server, cyclotron)
+    view.draw()
+    cyclotron.apply(Kick(dv=0.5))  # the model alone: the view keeps the orbit before the kick
+    assert view.ghost_ring.visible

@@ -231,7 +231,7 @@ def _numeric_keys(raw: dict) -> list[tuple]:
         elif isinstance(v, list) and v and isinstance(v[0], dict):
             for i, item in enumerate(v):
                 out += [(k, i, kk) for kk, vv in item.items() if isinstance(vv, int | float)]
-    out += [("parameters", p) for p in EXHIBITS[raw["exhibit"]].Config().params]
+    out += [("parameters", p) for p in EXHIBITS[raw["exhibit"]].model_type.Config().params]
     out += [(k,) for k in ("speed", "dt", "rtol")]
     return list(dict.fromkeys(out))
 

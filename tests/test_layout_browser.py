@@ -93,7 +93,7 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
 
     app, page = viewer
     app.enqueue("disk", Set(fields={"mode": mode}))
-    wait_until(lambda: app.exhibits["disk"].config.mode == mode, 15, f"the {mode} disk")
+    wait_until(lambda: app.exhibits["disk"].model.config.mode == mode, 15, f"the {mode} disk")
     free = _panel_left(page)
     names = set()
     for view in ("Home", "Cyclotron", "Disk", "Hoop", "Top"):
@@ -102,7 +102,7 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
             wait_until(lambda: app.stage == "cyclotron", 15, "the cyclotron's stage")
         page.get_by_role("button", name=view, exact=True).click()
         position, target, _ = _camera(app, view)
-        t0 = app.exhibits["disk"].t
+        t0 = app.exhibits["disk"].model.t
         for _ in range(4):  # over a second of the motion: the moving labels move
             camera = (position, target)
             boxes = [
@@ -111,12 +111,14 @@ def test_no_two_labels_overlap_on_the_page_at_any_preset(viewer, mode):
                 + screen.image_boxes(app.scene_nodes(), camera, *PAGE)
                 if b.x0 < free and b.y0 < PAGE[1]
             ]
-            assert not screen.overlapping(boxes), (view, app.exhibits["disk"].t)
+            assert not screen.overlapping(boxes), (view, app.exhibits["disk"].model.t)
             names |= {b.text for b in boxes}
             wait_until(
-                lambda t=app.exhibits["disk"].t: app.exhibits["disk"].t > t + 0.3, 15, "time"
+                lambda t=app.exhibits["disk"].model.t: app.exhibits["disk"].model.t > t + 0.3,
+                15,
+                "time",
             )
-        assert app.exhibits["disk"].t > t0
+        assert app.exhibits["disk"].model.t > t0
     expected = {
         "mode 1",
         "mode 2",
@@ -210,7 +212,7 @@ def _red_pixels(page) -> int:
 
 def test_a_chart_keeps_its_history_when_the_window_changes(viewer):
     app, page = viewer
-    hoop = app.exhibits["hoop"]
+    hoop = app.exhibits["hoop"].model
     page.get_by_role("tab", name="Hoop").click()
     wait_until(lambda: np.ptp(hoop.chart_data()[0]) >= 8.0, 60, "ten seconds of chart")
     wait_until(lambda: _red_pixels(page) > 50, 30, "the error line", poll_s=0.5)

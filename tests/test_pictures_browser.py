@@ -81,10 +81,17 @@ def _save(img: np.ndarray, name: str, tmp_path) -> None:
 
 def _choose(app, key: str, x: str, y: str) -> None:
     ex = app.exhibits[key]
-    variables = ex.plot_variables(ex.config)
+    variables = ex.model.plot_variables(ex.model.config)
     app.w[f"{key}.plot_x"].value = variables[x].label  # as the dropdowns do
     app.w[f"{key}.plot_y"].value = variables[y].label
 
+
+#: Hides (``true``) or shows the panel around the Leave button (a still of the scene alone).
+PANEL_HIDDEN = """hidden => {
+    const leave = [...document.querySelectorAll('button')].find(b => b.textContent.includes('Leave'));
+    const panel = leave && leave.closest('.mantine-Paper-root');
+    if (panel) panel.style.visibility = hidden ? 'hidden' : '';
+}"""
 
 KICK = Kick(dv=0.4)
 MIX = Set(fields={"mode": "mix", "amplitude": 1.0})
@@ -113,7 +120,7 @@ def test_the_plot_shows_the_motion_and_its_exact_curve(
     frames_later(app, 2)  # the commands are applied at the start of a frame
     _choose(app, key, *pair)
     # 200 points are 600 frames (a point each measured frame, every third): 10 s at 60 fps
-    wait_until(lambda: len(app.exhibits[key].trace) >= 200, 60, "the path to grow")
+    wait_until(lambda: len(app.exhibits[key].model.trace) >= 200, 60, "the path to grow")
     img = _plot(page, tab)
     assert app.panels[key].plot_choice == pair
     _save(img, name, tmp_path)
@@ -129,8 +136,15 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
     app.enqueue("app", Present("Disk"))
     try:
         wait_until(lambda: app.presenting is not None, 20, "presentation mode")
+
         # the still shows the construction, not presentation mode's key figures beside it
-        app.enqueue("call", lambda a: setattr(a.stage_label, "visible", False))
+        def construction_only(a) -> None:
+            a.stage_label.visible = False
+            a.charts["disk"].visible = False
+
+        app.enqueue("call", construction_only)
+        # nor the page's panel (its Leave button) over the still's corner
+        page.evaluate(PANEL_HIDDEN, True)
         frames_later(app, 60)  # the camera's move to the disk is a second of frames
         img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
         # the README's still: the disk's box as the browser's camera sees it (the body, its
@@ -147,4 +161,5 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
         _save(img[y0 : int(y1) + 20, x0 : int(x1) + 20], "poinsot", tmp_path)
         assert "Poinsot" in app.exhibits["disk"].poinsot.names[0].text
     finally:
+        page.evaluate(PANEL_HIDDEN, False)
         app.enqueue("app", Present("Off"))

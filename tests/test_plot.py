@@ -11,16 +11,22 @@ import pytest
 
 from mechviz import dynamics
 from mechviz.dynamics import hoop as hp
-from mechviz.viz.model import CyclotronConfig, DiskConfig, HoopConfig
+from mechviz.viz.model import (
+    CyclotronConfig,
+    CyclotronModel,
+    DiskConfig,
+    DiskModel,
+    HoopConfig,
+    HoopModel,
+)
 from mechviz.viz.model.commands import Set
 from mechviz.viz.model.plot import PlotImage, Samples
-from mechviz.viz.scene import CyclotronExhibit, DiskExhibit, HoopExhibit
 
 CASES = [
-    (CyclotronExhibit, CyclotronConfig(centre=(0.6, 0.0), vz=0.1)),
-    (HoopExhibit, HoopConfig(mode="mix", amplitude=0.8)),
-    (DiskExhibit, DiskConfig(mode="driven")),
-    (DiskExhibit, DiskConfig(mode="released", extra_spin=(0.0, 0.0, 0.05))),
+    (CyclotronModel, CyclotronConfig(centre=(0.6, 0.0), vz=0.1)),
+    (HoopModel, HoopConfig(mode="mix", amplitude=0.8)),
+    (DiskModel, DiskConfig(mode="driven")),
+    (DiskModel, DiskConfig(mode="released", extra_spin=(0.0, 0.0, 0.05))),
 ]
 
 
@@ -69,15 +75,15 @@ def test_the_charge_sits_in_its_well_at_the_level_of_its_transverse_energy():
     p = cfg.physics()
     state = cfg.initial_state()
     state[3] += 0.4  # a radial kick: the circle no longer holds the axis's centre
-    smp = samples_of(CyclotronExhibit, cfg, 12.0, state=state)
-    v = CyclotronExhibit.plot_variables(cfg)
+    smp = samples_of(CyclotronModel, cfg, 12.0, state=state)
+    v = CyclotronModel.plot_variables(cfg)
     e_perp = 0.5 * p.mass * (smp.states[:, 3] ** 2 + smp.states[:, 4] ** 2)
     gap = e_perp - v["V_eff"].values(smp)
     np.testing.assert_allclose(
         gap, v["p_r"].values(smp) ** 2 / (2 * p.mass), atol=1e-12 * e_perp.max()
     )
     assert np.ptp(v["r"].values(smp)) > 0.1  # r swings: the point moves in the well
-    well, level, bottom = CyclotronExhibit.plot_curves(cfg, "r", "V_eff", smp)
+    well, level, bottom = CyclotronModel.plot_curves(cfg, "r", "V_eff", smp)
     assert level.y[0] == pytest.approx(e_perp[-1], rel=1e-12)
     assert np.nanmin(well.y) == pytest.approx(bottom.y[0], rel=1e-9)  # r0 at the bottom
 
@@ -94,12 +100,12 @@ def test_the_well_is_drawn_whole_on_the_default_orbit_where_r_never_moves(where)
 
     cfg = CyclotronConfig()
     p = cfg.physics()
-    smp = samples_of(CyclotronExhibit, cfg, 6.0, n=120)
-    v = CyclotronExhibit.plot_variables(cfg)
+    smp = samples_of(CyclotronModel, cfg, 6.0, n=120)
+    v = CyclotronModel.plot_variables(cfg)
     r = v["r"].values(smp)
     assert np.ptp(r) < 1e-9 * r.max()  # r does not move
     e_perp = 0.5 * p.mass * (smp.states[-1, 3] ** 2 + smp.states[-1, 4] ** 2)
-    curves = CyclotronExhibit.plot_curves(cfg, "r", "V_eff", smp)
+    curves = CyclotronModel.plot_curves(cfg, "r", "V_eff", smp)
     if where == "panel":
         image = PlotImage()
         image.render(variables=v, x="r", y="V_eff", samples=smp, curves=curves)
@@ -123,16 +129,14 @@ def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendul
     at the bottom with theta' = 2.05 w1 stays outside (over the top)."""
     cfg = HoopConfig()
     w1 = float(hp.normal_modes(cfg.physics())[0][0])
-    sep = HoopExhibit.plot_curves(cfg, "theta1", "omega1", samples_of(HoopExhibit, cfg, 0.1, n=2))[
-        0
-    ]
+    sep = HoopModel.plot_curves(cfg, "theta1", "omega1", samples_of(HoopModel, cfg, 0.1, n=2))[0]
     np.testing.assert_allclose(0.5 * sep.y**2 - w1**2 * np.cos(sep.x), w1**2, atol=1e-12)
 
     period = hp.mode1_period(cfg.physics(), 3.0)
-    inside = samples_of(HoopExhibit, cfg, period, state=np.array([3.0, 3.0, 0.0, 0.0]))
+    inside = samples_of(HoopModel, cfg, period, state=np.array([3.0, 3.0, 0.0, 0.0]))
     th, rate = inside.states[:, 0], inside.states[:, 2]
     assert np.all(np.abs(rate) < 2 * w1 * np.cos(th / 2) + 1e-9)
-    orbit = HoopExhibit.plot_curves(cfg, "theta1", "omega1", inside)[1]
+    orbit = HoopModel.plot_curves(cfg, "theta1", "omega1", inside)[1]
     assert orbit.label == "exact pendulum orbit"
     e_path = 0.5 * rate**2 - w1**2 * np.cos(th)  # the pendulum's energy per unit inertia
     np.testing.assert_allclose(e_path, e_path[0], atol=1e-9 * w1**2)
@@ -142,7 +146,7 @@ def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendul
         0.5 * orbit.y[ok] ** 2 - w1**2 * np.cos(orbit.x[ok]), e_path[-1], atol=1e-12 * w1**2
     )
 
-    over = samples_of(HoopExhibit, cfg, 3.0, state=np.array([0.0, 0.0, 2.05 * w1, 2.05 * w1]))
+    over = samples_of(HoopModel, cfg, 3.0, state=np.array([0.0, 0.0, 2.05 * w1, 2.05 * w1]))
     th, rate = over.states[:, 0], over.states[:, 2]
     assert np.all(np.abs(rate) > 2 * w1 * np.abs(np.cos(th / 2)))
     assert np.ptp(th) > 2 * math.pi  # it went over the top
@@ -150,13 +154,13 @@ def test_the_hoop_phase_portrait_is_split_by_the_separatrix_of_the_mode_1_pendul
 
 def test_configuration_space_draws_the_mode_lines_a_small_mode_1_start_stays_on():
     cfg = HoopConfig(mode="mode 1", amplitude=0.05)
-    smp = samples_of(HoopExhibit, cfg, 10.0)
-    line1, line2 = HoopExhibit.plot_curves(cfg, "theta1", "theta2", smp)
+    smp = samples_of(HoopModel, cfg, 10.0)
+    line1, line2 = HoopModel.plot_curves(cfg, "theta1", "theta2", smp)
     _, shapes = hp.normal_modes(cfg.physics())
     for line, shape in ((line1, shapes[0]), (line2, shapes[1])):
         d = np.array([line.x[1] - line.x[0], line.y[1] - line.y[0]])
         assert abs(d[0] * shape[1] - d[1] * shape[0]) < 1e-12 * np.linalg.norm(d)  # along the shape
-    q = HoopExhibit.plot_variables(cfg)["q2"].values(smp)
+    q = HoopModel.plot_variables(cfg)["q2"].values(smp)
     assert np.abs(q).max() < 1e-9  # on the (1, 1) line: no mode-2 part
 
 
@@ -165,7 +169,7 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
     Every sample of a tumble satisfies the conic of the drawn curve (from the first sample's E
     and L), and the curve's points satisfy it too."""
     cfg = DiskConfig(mode="released", extra_spin=(0.0, 0.0, 0.05))
-    smp = samples_of(DiskExhibit, cfg, 20.0)
+    smp = samples_of(DiskModel, cfg, 20.0)
     moments = dynamics.disk.free_kernel_params(cfg.physics())
     w0 = smp.states[0, :3]
     two_e, l2 = np.sum(moments * w0**2), np.sum((moments * w0) ** 2)
@@ -178,7 +182,7 @@ def test_the_released_disk_runs_on_the_drawn_polhode_and_its_asymptotes_are_the_
         np.testing.assert_allclose(
             a * w[:, i] ** 2 + b * w[:, j] ** 2, c, atol=1e-9 * two_e * moments[k]
         )
-        (curve,) = DiskExhibit.plot_curves(cfg, x, y, smp)
+        (curve,) = DiskModel.plot_curves(cfg, x, y, smp)
         ok = np.isfinite(curve.x)
         on_curve = a * curve.x[ok] ** 2 + b * curve.y[ok] ** 2
         np.testing.assert_allclose(on_curve, c, atol=1e-9 * two_e * moments[k])
@@ -195,7 +199,7 @@ def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_oth
         for _ in range(60):
             app.step_frame()
         panel = app.panels["hoop"]
-        variables = HoopExhibit.plot_variables(app.exhibits["hoop"].config)
+        variables = HoopModel.plot_variables(app.exhibits["hoop"].model.config)
         app.w["hoop.plot_y"].value = variables["theta2"].label  # as the dropdown does
         app.w["hoop.plot_x"].value = variables["theta1"].label
         app.step_frame()
@@ -207,12 +211,12 @@ def test_the_panel_plots_the_pair_a_person_picks_and_follows_the_disk_to_its_oth
         assert np.abs(app.w["hoop.plot"].image.astype(int) - before).mean() > 1  # drawn anew
 
         disk = app.panels["disk"]
-        app.exhibits["disk"].apply(Set(fields={"mode": "released"}))
+        app.exhibits["disk"].model.apply(Set(fields={"mode": "released"}))
         disk.refresh_plot(force=True)
-        released = DiskExhibit.plot_variables(app.exhibits["disk"].config)
+        released = DiskModel.plot_variables(app.exhibits["disk"].model.config)
         assert (
             disk.plot_choice
-            == DiskExhibit.default_plot(app.exhibits["disk"].config)
+            == DiskModel.default_plot(app.exhibits["disk"].model.config)
             == ("w2", "w3")
         )
         assert tuple(app.w["disk.plot_x"].options) == tuple(v.label for v in released.values())

@@ -97,7 +97,11 @@ def test_csv_holds_every_run_member_and_frame(recorded, name):
     ghost = res.frames if demo.ghost else 0
     assert len(rows) == runs * members * res.frames + ghost
     first = rows[0]
-    system = "driven-disk" if demo.motion == "driven" else EXHIBITS[demo.exhibit].Config.system_name
+    system = (
+        "driven-disk"
+        if demo.motion == "driven"
+        else EXHIBITS[demo.exhibit].model_type.Config.system_name
+    )
     names = dynamics.SYSTEMS[system].state_names
     assert list(first)[:3] == ["run", "member", "t"] and all(n in first for n in names)
     assert float(first["t"]) == 0.0 and float(first["energy_error"]) == 0.0
@@ -255,7 +259,7 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     out, results = recorded
     demo = results["beam"].demo
     live = CyclotronExhibit(server)
-    live.apply(
+    live.model.apply(
         Set(
             fields={
                 "method": demo.method,
@@ -270,8 +274,8 @@ def test_recorded_beam_starts_where_the_live_beam_exhibit_starts(recorded, serve
     rows = list(csv.DictReader(io.StringIO((out / "beam.csv").read_text())))
     names = dynamics.SYSTEMS["cyclotron"].state_names
     first = np.array([[float(r[n]) for n in names] for r in rows if float(r["t"]) == 0.0])
-    assert first.shape == live.beam.state.shape == (12, 6)
-    np.testing.assert_allclose(first, live.beam.state, rtol=1e-9, atol=1e-12)
+    assert first.shape == live.model.beam.state.shape == (12, 6)
+    np.testing.assert_allclose(first, live.model.beam.state, rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize(

@@ -31,7 +31,7 @@ def test_pausing_and_scrubbing_back_moves_the_time_and_the_exhibits_back():
         page.get_by_role("button", name="Pause").click()
         page.get_by_role("button", name="Play").wait_for(timeout=scaled(15) * 1000)
         wait_until(lambda: not app.playing, 15, "the app to pause")
-        t_paused, cyc = app.sim_time, app.exhibits["cyclotron"]
+        t_paused, cyc = app.sim_time, app.exhibits["cyclotron"].model
         t_shown = cyc.t
         wait_until(lambda: _page_time(page) == round(t_shown, 2), 15, "the page's paused time")
         before = browser.screenshot_array(page)
@@ -46,7 +46,7 @@ def test_pausing_and_scrubbing_back_moves_the_time_and_the_exhibits_back():
             "the page's time to go 5 s back",
         )
         assert not app.playing
-        hoop = app.exhibits["hoop"]
+        hoop = app.exhibits["hoop"].model
         assert hoop.scrubbed == pytest.approx(5.0, abs=0.02)
         # the hoop's readout on its tab says the same time
         page.get_by_role("tab", name="Hoop").click()

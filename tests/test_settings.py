@@ -53,8 +53,8 @@ def server():
 
 
 def _start(ex) -> tuple[np.ndarray, dict, str]:
-    sim = ex.runs()["main"]
-    return sim.state0[0], dict(ex.config.physics().__dict__), sim.method.name
+    sim = ex.model.runs()["main"]
+    return sim.state0[0], dict(ex.model.config.physics().__dict__), sim.method.name
 
 
 @pytest.mark.parametrize("system", list(dynamics.SPECS))
@@ -132,10 +132,10 @@ def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, meth
     assert err.value.field == named["api"]
 
     ex = app.exhibits[system]
-    before = ex.config
+    before = ex.model.config
     if field == "rtol":  # a dropdown in the panel: only the model can be given a bad one
         with pytest.raises(dynamics.SettingError) as err:
-            ex.apply(Set(fields={"method": method, "rtol": number}))
+            ex.model.apply(Set(fields={"method": method, "rtol": number}))
         assert err.value.field == named["viewer"]
     else:
         key = f"{system}.params.{field}" if field in spec.default_params() else f"{system}.{field}"
@@ -146,7 +146,7 @@ def test_every_front_end_refuses_a_bad_value_naming_the_same_setting(field, meth
         assert len(app.messages) > count
         label = named["viewer"] if field != "dt" else "Step dt [s]"
         assert app.messages[-1][1].startswith(label), app.messages[-1]
-    assert ex.config == before
+    assert ex.model.config == before
 
     table = {"exhibit": system, "duration": 1.0, **({"method": method} if method else {})}
     if field in spec.default_params():

@@ -116,7 +116,7 @@ def test_each_stage_shows_its_exhibit_alone_large_with_words_for_a_hall(viewer, 
     assert min(sizes) >= 0.03 * min(height, 1080), sizes
     # and the stage's words drawn so: the tallest line of ink in the band or column
     words = app.stage_label.text
-    assert app.stage_label.visible and app.exhibits[key].title in words
+    assert app.stage_label.visible and app.exhibits[key].model.title in words
 
     # the words' columns: beside the stage's chart where it stands beside them
     xy = framing.project(app.charts[key].world_corners(), position, target, width, height, fov)

@@ -103,17 +103,21 @@ def test_each_stage_shows_its_chart_beside_the_exhibit_readable_and_up_to_date(
     # the line ends at the exhibit's time: paused, then taken back by Rewind
     app.enqueue("app", Pause())
     wait_until(lambda: not app.playing, 15, "the pause")
-    wait_until(lambda: abs(_last_time(chart) - ex.t) < 1e-3, 15, "the chart at the time shown")
-    t_paused = ex.t
-    app.enqueue("app", Scrub(-0.5))
-    wait_until(lambda: ex.t < t_paused - 0.1, 15, "the exhibit taken back")
     wait_until(
-        lambda: abs(_last_time(chart) - ex.t) < 1e-3, 15, "the chart at the moment gone back to"
+        lambda: abs(_last_time(chart) - ex.model.t) < 1e-3, 15, "the chart at the time shown"
     )
-    print(f"  paused at {t_paused:.2f} s, rewound to {ex.t:.2f} s: the chart ends there")
+    t_paused = ex.model.t
+    app.enqueue("app", Scrub(-0.5))
+    wait_until(lambda: ex.model.t < t_paused - 0.1, 15, "the exhibit taken back")
+    wait_until(
+        lambda: abs(_last_time(chart) - ex.model.t) < 1e-3,
+        15,
+        "the chart at the moment gone back to",
+    )
+    print(f"  paused at {t_paused:.2f} s, rewound to {ex.model.t:.2f} s: the chart ends there")
     app.enqueue("app", Play())
     wait_until(lambda: app.playing, 15, "play")
-    wait_until(lambda: _last_time(chart) > ex.t - 0.2, 15, "the chart going on")
+    wait_until(lambda: _last_time(chart) > ex.model.t - 0.2, 15, "the chart going on")
     _shot(page, f"stage-{key}-{width}x{height}.png", tmp_path)
 
 
@@ -127,7 +131,7 @@ def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tm
     before = _framed(app)
     app.enqueue("disk", Set(fields={"mode": "released"}))
     try:
-        wait_until(lambda: ex.config.mode == "released", 15, "the release")
+        wait_until(lambda: ex.model.config.mode == "released", 15, "the release")
         position, target, fov = _arrived(app, before)  # framed again with Poinsot beside
         camera = (position, target, fov)
         wait_until(lambda: ex.poinsot.frame.visible, 15, "Poinsot's picture")
@@ -152,4 +156,4 @@ def test_poinsot_is_a_third_of_the_page_high_beside_the_released_disk(viewer, tm
         _shot(page, f"stage-disk-released-{width}x{height}.png", tmp_path)
     finally:
         app.enqueue("disk", Set(fields={"mode": "driven"}))
-        wait_until(lambda: ex.config.mode == "driven", 15, "driven again")
+        wait_until(lambda: ex.model.config.mode == "driven", 15, "driven again")

@@ -85,20 +85,20 @@ BOXES = {  # name: (label, value in force, good texts, bad texts)
     ),
     "kick": (
         "Kick dv [m/s]",
-        lambda app: app.exhibits[CYC].config.kick,
+        lambda app: app.exhibits[CYC].model.config.kick,
         ["-0.3", "−0.45", "2.5e-1", "-1E-1", ".75", "0.05", "1", "-1", "+0.4", "-.2"],
         ["1.5", "-2", "1e1", "-", "--3", "1.2.3", "e5", "0x10"],
     ),
     "dt": (
         "Step dt [s]",
-        lambda app: app.exhibits[CYC].config.dt,
+        lambda app: app.exhibits[CYC].model.config.dt,
         ["0.02", "2.5e-2", "1E-2", "0.005", ".03", "5e-3", "0.0125", "4E-2"],
         # 1e4 s: longer than a turn of the charge at every mass entered (2 pi x 250 s at most)
         ["0", "-0.01", "1e4", "1e", "abc", "inf", "0.0.1"],
     ),
     "mass": (
         "Mass m [kg]",
-        lambda app: app.exhibits[CYC].config.params["mass"],
+        lambda app: app.exhibits[CYC].model.config.params["mass"],
         ["2", "0.5", "1.5e1", "3E+0", "250", "0.75", "1", "12.5"],
         ["0", "-1", "2000", "1e-4", "m", "1,5", "2e"],
     ),
@@ -123,22 +123,22 @@ def _other_change(app, page, rng: random.Random) -> str:
     ex = app.exhibits[CYC]
     what = rng.choice(("kick", "beam", "play", "method"))
     if what == "kick":
-        motion = ex.motion
+        motion = ex.model.motion
         page.get_by_role("button", name="Kick", exact=True).click()
-        wait_until(lambda: app.exhibits[CYC].motion is not motion, 20, "the kick given")
+        wait_until(lambda: app.exhibits[CYC].model.motion is not motion, 20, "the kick given")
     elif what == "beam":
-        beam = ex.config.beam
+        beam = ex.model.config.beam
         page.get_by_role("checkbox", name="Beam").click()
-        wait_until(lambda: app.exhibits[CYC].config.beam != beam, 20, "the beam toggled")
+        wait_until(lambda: app.exhibits[CYC].model.config.beam != beam, 20, "the beam toggled")
     elif what == "play":
         playing = app.playing
         page.get_by_role("button", name="Pause" if playing else "Play", exact=True).click()
         wait_until(lambda: app.playing != playing, 20, "play/pause")
     else:
-        method = "rk4" if ex.config.method == "boris" else "boris"
+        method = "rk4" if ex.model.config.method == "boris" else "boris"
         page.get_by_role("combobox", name="Method", exact=True).click()
         page.get_by_role("option", name=method, exact=True).click()
-        wait_until(lambda: app.exhibits[CYC].config.method == method, 20, f"method {method}")
+        wait_until(lambda: app.exhibits[CYC].model.config.method == method, 20, f"method {method}")
     return what
 
 
@@ -153,7 +153,7 @@ def test_a_hundred_numbers_typed_key_by_key_under_load_are_each_applied_exactly_
         return MAX_PAUSE * rng.random() ** 4
 
     app.enqueue(CYC, Set(fields={"method": "boris"}))  # a fixed step: the step box shows
-    wait_until(lambda: app.exhibits[CYC].config.method == "boris", 20, "boris")
+    wait_until(lambda: app.exhibits[CYC].model.config.method == "boris", 20, "boris")
     page.get_by_role("tab", name="Cyclotron").click()
     seen: dict[str, list[float]] = {name: [] for name in BOXES}  # every value in force, in order
 
@@ -235,7 +235,7 @@ def test_a_box_typed_in_keeps_its_text_and_shows_the_value_in_force_once_left(vi
     app.typing.left()
     page.get_by_role("tab", name="Cyclotron").click()
     box = _box(page, "Kick dv [m/s]")
-    kick = app.exhibits[CYC].config.kick
+    kick = app.exhibits[CYC].model.config.kick
     wait_until(lambda: box.input_value() == number_text(kick), 20, "the kick shown")
     box.click()
     box.press("Control+A")
@@ -251,7 +251,7 @@ def test_a_box_typed_in_keeps_its_text_and_shows_the_value_in_force_once_left(vi
     n = len(app.messages)
     page.get_by_role("button", name="Kick", exact=True).click()  # moved on
     wait_until(lambda: box.input_value() == number_text(kick), 20, "the value in force back")
-    assert app.exhibits[CYC].config.kick == kick
+    assert app.exhibits[CYC].model.config.kick == kick
     assert any("not entered" in body for _, body in app.messages[n:]), app.messages[n:]
     _close_notes(page)
 
@@ -261,13 +261,13 @@ def test_a_stepper_moves_a_number_to_the_next_value_of_its_series(viewer):
     page.get_by_role("tab", name="Cyclotron").click()
     ex = app.exhibits[CYC]
     app.enqueue(CYC, Set(params={"mass": 1.0}))
-    wait_until(lambda: ex.config.params["mass"] == 1.0, 20, "mass 1")
+    wait_until(lambda: ex.model.config.params["mass"] == 1.0, 20, "mass 1")
     box = _box(page, "Mass m [kg]")
     stepper = box.locator("xpath=following::button[normalize-space()='+'][1]")
     stepper.click()
-    wait_until(lambda: app.exhibits[CYC].config.params["mass"] == 2.0, 20, "mass 2")
+    wait_until(lambda: app.exhibits[CYC].model.config.params["mass"] == 2.0, 20, "mass 2")
     wait_until(lambda: box.input_value() == "2", 20, "the box to show 2")
     box.locator("xpath=following::button[normalize-space()='−'][1]").click()
     box.locator("xpath=following::button[normalize-space()='−'][1]").click()
-    wait_until(lambda: app.exhibits[CYC].config.params["mass"] == 0.5, 20, "mass 0.5")
+    wait_until(lambda: app.exhibits[CYC].model.config.params["mass"] == 0.5, 20, "mass 0.5")
     wait_until(lambda: box.input_value() == "0.5", 20, "the box to show 0.5")

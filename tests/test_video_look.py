@@ -144,7 +144,7 @@ def test_a_session_carries_the_viewers_camera_and_the_exhibits_title():
         info = session_info(app, types.SimpleNamespace(camera=camera))
     finally:
         app.stop()
-    assert info["title"] == ex.title
+    assert info["title"] == ex.model.title
     page = video.with_session_info(b"<html><head></head><body></body></html>", info)
     assert video.session_info(page) == info
     clip = video.Clip(page=page, fps=30, frames=1, camera=framing.Camera(**info["camera"]))

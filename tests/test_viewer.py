@@ -82,11 +82,11 @@ def test_every_exhibit_has_its_scene_nodes(app):
 def test_charge_is_drawn_on_the_exact_helix_at_the_simulated_time(app):
     frames(app, 90)
     ex = app.exhibits["cyclotron"]
-    p = ex.params
-    exact = cy.exact_solution(p, ex.config.initial_state(), ex.t)
+    p = ex.model.params
+    exact = cy.exact_solution(p, ex.model.config.initial_state(), ex.model.t)
     drawn = ex.bodies.batched_positions[0]  # viser stores batched positions as float32
     np.testing.assert_allclose(drawn[:2], exact[:2], atol=1e-6)
-    assert drawn[2] == pytest.approx(exact[2] % ex.config.height, abs=1e-6)
+    assert drawn[2] == pytest.approx(exact[2] % ex.model.config.height, abs=1e-6)
     # the theory circle is centred on the guiding centre with the radius sqrt(2 m E)/(|q| B)
     centre = cy.guiding_centre(p, exact)
     np.testing.assert_allclose(ex.ring.position[:2], centre[:2], atol=1e-9)
@@ -96,7 +96,7 @@ def test_charge_is_drawn_on_the_exact_helix_at_the_simulated_time(app):
 def test_driven_disk_pose_and_bearing_forces_equal_dynamics(app):
     frames(app, 75)
     ex = app.exhibits["disk"]
-    p, t = ex.params, ex.sample.t
+    p, t = ex.model.params, ex.model.sample.t
     assert t == pytest.approx(75 * FRAME * app.speed)
     rot = dk.rotation_about_axle(p.omega * t)
     assert same_rotation(ex.body.wxyz, geo.quat_from_matrix(P @ rot))
@@ -109,14 +109,14 @@ def test_driven_disk_pose_and_bearing_forces_equal_dynamics(app):
             arrows[k, 1] - arrows[k, 0], P @ force * ex.force_scale, atol=1e-5
         )
     # the measured amplitude (dL/dt of the sampled motion) agrees with m R omega^2 / 2
-    assert ex.measured()["bearing_force"].value == pytest.approx(
+    assert ex.model.measured()["bearing_force"].value == pytest.approx(
         dk.axle_force_amplitude(p), rel=1e-3
     )
 
 
 def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
     ex = app.exhibits["hoop"]
-    c = ex.config
+    c = ex.model.config
     twin = dynamics.Simulation(
         dynamics.Hoop(c.physics()), c.method, dt=c.dt, state=c.initial_state()
     )
@@ -124,8 +124,8 @@ def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
         app.step_frame()
         twin.advance(FRAME * app.speed)
     state = twin.sample().state[0]
-    np.testing.assert_array_equal(ex.sample.state[0], state)
-    centre, bead = hp.positions(ex.params, state)
+    np.testing.assert_array_equal(ex.model.sample.state[0], state)
+    centre, bead = hp.positions(ex.model.params, state)
     pivot = ex.pivot_local
     rings, beads = ex.rings.batched_positions, ex.beads.batched_positions  # float32 in viser
     np.testing.assert_allclose(rings[0], pivot + [centre[0], 0, centre[1]], atol=1e-6)
@@ -133,19 +133,19 @@ def test_hoop_and_bead_are_drawn_where_an_identical_dynamics_run_puts_them(app):
     q = ex.rings.batched_wxyzs[0]
     assert same_rotation(q, geo.quat_about_axis((0.0, -1.0, 0.0), state[0]), tol=1e-6)
     # the ghost follows the linear theory from the same start
-    ghost = hp.linear_solution(ex.params, c.initial_state(), twin.t)
-    _, gbead = hp.positions(ex.params, ghost)
+    ghost = hp.linear_solution(ex.model.params, c.initial_state(), twin.t)
+    _, gbead = hp.positions(ex.model.params, ghost)
     np.testing.assert_allclose(beads[1], pivot + [gbead[0], 0, gbead[1]], atol=1e-6)
 
 
 def test_released_disk_is_drawn_with_the_free_body_pose(server):
     ex = DiskExhibit(server)
-    ex.apply(Set(fields={"mode": "released", "follow_cm": False}))
+    ex.model.apply(Set(fields={"mode": "released", "follow_cm": False}))
     for _ in range(40):
-        ex.advance(FRAME)
+        ex.model.advance(FRAME)
     ex.draw()
-    smp = ex.sample
-    rot, a = dk.released_pose(ex.params, smp.state[0], smp.t, ex.config.extra_spin)
+    smp = ex.model.sample
+    rot, a = dk.released_pose(ex.model.params, smp.state[0], smp.t, ex.model.config.extra_spin)
     assert same_rotation(ex.body.wxyz, geo.quat_from_matrix(P @ rot))
     np.testing.assert_allclose(ex.body.position, LIFT + P @ a, atol=1e-12)
 
@@ -155,25 +155,25 @@ def test_pause_stops_simulated_time_and_step_advances_one_frame(app):
     frames(app, 3)
     app.enqueue("app", Pause())
     frames(app, 1)
-    t = {k: ex.t for k, ex in app.exhibits.items()}
+    t = {k: ex.model.t for k, ex in app.exhibits.items()}
     frames(app, 10)
-    assert {k: ex.t for k, ex in app.exhibits.items()} == t
+    assert {k: ex.model.t for k, ex in app.exhibits.items()} == t
     assert app.w["play"].label == "Play"
     app.enqueue("app", Step())
     frames(app, 1)
-    assert app.exhibits["disk"].t == pytest.approx(t["disk"] + FRAME * app.speed)
+    assert app.exhibits["disk"].model.t == pytest.approx(t["disk"] + FRAME * app.speed)
     app.enqueue("app", Play())
     frames(app, 2)
-    assert app.exhibits["disk"].t > t["disk"] + FRAME
+    assert app.exhibits["disk"].model.t > t["disk"] + FRAME
     assert app.w["play"].label == "Pause"
 
 
 def test_speed_scales_simulated_time_per_frame(app):
     app.w["speed_track"].value = (3.0,)  # as the slider's track does
     frames(app, 1)  # applies the speed
-    t0 = app.exhibits["disk"].t
+    t0 = app.exhibits["disk"].model.t
     frames(app, 6)
-    assert app.exhibits["disk"].t - t0 == pytest.approx(6 * 3.0 * FRAME)
+    assert app.exhibits["disk"].model.t - t0 == pytest.approx(6 * 3.0 * FRAME)
 
 
 def test_method_change_from_the_dropdown_switches_the_integrator_and_readout(app):
@@ -182,7 +182,7 @@ def test_method_change_from_the_dropdown_switches_the_integrator_and_readout(app
     app.w["hoop.method"].value = "verlet"  # fires the callback as a browser would
     frames(app, 3)
     ex = app.exhibits["hoop"]
-    assert ex.sim.method.name == "verlet"
+    assert ex.model.sim.method.name == "verlet"
     assert "`verlet`" in ex.readout()
     assert "Stormer-Verlet" in app.w["hoop.about"].content
 
@@ -196,14 +196,16 @@ def test_tolerance_dropdown_sets_the_adaptive_methods_rtol(app):
     w.value = "1e-6"  # fires the callback as a browser would
     frames(app, 30)
     ex = app.exhibits["hoop"]
-    assert ex.config.rtol == 1e-6 and ex.sim.rtol == 1e-6
-    loose_steps, loose_h = ex.sim.steps, ex.sim.last_step
+    assert ex.model.config.rtol == 1e-6 and ex.model.sim.rtol == 1e-6
+    loose_steps, loose_h = ex.model.sim.steps, ex.model.sim.last_step
     # the readout shows the length of the step DOP853 is in (not cut at the frames)
     assert loose_h is not None and f"h = {loose_h:.2g} s" in ex.readout()
     w.value = "1e-12"
     frames(app, 30)
-    assert ex.sim.rtol == 1e-12 and ex.sim.steps > loose_steps  # tighter: more steps, same time
-    assert ex.sim.last_step < loose_h
+    assert (
+        ex.model.sim.rtol == 1e-12 and ex.model.sim.steps > loose_steps
+    )  # tighter: more steps, same time
+    assert ex.model.sim.last_step < loose_h
     app.enqueue("hoop", Set(fields={"rtol": 3e-7}))  # a value off the decades (a demo's)
     frames(app, 1)
     assert w.value == "3e-7" and "3e-7" in w.options
@@ -214,24 +216,24 @@ def test_invalid_parameter_is_refused_and_the_running_simulation_kept(app):
     app.enqueue("app", Pause())
     frames(app, 1)
     ex = app.exhibits["cyclotron"]
-    sim, state, t, config = ex.sim, ex.sample.state.copy(), ex.t, ex.config
+    sim, state, t, config = ex.model.sim, ex.model.sample.state.copy(), ex.model.t, ex.model.config
     enter(app, "cyclotron.params.mass", "-2")
     frames(app, 1)
-    assert ex.sim is sim and ex.config == config and ex.t == t
-    np.testing.assert_array_equal(ex.sample.state, state)
+    assert ex.model.sim is sim and ex.model.config == config and ex.model.t == t
+    np.testing.assert_array_equal(ex.model.sample.state, state)
     _title, body = app.messages[-1]
     assert body.startswith("Mass m [kg] must lie between") and "got -2" in body  # named as labelled
     assert app.w["cyclotron.params.mass"].value == "1"  # the widget shows the value in use
     app.enqueue("app", Play())
     frames(app, 2)
-    assert ex.t > t
+    assert ex.model.t > t
 
 
 def test_invalid_step_size_is_refused_with_the_field_named(app):
     enter(app, "hoop.dt", "0")
     frames(app, 1)
     assert app.messages[-1][1].startswith("Step dt [s] must be positive")
-    assert app.exhibits["hoop"].config.dt == pytest.approx(1 / 60)
+    assert app.exhibits["hoop"].model.config.dt == pytest.approx(1 / 60)
     assert app.w["hoop.dt"].value == "0.0166667"
 
 
@@ -241,7 +243,7 @@ def test_invalid_step_size_is_refused_with_the_field_named(app):
 def test_a_step_typed_as_a_person_writes_it_is_applied(app, typed, applied):
     enter(app, "hoop.dt", typed)
     frames(app, 1)
-    assert app.exhibits["hoop"].config.dt == applied
+    assert app.exhibits["hoop"].model.config.dt == applied
 
 
 @pytest.mark.parametrize(
@@ -261,12 +263,12 @@ def test_a_value_that_cannot_be_taken_is_refused_by_name_and_the_box_springs_bac
     app, widget, typed, message
 ):
     before = app.w[widget].value
-    speed, configs = app.speed, {k: ex.config for k, ex in app.exhibits.items()}
+    speed, configs = app.speed, {k: ex.model.config for k, ex in app.exhibits.items()}
     enter(app, widget, typed)
     frames(app, 2)
     assert app.messages[-1][1].startswith(message), app.messages[-1]
     assert app.w[widget].value == before
-    assert app.speed == speed and {k: ex.config for k, ex in app.exhibits.items()} == configs
+    assert app.speed == speed and {k: ex.model.config for k, ex in app.exhibits.items()} == configs
 
 
 def test_real_time_factor_says_nothing_while_paused_and_starts_afresh_after_a_reset(app):
@@ -283,20 +285,20 @@ def test_real_time_factor_says_nothing_while_paused_and_starts_afresh_after_a_re
 def test_kick_moves_the_predicted_circle_at_once_and_the_charge_stays_on_it(app):
     frames(app, 30)
     ex = app.exhibits["cyclotron"]
-    p = ex.params
-    before = ex.sample.state[0]
+    p = ex.model.params
+    before = ex.model.sample.state[0]
     v = math.hypot(before[3], before[4])
     _expected_state, expected_centre, expected_radius = cy.radial_kick(p, before, 0.5)
     enter(app, "cyclotron.kick", "0.5")
     app.enqueue("cyclotron", Kick(dv=0.5))
     app.enqueue("app", Pause())
     frames(app, 1)
-    assert ex.theory_radius == pytest.approx(math.hypot(v, 0.5), rel=1e-12)
-    np.testing.assert_allclose(ex.theory_centre[:2], expected_centre[:2], atol=1e-12)
+    assert ex.model.theory_radius == pytest.approx(math.hypot(v, 0.5), rel=1e-12)
+    np.testing.assert_allclose(ex.model.theory_centre[:2], expected_centre[:2], atol=1e-12)
     assert ex._ring_radius == pytest.approx(expected_radius, rel=1e-9)
     app.enqueue("app", Play())
     frames(app, 120)
-    st = ex.sample.state[0]
+    st = ex.model.sample.state[0]
     assert math.hypot(*(st[:2] - expected_centre[:2])) == pytest.approx(expected_radius, rel=1e-9)
 
 
@@ -392,35 +394,35 @@ def test_diverging_euler_pauses_only_the_charge_and_reset_recovers(app):
     enter(app, "speed", "10")
     frames(app, 2)
     ex = app.exhibits["cyclotron"]
-    assert ex.sim.method.name == "euler"
+    assert ex.model.sim.method.name == "euler"
     for _ in range(300):
         app.step_frame()
-        if ex.paused:
+        if ex.model.paused:
             break
-    assert ex.paused
-    assert "euler" in ex.failure and "dt=0.5" in ex.failure
+    assert ex.model.paused
+    assert "euler" in ex.model.failure and "dt=0.5" in ex.model.failure
     assert any("euler" in body for _, body in app.messages)
-    t_cyc, t_hoop = ex.t, app.exhibits["hoop"].t
+    t_cyc, t_hoop = ex.model.t, app.exhibits["hoop"].model.t
     frames(app, 5)
-    assert ex.t == t_cyc
-    assert app.exhibits["hoop"].t > t_hoop
+    assert ex.model.t == t_cyc
+    assert app.exhibits["hoop"].model.t > t_hoop
     app.enqueue("cyclotron", Reset())
     frames(app, 3)
-    assert not ex.paused and ex.failure is None and ex.t > 0
+    assert not ex.model.paused and ex.model.failure is None and ex.model.t > 0
 
 
 def test_a_step_beyond_the_stability_limit_pauses_the_hoop_with_the_step_named(server):
     ex = HoopExhibit(server, HoopConfig(method="rk4", dt=0.9, amplitude=0.3))
     for _ in range(400):
-        ex.advance(0.5)
-        if ex.paused:
+        ex.model.advance(0.5)
+        if ex.model.paused:
             break
-    assert ex.paused
-    assert "rk4" in ex.failure and "dt=0.9" in ex.failure
-    title, _body = ex.events[-1]
+    assert ex.model.paused
+    assert "rk4" in ex.model.failure and "dt=0.9" in ex.model.failure
+    title, _body = ex.model.events[-1]
     assert "Hoop" in title
-    ex.apply(Reset())
-    assert not ex.paused and ex.t == 0.0
+    ex.model.apply(Reset())
+    assert not ex.model.paused and ex.model.t == 0.0
 
 
 def test_the_step_control_shows_the_stability_limit_theory_gives(app):
@@ -428,7 +430,7 @@ def test_the_step_control_shows_the_stability_limit_theory_gives(app):
     2 / omega_2 after a method change, the gyrofrequency's after a field change, and a warning
     once dt is beyond the limit."""
     w = app.w["hoop.limit"]
-    omega2 = hp.normal_modes(app.exhibits["hoop"].params)[0][1]
+    omega2 = hp.normal_modes(app.exhibits["hoop"].model.params)[0][1]
     assert f"dt < {2 * math.sqrt(2) / omega2:.4g} s" in w.content
     app.enqueue("hoop", Set(fields={"method": "verlet", "dt": 0.01}))
     frames(app, 1)

@@ -44,17 +44,17 @@ def _inside(points: np.ndarray, box, margin: float = 1e-5) -> np.ndarray:
 
 
 def _euler(app, key: str, frames: int, frame_dt: float, **settings) -> None:
-    app.exhibits[key].apply(Set(fields={"method": "euler", **settings}))
+    app.exhibits[key].model.apply(Set(fields={"method": "euler", **settings}))
     for _ in range(frames):
         app.step_frame(frame_dt)
-        if app.exhibits[key].paused:
+        if app.exhibits[key].model.paused:
             return
 
 
 def test_eulers_spiral_on_the_cyclotron_grows_to_the_exhibits_edge_and_stops_there(app):
     ex = app.exhibits["cyclotron"]
     _euler(app, "cyclotron", 3000, 0.05, dt=0.05)
-    assert ex.paused and "the charge left the exhibit" in ex.failure
+    assert ex.model.paused and "the charge left the exhibit" in ex.model.failure
     trail = _drawn(app, "cyclotron", ("/trail/",))
     assert len(trail) > 100
     assert _inside(trail, ex.bounds).all()
@@ -70,7 +70,7 @@ def test_eulers_spiral_on_the_cyclotron_grows_to_the_exhibits_edge_and_stops_the
 def test_eulers_runaway_in_the_hoops_configuration_space_stays_in_its_square(app):
     ex = app.exhibits["hoop"]
     _euler(app, "hoop", 4000, 1 / 60)
-    assert ex.paused  # the energy rule: Euler's energy grew 25-fold
+    assert ex.model.paused  # the energy rule: Euler's energy grew 25-fold
     square = ex.config_space
     half = 0.5 * CONFIG_SIZE
     lo = square.centre - (half, 0.0, half) + ex.origin
@@ -79,16 +79,16 @@ def test_eulers_runaway_in_the_hoops_configuration_space_stays_in_its_square(app
     assert len(path) > 100
     assert _inside(path, (lo, hi)).all()
     # the angles themselves ran far beyond the square (theta2 went round the hoop)
-    assert np.abs(ex.state[:2]).max() * square.scale > 4 * half
+    assert np.abs(ex.model.state[:2]).max() * square.scale > 4 * half
     trails = _drawn(app, "hoop", ("/trail/",))
     assert _inside(trails, ex.bounds).all()
 
 
 def test_the_released_disks_growing_vectors_are_drawn_up_to_its_edge(app):
     ex = app.exhibits["disk"]
-    ex.apply(Set(fields={"mode": "released"}))
+    ex.model.apply(Set(fields={"mode": "released"}))
     _euler(app, "disk", 1200, 0.1)
-    assert float(ex.sample.energy_error[0]) > 1.0  # the energy more than doubled
+    assert float(ex.model.sample.energy_error[0]) > 1.0  # the energy more than doubled
     arrows = _drawn(app, "disk", ("/vectors",))
     assert _inside(arrows, ex.bounds).all()
     # drawn as long as the box allows: a tip on its edge
@@ -100,15 +100,15 @@ def test_a_kick_that_sends_the_orbit_past_the_edge_still_draws_all_of_it(app):
     """Bounding the drawing is for runaways: a kick of 1 m/s moves the exact circle 1 m off the
     axis with radius sqrt(2) m, beyond the exhibit's box, and every turn of it is drawn."""
     ex = app.exhibits["cyclotron"]
-    ex.apply(Kick(dv=1.0))
-    centre = ex.theory_centre[:2] + ex.origin[:2]
+    ex.model.apply(Kick(dv=1.0))
+    centre = ex.model.theory_centre[:2] + ex.origin[:2]
     for _ in range(420):  # a period (2 pi s) and more
         app.step_frame(1 / 60)
-    assert not ex.paused
+    assert not ex.model.paused
     trail = _drawn(app, "cyclotron", ("/trail/",))
     r = np.hypot(*(trail[:, :2] - centre).T)
-    after = np.isclose(r, ex.theory_radius, rtol=1e-3)
-    assert ex.theory_radius == pytest.approx(np.sqrt(2.0), rel=1e-9)
+    after = np.isclose(r, ex.model.theory_radius, rtol=1e-3)
+    assert ex.model.theory_radius == pytest.approx(np.sqrt(2.0), rel=1e-9)
     assert not _inside(trail[after], ex.bounds).all()  # it reaches past the exhibit's box
     # the whole circle after the kick: points all round it
     angles = np.arctan2(*(trail[after, :2] - centre).T[::-1])

@@ -80,7 +80,7 @@ def test_choosing_a_method_in_the_dropdown_changes_the_readout(viewer):
     page.get_by_role("combobox", name="Method").click()
     page.get_by_role("option", name="verlet", exact=True).click()
     page.get_by_text("Stormer-Verlet", exact=False).first.wait_for(timeout=scaled(15) * 1000)
-    wait_until(lambda: app.exhibits["hoop"].sim.method.name == "verlet", 15, "verlet to run")
+    wait_until(lambda: app.exhibits["hoop"].model.sim.method.name == "verlet", 15, "verlet to run")
     page.locator("code", has_text="verlet").first.wait_for(timeout=scaled(10) * 1000)
 
 
@@ -91,14 +91,14 @@ def _field(page, label: str):
 def test_an_invalid_parameter_shows_a_notification_naming_the_field(viewer):
     app, page, _ = viewer
     page.get_by_role("tab", name="Hoop").click()
-    sim = app.exhibits["hoop"].sim
+    sim = app.exhibits["hoop"].model.sim
     box = _field(page, "Gravity g")
     box.fill("-3")
     box.press("Enter")  # a number field is read on Enter
     page.get_by_role("alert").filter(has_text="Gravity g [m/s²] must lie between").first.wait_for(
         timeout=scaled(15) * 1000
     )
-    assert app.exhibits["hoop"].sim is sim
+    assert app.exhibits["hoop"].model.sim is sim
 
 
 def test_readme_screenshot_with_environment_lighting(viewer, tmp_path):
@@ -188,7 +188,7 @@ def _chart_lines(page) -> tuple[int, int]:
 def test_a_chart_still_draws_its_lines_after_a_resize_and_three_tab_switches(viewer):
     app, page, _ = viewer
     page.get_by_role("tab", name="Hoop").click()
-    hoop = app.exhibits["hoop"]
+    hoop = app.exhibits["hoop"].model
     # an earlier test restarted the hoop: let its chart fill
     wait_until(lambda: np.ptp(hoop.history.t) >= 6.0, 30, "the hoop's chart to fill")
     wait_until(lambda: min(_chart_lines(page)) > 50, 30, "the chart's lines", poll_s=0.5)

@@ -10,20 +10,22 @@ and pushes all poses inside ``server.atomic()``. Nothing else touches an exhibit
 
 API for other tools (the recorder, the bench)
 ---------------------------------------------
-Exhibits work without the app (:mod:`mechviz.viz.scene` holds them and describes the contract)::
+Exhibits work without the app (:mod:`mechviz.viz.scene` holds them and describes the contract):
+a view built over its headless model, which runs and takes the commands::
 
-    from mechviz.viz.model import CyclotronConfig, Kick, Reset, Set  # mechviz.viz.model.commands
+    from mechviz.viz.model import CyclotronConfig, CyclotronModel, Kick, Reset, Set
     from mechviz.viz.scene import CyclotronExhibit
 
-    ex = CyclotronExhibit(server, CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
-    ex.advance(1 / 30)                 # simulated seconds; a blow-up pauses it (ex.paused, ex.failure)
+    model = CyclotronModel(CyclotronConfig(method="euler", dt=0.05, compare_method="boris"))
+    ex = CyclotronExhibit(server, model)   # draws ``model`` (ex.model); observes it
+    model.advance(1 / 30)      # simulated seconds; a blow-up pauses it (model.paused, .failure)
     with server.atomic():
-        ex.draw()                      # handle assignments only
-    ex.apply(Kick(dv=0.5))                                # cyclotron: radial kick [m/s], the run goes on
-    ex.apply(Set(fields={"method": "rk4", "dt": 0.02}))   # any config field; restarts the run
-    ex.apply(Set(params={"field": 2.0}))                  # ValueError naming the field if invalid
-    ex.apply(Reset())                                     # commands.parse reads one from a dict
-    ex.sample, ex.measured(), ex.readout(), ex.chart_data(), ex.camera
+        ex.draw_if_changed()   # handle assignments only, if the model changed since drawn
+    model.apply(Kick(dv=0.5))                                # cyclotron: radial kick [m/s]
+    model.apply(Set(fields={"method": "rk4", "dt": 0.02}))   # any config field; restarts the run
+    model.apply(Set(params={"field": 2.0}))                  # ValueError naming the field if invalid
+    model.apply(Reset())                                     # commands.parse reads one from a dict
+    model.sample, model.measured(), model.chart_data(), ex.readout(), ex.camera
 
 The whole app, headless and without its loop thread::
 
@@ -57,6 +59,7 @@ import numpy as np
 from . import app_commands as ac
 from .frames import FrameLog, refresh_frames
 from .live_record import add_record_toggle
+from .model import MODELS
 from .model.commands import COMMANDS, Command, refused
 from .rewind_control import RewindControl
 from .scene import EXHIBITS, Exhibit
@@ -66,7 +69,7 @@ from .views import GRIDS, HOME, OVERVIEW, VIEWS, Views, log_axis  # noqa: F401  
 from .warm import warm_up  # noqa: F401  (compile what the exhibits start with; re-exported)
 
 # m: where each exhibit stands, as its model says (mechviz.viz.model.hooks.SystemHooks.origin)
-ORIGINS = {key: cls.origin for key, cls in EXHIBITS.items()}
+ORIGINS = {key: cls.origin for key, cls in MODELS.items()}
 
 CHART_RATE = 20.0  # Hz: how often each exhibit samples energy and error (a chart point)
 CHART_SECONDS = 10.0  # the charts show the last 10 s by default
@@ -120,7 +123,6 @@ class MechvizApp(Views):
         self.frame_hooks: list[Callable[[MechvizApp], None]] = []
         self.frame_log = FrameLog()  # start time and cost of the last frames (status line, bench)
         self._rtf_window: deque = deque(maxlen=240)
-        self._to_draw: set[str] = set()  # exhibits changed since drawn (they tell: observe)
         self._to_show: set[str] = set()  # exhibits changed since their readout was shown
         self._charted: dict[str, int] = {}  # exhibit key -> history version its chart shows
         self._cost_text = ""
@@ -168,16 +170,14 @@ class MechvizApp(Views):
         self._measure_every = max(1, round(self.fps / CHART_RATE))
         history_len = round(CHART_SECONDS * CHART_RATE)
         self.chart_window = CHART_SECONDS
-        self.exhibits: dict[str, Exhibit] = {
-            key: cls(
-                server, cfg.get(key), origin=ORIGINS[key], history_len=history_len, bounded=True
-            )
-            for key, cls in EXHIBITS.items()
-        }
-        for key, ex in self.exhibits.items():
-            ex.chart_window = self.chart_window  # the charts draw on the long history
-            ex.observe(lambda _model, key=key: (self._to_draw.add(key), self._to_show.add(key)))
-        self._to_draw.update(self.exhibits)
+        # each system's model, then the view drawn over it: the view observes its model and
+        # marks itself to draw (``to_draw``); the app runs and commands the models
+        self.exhibits: dict[str, Exhibit] = {}
+        for key, cls in EXHIBITS.items():
+            model = cls.model_type(cfg.get(key), history_len=history_len)
+            model.chart_window = self.chart_window  # the charts draw on the long history
+            model.observe(lambda _model, key=key: self._to_show.add(key))
+            self.exhibits[key] = cls(server, model, origin=ORIGINS[key], bounded=True)
         self.panels: dict[str, Panel] = {}
         self._build_stage()
         with server.atomic():
@@ -253,17 +253,18 @@ class MechvizApp(Views):
             try:
                 if target == "call":
                     command(self)
-                    self._to_draw.update(self.exhibits)  # it may have changed anything
+                    for ex in self.exhibits.values():  # it may have changed anything
+                        ex.to_draw = True
                 elif target == "app":
                     self._apply_app(command)
                 else:
                     ex = self.exhibits[target]
-                    ex.apply(command)
+                    ex.model.apply(command)
                     self._sync_widgets(target)
             except ValueError as exc:
                 if target in self.exhibits:
                     panel = self.panels.get(target)
-                    title = self.exhibits[target].title
+                    title = self.exhibits[target].model.title
                     self.notify(
                         f"Invalid value ({title})", panel.explain(exc) if panel else str(exc)
                     )
@@ -294,7 +295,7 @@ class MechvizApp(Views):
                 self._rtf_window.clear()
             case ac.ResetAll():
                 for ex in self.exhibits.values():
-                    ex.reset()
+                    ex.model.reset()
                 self.sim_time = 0.0
                 self._rtf_window.clear()  # the clock went back: the old samples say nothing now
                 self.rewind_control.forget()
@@ -305,7 +306,7 @@ class MechvizApp(Views):
             case ac.Stage(value, client):
                 self._set_stage(value, client)
             case ac.Reframe(client):  # a page changed shape (or has just connected)
-                view = "Home" if self.stage is None else self.exhibits[self.stage].name
+                view = "Home" if self.stage is None else self.exhibits[self.stage].model.name
                 self._move_camera(client, view)
             case ac.ChartWindow(value):
                 if value not in CHART_WINDOWS.values():
@@ -314,7 +315,7 @@ class MechvizApp(Views):
                     )
                 self.chart_window = float(value)
                 for ex in self.exhibits.values():
-                    ex.set_chart_window(self.chart_window)
+                    ex.model.set_chart_window(self.chart_window)
                 self._charted.clear()
             case ac.Present(value, client):
                 self._present(value, client)
@@ -339,7 +340,7 @@ class MechvizApp(Views):
     # ------------------------------------------------------------------ the frame
     def _advance(self, sim_seconds: float, *, measure_all: bool = False) -> None:
         for key, ex in self.exhibits.items():
-            ex.advance(
+            ex.model.advance(
                 sim_seconds,
                 measure=measure_all or self._measures_now(key),
                 shown=sim_seconds / self.speed,  # seconds of the show, for the Rewind control
@@ -364,8 +365,8 @@ class MechvizApp(Views):
             if self.gui is not None:
                 self._update_gui()
         for ex in self.exhibits.values():
-            while ex.events:
-                title, body = ex.events.pop(0)
+            while ex.model.events:
+                title, body = ex.model.events.pop(0)
                 self.notify(title, body, color="orange")
         for hook in list(self.frame_hooks):
             hook(self)
@@ -378,10 +379,8 @@ class MechvizApp(Views):
     def _draw(self) -> None:
         """Draw the exhibits whose state changed since they were last drawn (while paused a
         frame pushes nothing)."""
-        for key, ex in self.exhibits.items():
-            if key in self._to_draw:
-                self._to_draw.discard(key)  # before: a change while drawing is drawn next frame
-                ex.draw()
+        for ex in self.exhibits.values():
+            ex.draw_if_changed()
         self._draw_stage_chart()
 
     def _loop(self) -> None:
@@ -484,7 +483,7 @@ class MechvizApp(Views):
         def _(event) -> None:
             view = w["view"].value
             if view == "Frame":  # the view in force, framed again
-                view = HOME if self.stage is None else self.exhibits[self.stage].name
+                view = HOME if self.stage is None else self.exhibits[self.stage].model.name
             self.enqueue("app", ac.Camera(view, event.client))
 
         @w["stage"].on_click
@@ -498,7 +497,7 @@ class MechvizApp(Views):
 
         tabs = gui.add_tab_group()
         for key, ex in self.exhibits.items():
-            with tabs.add_tab(ex.name, icon=getattr(viser.Icon, ex.icon)):
+            with tabs.add_tab(ex.model.name, icon=getattr(viser.Icon, ex.icon)):
                 panel = self.panels[key] = Panel(self, ex)
                 ex.build_panel(panel)
 
@@ -565,7 +564,7 @@ class MechvizApp(Views):
                 continue
             ex = self.exhibits[key]
             charted = self._charted.get(key)
-            if not force and key not in self._to_show and charted == ex.chart_version():
+            if not force and key not in self._to_show and charted == ex.model.chart_version():
                 continue  # nothing new to show (e.g. paused)
             self._to_show.discard(key)
             self.w[f"{key}.readout"].content = ex.readout()
@@ -574,15 +573,15 @@ class MechvizApp(Views):
             if key in self.panels:
                 ex.refresh_panel(self.panels[key])
                 self.panels[key].refresh_plot()
-            if force or charted != ex.chart_version():
+            if force or charted != ex.model.chart_version():
                 chart = self.w[f"{key}.chart"]
-                data = ex.chart_data()[: len(chart.series)]
+                data = ex.model.chart_data()[: len(chart.series)]
                 if len(data[0]) >= 2:
                     chart.data = data
                     self.panels[key].keep_time_axis(
                         "chart", float(data[0][-1]), self.chart_window, log_axis(data[1:])
                     )
-            self._charted[key] = ex.chart_version()
+            self._charted[key] = ex.model.chart_version()
 
     # ------------------------------------------------------------------ running
     def run_forever(self, until: threading.Event | None = None) -> None:

@@ -130,7 +130,7 @@ def session_info(app, client=None) -> dict[str, Any]:
     lo, hi = ex.bounds
     fov = getattr(cam, "fov", None)
     return {
-        "title": ex.title,
+        "title": ex.model.title,
         "caption": time.strftime("Recorded in the live viewer, %Y-%m-%d %H:%M", time.localtime()),
         "camera": {
             "position": position,

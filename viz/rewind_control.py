@@ -59,10 +59,10 @@ class RewindControl:
         app.playing = False
         app._rtf_window.clear()
         for key, ex in app.exhibits.items():
-            if ex.scrubbed is None:
-                self._live_t[key] = ex.t
-            ex.scrub(-v)
-        self.back = max((ex.scrubbed or 0.0) for ex in app.exhibits.values())
+            if ex.model.scrubbed is None:
+                self._live_t[key] = ex.model.t
+            ex.model.scrub(-v)
+        self.back = max((ex.model.scrubbed or 0.0) for ex in app.exhibits.values())
         self.show()
 
     def sim_back(self) -> float:
@@ -70,9 +70,9 @@ class RewindControl:
         (one changed meanwhile went on from its moment shown, or started afresh)."""
         return max(
             (
-                self._live_t.get(k, ex.t) - ex.t
+                self._live_t.get(k, ex.model.t) - ex.model.t
                 for k, ex in self.app.exhibits.items()
-                if ex.scrubbed is not None
+                if ex.model.scrubbed is not None
             ),
             default=0.0,
         )
@@ -80,10 +80,10 @@ class RewindControl:
     def resume(self) -> None:
         """Every exhibit goes on from the moment shown (called before Play and Step)."""
         app = self.app
-        if any(ex.scrubbed is not None for ex in app.exhibits.values()):
+        if any(ex.model.scrubbed is not None for ex in app.exhibits.values()):
             app.sim_time = max(0.0, app.sim_time - self.sim_back())
             for ex in app.exhibits.values():
-                ex.resume_here()
+                ex.model.resume_here()
         self.forget()
 
     def forget(self) -> None:
@@ -104,6 +104,6 @@ class RewindControl:
 
     def status(self) -> str:
         """The status line's words while scrubbed back ("" otherwise)."""
-        if not any(ex.scrubbed is not None for ex in self.app.exhibits.values()):
+        if not any(ex.model.scrubbed is not None for ex in self.app.exhibits.values()):
             return ""
         return f" · {self.back:.1f} s back: Play goes on from here"

@@ -59,7 +59,7 @@ FILL = STAGE_FILL  # the exhibits' presets are their stages
 # the direction the home view looks in: from the front left, 36 degrees above the floor
 OVERVIEW = ((-2.42, -6.0, 4.7), (0.0, 0.0, 0.0))
 OVERVIEW_FILL = 0.9  # of the page's height the three exhibits' pictures span at home
-VIEWS = {cls.name: key for key, cls in EXHIBITS.items()}  # stage name -> exhibit
+VIEWS = {cls.model_type.name: key for key, cls in EXHIBITS.items()}  # stage name -> exhibit
 HOME = "Home"
 
 
@@ -321,7 +321,9 @@ class Views:
             # readout says "not resolved")
             shown = "…" if shown == "not resolved" else shown
             figures.append((f"{name} {shown}", f"  theory {theory[:-1]}" if theory else ""))
-        headline = ex.title if layout.endswith("-short") else f"{ex.title}: {ex.caption}"
+        headline = (
+            ex.model.title if layout.endswith("-short") else f"{ex.model.title}: {ex.caption}"
+        )
         if layout.startswith("column"):
             lines = textwrap.wrap(headline, COLUMN_CHARS)
             for figure, theory in figures:
@@ -465,13 +467,13 @@ class Views:
             ex.on_stage(self.stage == key)
         self.stage_label.visible = self.stage is not None
         if "stage" in getattr(self, "w", {}):
-            shown = HOME if self.stage is None else self.exhibits[self.stage].name
+            shown = HOME if self.stage is None else self.exhibits[self.stage].model.name
             if self.w["stage"].value != shown:
                 self._syncing = True
                 self.w["stage"].value = shown
                 self._syncing = False
         if "present" in getattr(self, "w", {}):
-            shown = "Off" if self.presenting is None else self.exhibits[self.presenting].name
+            shown = "Off" if self.presenting is None else self.exhibits[self.presenting].model.name
             if self.w["present"].value != shown:
                 self._syncing = True
                 self.w["present"].value = shown

@@ -3,8 +3,8 @@ exhibit (its sample buffers are in :mod:`mechviz.viz.model.history`).
 
 An exhibit's *model* owns the :class:`mechviz.dynamics.Simulation` (s) of one system, its events, the
 samples its readouts and charts need, and the figures measured from them; it imports no viser and
-draws nothing. The view (:mod:`mechviz.viz.scene`) subclasses it to draw the scene and build the panel;
-the recorder, the notebook and the tests run the model alone. Every model has
+draws nothing. A view (:mod:`mechviz.viz.scene`) is built over a model, observes it and draws
+what it reads there; the recorder, the notebook and the tests run the model alone. Every model has
 
 - ``config``: a frozen, validated settings dataclass (:class:`ExhibitConfig`); change it with
   ``apply(Set(fields={field: value, ...}))``,
@@ -16,7 +16,8 @@ the recorder, the notebook and the tests run the model alone. Every model has
 - ``state``, ``sample``, ``t``, ``paused``, ``failure``, ``measured()`` (the figures measured
   from the motion, by name, from :mod:`mechviz.dynamics.measure`), ``chart_data()``, ``runs()`` (the
   simulations a recording traces, by role),
-- ``observe(callback)``: ``callback(model)`` after every change (:mod:`.observed`); ``revision`` counts them,
+- ``observe(callback)``: ``callback(model)`` after every change (:mod:`.observed`); ``revision``
+  counts them; ``on(event, callback)`` for what a view must act on (a new start, a rewind),
 - ``plot_variables(config)``, ``plot_curves(config, x, y, samples)``, ``pictures(config)``
   and ``default_plot(config)``: what a plot of any variable against any other and a recording's
   pictures draw (:mod:`mechviz.viz.model.plot`); ``plot_samples()`` the main run's samples over the
@@ -124,8 +125,9 @@ class ExhibitModel(Rewinding, SystemHooks):
     """Base class: subclasses define ``Config`` (``key`` and ``chart_series`` follow from it),
     ``title``, ``name`` and the hooks
     ``_start`` (simulations from the config), ``_observe`` (record the motion samples after each
-    advance), ``measured`` and ``_apply_command`` (its own ``commands``). A view learns of a new
-    start from ``_started()``, called at the end of every ``_start``."""
+    advance), ``measured`` and ``_apply_command`` (its own ``commands``). ``_start`` ends with
+    ``_started()``, which announces ``"started"`` (:mod:`.observed`): a view builds its picture
+    of the new runs then."""
 
     key: ClassVar[str] = ""
     title: ClassVar[str] = ""
@@ -170,6 +172,9 @@ class ExhibitModel(Rewinding, SystemHooks):
         self._sample: dynamics.Sample | None = None
         self._compare_sample: dynamics.Sample | None = None
         self._kept: dict[str, Any] = {}  # the last resolved figure of each name (measured())
+        # the box [m] the runs are drawn in, about the exhibit's origin (None: anywhere): a run
+        # whose drawing leaves it has diverged (``_outside``); a view drawn beside others sets it
+        self.box: tuple[np.ndarray, np.ndarray] | None = None
         if start:
             self._start()
 
@@ -298,9 +303,15 @@ class ExhibitModel(Rewinding, SystemHooks):
                 )
                 return
 
+    def confine(self, box: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Count a run whose drawing leaves ``box`` (low, high corners [m] about the exhibit's
+        origin; ``None``: no box) as diverged: a view that draws the exhibit beside others
+        gives its box, as a run's leaving it means the method is wrong, not the physics."""
+        self.box = None if box is None else tuple(np.asarray(c, float) for c in box)
+
     def _outside(self, sim: dynamics.Simulation) -> str | None:
-        """What of ``sim``'s drawing lies outside the exhibit, in words (``None``: nothing, or
-        a model that draws nothing); a view says."""
+        """What of ``sim``'s drawing lies outside :attr:`box`, in words (``None``: nothing, no
+        box, or a model that does not say)."""
         return None
 
     def _fail(self, error: dynamics.IntegrationError) -> None:
@@ -362,32 +373,10 @@ class ExhibitModel(Rewinding, SystemHooks):
 
     def stability_text(self) -> str:
         """Where the running method's step stops being stable (markdown, for the step control):
-        the largest stable dt from :func:`mechviz.dynamics.stability.stability_limit` for the current
-        parameters and state, and whether the chosen dt is inside it."""
-        from mechviz.dynamics import stability
+        :func:`mechviz.viz.model.stability_note.stability_note` of the main run now."""
+        from .stability_note import stability_note
 
-        sim = self.sim
-        m = sim.method
-        if m.adaptive:
-            return f"<small>{m.name}: adaptive, the step follows rtol; no fixed limit</small>"
-        if m.closed_form:
-            return "<small>exact flow: any step</small>"
-        limit = stability.stability_limit(m.name, sim.system, self.state)
-        reason = m.limit_reason
-        if limit is None:
-            return f"<small>Stable at any dt ({reason}).</small>"
-        if limit == 0.0:
-            return f"<small>⚠ Unstable at every dt: {reason}.</small>"
-        omega = stability.fastest_frequency(sim.system, self.state)
-        where = (
-            f"dt = {fmt(sim.dt)} s is {sim.dt / limit:.1%} of it"
-            if sim.dt <= limit
-            else f"⚠ dt = {fmt(sim.dt)} s is beyond it: expect the run to blow up"
-        )
-        return (
-            f"<small>**Stability limit dt < {fmt(limit)} s** (ω_max = {fmt(omega)} rad/s; "
-            f"{reason}); {where}.</small>"
-        )
+        return stability_note(self.sim, self.state)
 
     # ------------------------------------------------------------------ commands
     def apply(self, command: Command) -> str:
@@ -546,7 +535,8 @@ class ExhibitModel(Rewinding, SystemHooks):
         raise NotImplementedError
 
     def _started(self) -> None:
-        """Called at the end of every ``_start``: a view resets what it draws."""
+        """Called at the end of every ``_start``: announces it (a view resets what it draws)."""
+        self.announce("started")
 
     def _observe(self) -> None:
         pass

@@ -264,16 +264,29 @@ class CyclotronModel(ExhibitModel):
         self._beam_changed()
 
     def _beam_changed(self) -> None:
-        """Called when the beam came, went or changed: a view redraws it."""
+        """Called when the beam came, went or changed: announced (a view redraws it)."""
+        self.announce("beam")
 
     def _rewound(self) -> None:
         # the circle theory predicts from the state shown (a kick after it is undone)
         p, st = self.params, self.state
         self.theory_centre = cy.guiding_centre(p, st)
         self.theory_radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
+        super()._rewound()
 
     def _segment_started(self) -> None:
-        """Called when the estimators' samples start afresh: a view breaks its trails."""
+        """Called when the estimators' samples start afresh: announced (a view breaks its
+        trails)."""
+        self.announce("segment")
+
+    def _outside(self, sim) -> str | None:
+        if self.box is None:
+            return None
+        lo, hi = self.box
+        x, y = sim.state[0, :2]
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            return None
+        return "the charge left the exhibit"
 
     def _extra_simulations(self):
         return [self.beam] if self.beam is not None else []

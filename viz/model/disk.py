@@ -157,7 +157,7 @@ class DiskModel(ExhibitModel):
         self.force_amplitude = dk.axle_force_amplitude(p)
         # Driven: L is fixed in the body (dynamics gives it at t = 0, when the disk frame is the
         # space frame); the pose turns it with the sampled rotation R(t).
-        self._body_L = dk.angular_momentum(p, 0.0)
+        self.body_L = dk.angular_momentum(p, 0.0)
         # driven: (angle, omega) for the bearing force; released: body angular velocity
         self.motion = Motion((2,) if c.mode == "driven" else (3,))
         self._started()
@@ -194,7 +194,7 @@ class DiskModel(ExhibitModel):
         p, st = self.params, self.state
         rot, a = self.pose()
         if self.config.mode == "driven":
-            return p.omega * dk.AXLE, rot @ self._body_L, a
+            return p.omega * dk.AXLE, rot @ self.body_L, a
         moments = dk.free_kernel_params(p)
         omega = dk.quaternion_to_matrix(st[3:7]) @ st[:3]
         L = dk.free_angular_momentum_space(moments, st)
@@ -202,6 +202,7 @@ class DiskModel(ExhibitModel):
 
     def _rewound(self) -> None:
         self._pose_cache = None  # the same time may hold another state once gone back
+        super()._rewound()
 
     def _observe(self) -> None:
         st = self.state

@@ -219,7 +219,8 @@ class HoopModel(ExhibitModel):
         self._observe()
 
     def _jumped(self) -> None:
-        """Called when the runs jump to a new start: a view breaks its trails."""
+        """Called when the runs jump to a new start: announced (a view breaks its trails)."""
+        self.announce("jumped")
 
     def modal_coordinates(self, state) -> np.ndarray:
         return measure.modal_coordinates(np.asarray(state, float)[:2], self.shapes)

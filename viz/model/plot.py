@@ -1,14 +1,14 @@
 """Any variable against any other: the quantities an exhibit can plot, and one drawn against
 another with the exact curves of the system's theory beside the motion.
 
-One path for the live viewer and the recordings. An exhibit names its quantities
-(:meth:`mechviz.viz.scene.base.Exhibit.plot_variables`: state, energy, errors and the quantities its
+One path for the live viewer and the recordings. An exhibit's model names its quantities
+(:meth:`mechviz.viz.model.base.ExhibitModel.plot_variables`: state, energy, errors and the quantities its
 theory is told in, such as the charge's ``r`` and ``V_eff`` or the hoop's modal coordinates),
 each computed from :class:`Samples` of a run; and the exact curves that go with a pair
-(:meth:`~mechviz.viz.scene.base.Exhibit.plot_curves`: the well ``V_eff(r)``, the mode-1 pendulum's
+(:meth:`~mechviz.viz.model.base.ExhibitModel.plot_curves`: the well ``V_eff(r)``, the mode-1 pendulum's
 separatrix, the mode lines of configuration space). The live panel draws the main run's samples
 over the chart window into an image (:class:`PlotImage`); a recording writes the same quantities
-as CSV columns and draws the exhibit's pictures (``Exhibit.pictures``) in its PNG, both with
+as CSV columns and draws the exhibit's pictures (``ExhibitModel.pictures``) in its PNG, both with
 :func:`draw_xy`.
 
 uPlot, viser's chart, needs an x that only grows (time); a path in a plane does not, hence

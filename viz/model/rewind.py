@@ -169,7 +169,9 @@ class Rewinding(Observed):
 
     def _rewound(self) -> None:
         """Called after the runs were put back (scrubbed, or resumed from there): a model
-        works out again what it derives from the state, a view breaks its trails."""
+        works out again what it derives from the state (its override, then this), and this
+        announces it (a view breaks its trails)."""
+        self.announce("rewound")
 
     def chart_version(self) -> tuple:
         """Changes whenever the charts would show something else."""

@@ -54,10 +54,11 @@ def labels_for(ex: ExhibitModel) -> dict[str, str]:
 
 
 def build_exhibit(server, demo: Demo):
-    """The demo's exhibit, as the viewer would build it for these settings."""
+    """The demo's exhibit, as the viewer would build it for these settings: its model, and
+    the view drawn over it (``.model``)."""
     from ..scene import EXHIBITS
 
-    return EXHIBITS[demo.exhibit](server, demo.config(), history_len=8)
+    return EXHIBITS[demo.exhibit](server, MODELS[demo.exhibit](demo.config(), history_len=8))
 
 
 def trace_demo(demo: Demo, progress: ProgressFn | None = None) -> Traces:
@@ -80,7 +81,7 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "li
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         ex = build_exhibit(server, demo)
-        check_work(ex, demo)
+        check_work(ex.model, demo)
         position, look_at = ex.camera
         cam = demo.camera
         view = (tuple(cam.position or position), tuple(cam.look_at or look_at))
@@ -103,7 +104,7 @@ def run_demo(demo: Demo, progress: ProgressFn | None = None, *, theme: str = "li
                 # one serializes once: one for the .viser file, one for viser's own HTML page.
                 serializers.extend([server.get_scene_serializer(), server.get_scene_serializer()])
 
-        traces = _run(ex, demo, progress, draw)
+        traces = _run(ex.model, demo, progress, draw)
         for ser in serializers:
             ser.insert_sleep(1.0 / demo.fps)  # the last frame lasts one frame too
         data = serializers[0].serialize()

@@ -251,7 +251,7 @@ class HoopMapsView:
         """The panel's "Look at the map": the hoop on stage, the camera in front of its map."""
         # the map stands on the hoop's stage only: the stage first, then the camera on the map
         # (the app applies the two in this order, in its own thread)
-        self.app.enqueue("app", Stage(self.exhibit.name, event.client))
+        self.app.enqueue("app", Stage(self.exhibit.model.name, event.client))
         self.app.enqueue("call", lambda _app: self.look_at_map(event.client))
 
     def look_at_map(self, client) -> None:
@@ -273,16 +273,16 @@ class HoopMapsView:
     def refresh(self) -> None:
         """Take finished maps, ask for missing ones, and draw what changed."""
         ex = self.exhibit
-        changed = self.maps.update(ex.params, ex.config.method)
+        changed = self.maps.update(ex.model.params, ex.model.config.method)
         status = f"<small>{self.maps.status}</small>" if self.maps.status else ""
         if self.status.content != status:  # an assignment is sent to every client, even unchanged
             self.status.content = status
-        start = tuple(float(x) for x in ex.sim.state0[0, :2])
+        start = tuple(float(x) for x in ex.model.sim.state0[0, :2])
         dark = getattr(self.app, "theme", "light") == "dark"
         key = (
             start,
-            ex.config.dt,
-            ex.config.method,
+            ex.model.config.dt,
+            ex.model.config.method,
             dark,
             id(self.maps.chaos),
             id(self.maps.stability),
@@ -297,17 +297,17 @@ class HoopMapsView:
             self._mark(chaos, start)
         stab = self.maps.stability
         if stab is not None:
-            amp = start_amplitude(ex.params, start)
-            dt = float(ex.config.dt)
+            amp = start_amplitude(ex.model.params, start)
+            dt = float(ex.model.config.dt)
             self.stability_image.image = draw_stability(self.stability_picture, stab, amp, dt, dark)
             self.step_drawn = (amp, dt, self.stability_picture.place_of(amp, dt))
         elif not self.maps.worker.busy("stability"):
             self.stability_image.image = self._blank()
-        fixed = not ex.sim.method.adaptive
+        fixed = not ex.model.sim.method.adaptive
         self.stability_note.content = (
             ""
             if fixed
-            else f"<small>{ex.config.method} is adaptive: its step follows the tolerance, "
+            else f"<small>{ex.model.config.method} is adaptive: its step follows the tolerance, "
             "so there is no fixed step to mark.</small>"
         )
 

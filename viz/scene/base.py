@@ -1,20 +1,29 @@
 """What the three scenes share: the exhibit, the viser view of an exhibit's model.
 
-An *exhibit* is a model (:class:`mechviz.viz.model.base.ExhibitModel`: the runs, events, samples and
-measured figures, headless) drawn in a viser scene, with its GUI panel. The live viewer
-(:mod:`mechviz.viz.app`)
-and the recorder's ``.viser`` files (:mod:`mechviz.viz.record`) draw the same exhibits, so a
-demo reaches the screen by one path. Besides the model's interface every exhibit has
+An *exhibit* is a view built over a model (:class:`mechviz.viz.model.base.ExhibitModel`: the
+runs, events, samples and measured figures, headless), kept as its ``model``: it draws the
+model in a viser scene and builds its GUI panel. The view observes the model
+(:meth:`mechviz.viz.model.observed.Observed.observe`) and so knows when to draw again, whoever
+changed it; everything about the run (advance, apply a command, scrub, the figures, the charts'
+data) is asked of ``exhibit.model``. The live viewer (:mod:`mechviz.viz.app`) and the recorder's
+``.viser`` files (:mod:`mechviz.viz.record`) draw the same exhibits, so a demo reaches the screen
+by one path. Every exhibit has
 
-- ``draw()``: handle assignments only; the caller wraps ``server.atomic()``,
+- ``model``, and ``model_type``: the model class it draws (the registries pair them by system),
+- ``draw()``: handle assignments only; the caller wraps ``server.atomic()``; ``to_draw`` says
+  whether the model changed since (``draw_if_changed()`` draws only then),
 - ``readout()`` (markdown), ``camera``, ``bounds``, ``labels()``,
 - ``build_panel(panel)``: its controls, in the tab the app gives it (:mod:`mechviz.viz.scene.panel`),
+- ``close()``: it stops observing its model (the model runs on, undrawn),
 
-and the hooks ``_build`` (scene nodes, once) and ``_started`` (reset what is drawn for a new start).
+and the hooks ``_build`` (scene nodes, once) and ``_started`` (the model's ``"started"``: reset
+what is drawn for a new start); a subclass answers the model's other announcements
+(:data:`mechviz.viz.model.observed.Event`) in ``listens``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -35,6 +44,7 @@ from ..model.base import (  # noqa: F401  (re-exported for the scenes)
     log10_abs,
     positive,
 )
+from ..model.observed import Event
 
 
 def brief(x, digits: int = 4) -> str:
@@ -105,32 +115,80 @@ class NodeBook:
         }
 
 
-class Exhibit(ExhibitModel):
-    """A model drawn: subclasses add ``icon``, ``_build``, ``_started``, ``draw``, ``readout``,
-    ``camera``, ``_extent`` and ``build_panel`` to a model class."""
+class Exhibit:
+    """A model drawn: subclasses name their ``model_type`` and add ``icon``, ``_build``,
+    ``_started``, ``draw``, ``readout``, ``camera``, ``_extent`` and ``build_panel``.
 
+    Built over ``model`` (a model of ``model_type``; a config, or ``None`` for the defaults,
+    builds one with ``history_len``). ``bounded``: beside other exhibits (the live viewer), a
+    runaway is drawn only inside the exhibit's box, and the model is told that box (a run that
+    leaves it has diverged, :meth:`mechviz.viz.model.base.ExhibitModel.confine`); alone (a
+    recording) it is drawn all."""
+
+    model_type: ClassVar[type[ExhibitModel]]
+    key: ClassVar[str] = ""  # its system's name, the model type's
     icon: ClassVar[str] = "CIRCLE"  # a viser.Icon name for the exhibit's tab
     caption: ClassVar[str] = ""  # "what you see", shown on the exhibit's stage
+    # what the view does when the model announces it, beyond drawing again: a method's name
+    listens: ClassVar[dict[Event, str]] = {"started": "_started"}
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "model_type" in cls.__dict__:
+            cls.key = cls.model_type.key
 
     def __init__(
         self,
         server,
-        config=None,
+        model: ExhibitModel | ExhibitConfig | None = None,
         *,
         origin=(0.0, 0.0, 0.0),
         history_len: int = 600,
         bounded: bool = False,
     ) -> None:
-        # beside other exhibits (the live viewer): a runaway is drawn only inside the exhibit's
-        # box, and a run that leaves it diverging is paused; alone (a recording) it is drawn all
+        if isinstance(model, ExhibitModel) and not isinstance(model, self.model_type):
+            raise TypeError(
+                f"{type(self).__name__} draws a {self.model_type.__name__}, not {model!r}"
+            )
+        if not isinstance(model, self.model_type):
+            model = self.model_type(model, history_len=history_len)
+        self.model = model
         self.bounded = bounded
         self.server = server
         self.scene = NodeBook(server.scene)  # every node this exhibit makes, by name
         self.origin = np.asarray(origin, dtype=float)
         self.root = f"/{self.key}"
-        super().__init__(config, history_len=history_len, start=False)
+        self.to_draw = True  # the model changed since last drawn (drawn once at least)
         self._build()
-        self._start()
+        self._started()
+        self._stops: list[Callable[[], None]] = [model.observe(self._model_changed)]
+        for event, method in self.listens.items():
+            self._stops.append(model.on(event, getattr(self, method)))
+        if bounded:  # the box is the config's: told again at every start
+            self._confine()
+            self._stops.append(model.on("started", self._confine))
+
+    def _confine(self) -> None:
+        lo, hi = self._extent()
+        self.model.confine((np.asarray(lo, float), np.asarray(hi, float)))
+
+    def _model_changed(self, _model: ExhibitModel) -> None:
+        """The model changed (an advance, a command, a scrub): draw it again next frame."""
+        self.to_draw = True
+
+    def draw_if_changed(self) -> bool:
+        """Draw if the model changed since last drawn (or the view asked to be); whether it did."""
+        if not self.to_draw:
+            return False
+        self.to_draw = False  # before: a change while drawing is drawn next time
+        self.draw()
+        return True
+
+    def close(self) -> None:
+        """Stop observing the model: its changes are no longer drawn (its nodes stay)."""
+        for stop in self._stops:
+            stop()
+        self._stops.clear()
 
     # ------------------------------------------------------------------ subclass hooks
     def _build(self) -> None:  # pragma: no cover - abstract
@@ -174,9 +232,9 @@ class Exhibit(ExhibitModel):
     def key_figures(self) -> list[tuple[str, str]]:
         """``(name, value)`` of the figures presentation mode shows large beside the exhibit:
         the time and the relative energy error, and each exhibit's own measured figures."""
-        smp = self.sample
+        smp = self.model.sample
         return [
-            ("t", f"{self.t:.1f} s"),
+            ("t", f"{self.model.t:.1f} s"),
             ("ΔE/E", f"{float(np.max(np.abs(smp.energy_error))):.1e}"),
         ]
 
@@ -190,12 +248,13 @@ class Exhibit(ExhibitModel):
         return [h for h in self.nodes.values() if type(h).__name__ == "LabelHandle"]
 
     def on_stage(self, shown: bool) -> None:
-        """The exhibit goes on stage (``shown``) or leaves it: what it draws only there."""
+        """The exhibit goes on stage (``shown``) or leaves it: what it draws only there (the
+        model is the same either way)."""
 
     def stage_plot(self) -> tuple[str, tuple[tuple[str, tuple[int, int, int]], ...]]:
         """The chart the stage shows against time (:mod:`mechviz.viz.scene.stage_chart`): its
-        y axis's label with the unit, and ``(name, colour)`` of each series, names of
-        :meth:`plot_variables`. By default the relative energy error."""
+        y axis's label with the unit, and ``(name, colour)`` of each series, names of the
+        model's ``plot_variables``. By default the relative energy error."""
         return "relative energy error ΔE/E", (("energy_error", (60, 110, 240)),)
 
     def stage_labels(self) -> list:

@@ -13,6 +13,7 @@ view (the trail is broken where it wraps).
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from mechviz.dynamics import cyclotron as cy
 from .. import geometry as geo
 from ..model.commands import Kick
 from ..model.cyclotron import CyclotronConfig, CyclotronModel, well  # noqa: F401  (re-exported)
-from .base import Exhibit, against_theory, fmt
+from .base import Event, Exhibit, against_theory, fmt
 
 
 class BeamTrails:
@@ -68,12 +69,19 @@ class BeamTrails:
         self.node.remove()
 
 
-class CyclotronExhibit(CyclotronModel, Exhibit):
+class CyclotronExhibit(Exhibit):
     """The cyclotron drawn: the charge with its trail, the predicted circle, the field, the
     comparison run and the beam."""
 
+    model_type = CyclotronModel
     icon = "ATOM"
     caption = "every orbit takes 2πm/|q|B, whatever its speed"
+    listens: ClassVar[dict[Event, str]] = {
+        "started": "_started",
+        "segment": "_segment_started",
+        "rewound": "_rewound",
+        "beam": "_beam_changed",
+    }
 
     def stage_plot(self):
         # x swings at the gyrofrequency: its period is the figure the stage measures
@@ -81,7 +89,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     # ------------------------------------------------------------------ scene (built once)
     def _build(self) -> None:
-        s, r, H = self.scene, self.root, self.config.height
+        s, r, H = self.scene, self.root, self.model.config.height
         s.add_frame(r, show_axes=False, position=self.origin)
         self.label = s.add_label(
             f"{r}/label",
@@ -115,9 +123,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             s, f"{r}/orbit_before_kick", geo.circle_segments(1.0), geo.GHOST, 1.5, visible=False
         )
         self._drawn_circle: tuple | None = None  # (centre x, y, radius, height) last drawn
-        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.config.trail_cap)
+        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.TRAIL, cap=self.model.config.trail_cap)
         self.compare_trail = geo.ChunkedTrail(
-            s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
+            s, f"{r}/compare_trail", geo.COMPARE, cap=self.model.config.trail_cap
         )
         self.beam_node = None
         self.beam_trails: BeamTrails | None = None
@@ -125,7 +133,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         self._body_positions = np.zeros((3, 3))
 
     def _field_points(self, sign: float) -> np.ndarray:
-        H = self.config.height
+        H = self.model.config.height
         a, b = (0.0, H) if sign > 0 else (H, 0.0)
         return np.asarray(
             [[[x, y, a], [x, y, b]] for x in (-1.6, 0.0, 1.6) for y in (-1.6, 0.0, 1.6)],
@@ -133,7 +141,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         )
 
     def _started(self) -> None:
-        p, cmp_ = self.params, self.compare
+        p, cmp_ = self.model.params, self.model.compare
         self.ghost_ring.visible = False  # a new start has no orbit before a kick
         self._drawn_circle = None
         self.trail.clear()
@@ -142,6 +150,7 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         self._rebuild_beam_node()
         self.bodies.batched_scales = np.array([1.0, 1.0 if cmp_ is not None else 0.0, 0.5])
         self.compare_trail.visible = cmp_ is not None
+        self._segment_started()  # the trails' box (the model's next announcement says it again)
 
     def _segment_started(self) -> None:
         self.trail.lift()
@@ -150,16 +159,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         # send one beyond the exhibit's edge): a spiral growing out of them stops at the edge
         box = self._trail_box()
         self.trail.box = self.compare_trail.box = box
-        if getattr(self, "beam_trails", None) is not None:
+        if self.beam_trails is not None:
             self.beam_trails.box = box
-        if getattr(self, "_drawn_circle", None) is not None:  # a kick: keep the old orbit
+        if self._drawn_circle is not None:  # a kick: keep the old orbit
             x, y, radius, z = self._drawn_circle
             self.ghost_ring.points = geo.circle_segments(radius)
             self.ghost_ring.position = (x, y, z)
             self.ghost_ring.visible = True
 
     def _rewound(self) -> None:
-        super()._rewound()
         # gone back in the run: the next points start new pieces (no line back across the
         # path already drawn); the beam's short trails start afresh
         self.trail.lift()
@@ -179,9 +187,9 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         if self.beam_trails is not None:
             self.beam_trails.remove()
             self.beam_trails = None
-        if self.beam is None:
+        if self.model.beam is None:
             return
-        n = len(self.beam.state)
+        n = len(self.model.beam.state)
         sphere = geo.sphere_mesh(0.045, 1)
         t = np.linspace(0.0, 1.0, n)[:, None]
         colors = ((1 - t) * np.array(geo.BEAM[0]) + t * np.array(geo.BEAM[1])).astype(np.uint8)
@@ -190,19 +198,19 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             f"{self.root}/beam",
             sphere,
             colors,
-            positions=self._display(self.beam.state[:, :3]),
+            positions=self._display(self.model.beam.state[:, :3]),
         )
         self.beam_trails = BeamTrails(
             self.scene,
             f"{self.root}/beam_trails",
             colors,
-            self.config.height,
+            self.model.config.height,
         )
 
     # ------------------------------------------------------------------ drawing
     def _display(self, xyz: np.ndarray) -> np.ndarray:
         out = np.array(xyz, dtype=float)
-        out[..., 2] = np.mod(out[..., 2], self.config.height)
+        out[..., 2] = np.mod(out[..., 2], self.model.config.height)
         return out
 
     def display_position(self, state: np.ndarray) -> np.ndarray:
@@ -211,18 +219,18 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     def _push_trail(self, trail: geo.ChunkedTrail, pos: np.ndarray) -> None:
         last = trail.last_point
-        if last is not None and abs(pos[2] - last[2]) > 0.5 * self.config.height:
+        if last is not None and abs(pos[2] - last[2]) > 0.5 * self.model.config.height:
             trail.lift()  # the displayed height wrapped round: no segment across the jump
         trail.push(pos)
         trail.draw()
 
     def draw(self) -> None:
-        st = self.state
+        st = self.model.state
         pos = self.display_position(st)
-        p = self.params
+        p = self.model.params
         centre = cy.guiding_centre(p, st)
         radius = cy.orbit_radius(p, 0.5 * p.mass * (st[3] ** 2 + st[4] ** 2))
-        cs = self.compare_state
+        cs = self.model.compare_state
         cpos = self.display_position(cs) if cs is not None else pos
         bodies = self._body_positions  # reused: viser copies what it is given
         bodies[0], bodies[1] = pos, cpos
@@ -236,8 +244,8 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
             self._ring_radius = radius
         self.ring.position = (centre[0], centre[1], pos[2])
         self._drawn_circle = (float(centre[0]), float(centre[1]), float(radius), float(pos[2]))
-        if self.beam is not None and self.beam_node is not None:
-            shown = self._display(self.beam.state[:, :3])
+        if self.model.beam is not None and self.beam_node is not None:
+            shown = self._display(self.model.beam.state[:, :3])
             self.beam_node.batched_positions = shown
             self.beam_trails.push(shown)
 
@@ -247,24 +255,15 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
         if not self.bounded:
             return None
         lo, hi = (np.array(v, float) for v in self._extent())
-        p = self.params
-        for sim in self.simulations():
+        p = self.model.params
+        for sim in self.model.simulations():
             for s in sim.state:
                 c, r = cy.guiding_centre(p, s)[:2], 1.01 * cy.larmor_radius(p, s)
                 lo[:2], hi[:2] = np.minimum(lo[:2], c - r), np.maximum(hi[:2], c + r)
         return lo.astype(np.float32), hi.astype(np.float32)
 
-    def _outside(self, sim) -> str | None:
-        if not self.bounded:
-            return None
-        lo, hi = self._extent()
-        x, y = sim.state[0, :2]
-        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
-            return None
-        return "the charge left the exhibit"
-
     def _extent(self):
-        H = self.config.height
+        H = self.model.config.height
         # up to the title above the field (its text stands on H + 0.5): framed, it is in the picture
         return (-1.7, -1.7, 0.0), (1.7, 1.7, H + 0.8)
 
@@ -275,41 +274,41 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:
-        m = self.measured()
-        w_th = cy.gyrofrequency(self.params)
+        m = self.model.measured()
+        w_th = cy.gyrofrequency(self.model.params)
         return [
             ("ω", against_theory(m["gyrofrequency"], "rad/s", w_th)),
-            ("r", against_theory(m["radius"], "m", self.theory_radius)),
+            ("r", against_theory(m["radius"], "m", self.model.theory_radius)),
             *super().key_figures(),
         ]
 
     def readout(self) -> str:
-        p, smp = self.params, self.sample
+        p, smp = self.model.params, self.model.sample
         w_th = cy.gyrofrequency(p)
-        m = self.measured()
+        m = self.model.measured()
         w_me = m["gyrofrequency"]
         t_me = fmt(2 * math.pi / w_me.value) if w_me else "—"
         lines = [
-            f"**t = {self.t:.2f} s** · {self.method_line(self.sim)}",
+            f"**t = {self.model.t:.2f} s** · {self.model.method_line(self.model.sim)}",
             "",
             "| quantity | theory | measured |",
             "|---|---|---|",
             f"| gyrofrequency \\|qB\\|/m [rad/s] | {fmt(w_th)} | {fmt(w_me)} |",
             f"| period 2π/ω [s] | {fmt(2 * math.pi / w_th)} | {t_me} |",
-            f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.theory_radius)} | {fmt(m['radius'])} |",
+            f"| radius √(2mE)/\\|qB\\| [m] | {fmt(self.model.theory_radius)} | {fmt(m['radius'])} |",
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs exact | 0 | {float(np.max(smp.error)) if smp.error is not None else 0.0:.2e} |",
         ]
-        c = self.compare_sample
+        c = self.model.compare_sample
         if c is not None:
             lines.append(
-                f"\nComparison {self.method_line(self.compare)} (blue): relative energy error "
+                f"\nComparison {self.model.method_line(self.model.compare)} (blue): relative energy error "
                 f"{float(np.max(np.abs(c.energy_error))):.2e}, error {float(np.max(c.error)):.2e}"
             )
         wb = m["beam_gyrofrequencies"]
-        if self.beam is not None:
-            lo, hi = self.config.beam_speeds
-            n = len(self.beam.state)
+        if self.model.beam is not None:
+            lo, hi = self.model.config.beam_speeds
+            n = len(self.model.beam.state)
             if not wb:
                 periods = f"periods not resolved ({wb.reason})"
             else:
@@ -320,12 +319,12 @@ class CyclotronExhibit(CyclotronModel, Exhibit):
                     f"{fmt(2 * math.pi / w_th, 7)} s whatever the speed)"
                 )
             lines.append(f"\nBeam of {n} charges, speeds {lo:g}–{hi:g} m/s: {periods}")
-        lines.append(self.work_line())
+        lines.append(self.model.work_line())
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ GUI
     def build_panel(self, panel) -> None:
-        gui, c = panel.gui, self.config
+        gui, c = panel.gui, self.model.config
         panel.readout_and_chart(compare=True)
         panel.param_inputs()
         panel.integrator_inputs(compare=True)

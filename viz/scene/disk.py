@@ -5,17 +5,19 @@ forces at A and B (``mechviz.dynamics.disk.bearing_force_a/b``) are drawn as arr
 disk, scaled to their magnitude, beside the angular velocity (along the axle) and the angular
 momentum about A (not along it: that is why the bearings must push). *Released*: the axle is
 removed at ``t = 0`` and the free body tumbles (``mechviz.dynamics.ReleasedDisk``, integrated by the chosen
-method); drawn by default in the frame moving with its centre of mass.
+method); drawn by default in the frame moving with its centre of mass, with Poinsot's
+construction (:mod:`mechviz.viz.scene.poinsot`).
 
-World mapping: the dynamics' disk frame (axle along +y) is drawn with the axle vertical and the
-disk facing the default camera at ``t = 0``: world ``(x, y, z) = lift + P (x, y, z)_disk`` with
-``P`` sending disk ``x -> x``, ``y -> z``, ``z -> -y`` (a proper rotation), ``lift = (0, 0, 0.4)``
-above the exhibit origin.
+World mapping (:data:`mechviz.viz.scene.poinsot.P`): the dynamics' disk frame (axle along
++y) is drawn with the axle vertical and the disk facing the default camera at ``t = 0``: world
+``(x, y, z) = lift + P (x, y, z)_disk`` with ``P`` sending disk ``x -> x``, ``y -> z``,
+``z -> -y`` (a proper rotation), ``lift = (0, 0, 0.4)`` above the exhibit origin.
 """
 
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -23,196 +25,22 @@ from mechviz.dynamics import disk as dk
 
 from .. import geometry as geo
 from ..model.disk import MODES, DiskConfig, DiskModel, principal_axes_for  # noqa: F401
-from .base import Exhibit, against_theory, error_text, fmt
+from .base import Event, Exhibit, against_theory, error_text, fmt
+from .poinsot import LIFT, P, PoinsotPicture, to_world
 
-P = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # disk frame -> world
 AXIS_NAMES = ("(red)", "(green)", "(blue)")  # the principal axes' arrows, geo.AXES_RGB
-LIFT = np.array([0.0, 0.0, 0.4])
 TITLE = "Spinning disk with a bead"
 # The disk's opacity: driven, nearly solid; released, the Poinsot ellipsoid at the centre of
 # mass shows through it.
 DISK_OPACITY = {"driven": 0.85, "released": 0.3}
-NAMES = "Poinsot: inertia ellipsoid + polhode,\ninvariable plane (⊥ L) + herpolhode"
-STAGE_NAMES = "Poinsot: ellipsoid rolls\non the plane ⊥ L"  # short: large on the stage
-# Poinsot's picture on the disk's stage, in disk radii
-STAGE_DISTANCE = 1.0  # the plane's distance from the ellipsoid's centre (half its height)
-STAGE_GAP = 1.2  # clear of the disk's box in perspective (the arrows reach its edges)
-# On the stage the picture is turned about the camera's horizontal, L tipped towards the hall:
-# with L up, the plane is seen edge on and the picture is as flat as the plane's distance
-# (the ellipsoid lies along the plane); tipped, its long axis shows in the height too.
-STAGE_TIP = math.radians(50.0)
-STAGE_TILT = np.array(
-    [
-        [1.0, 0.0, 0.0],
-        [0.0, math.cos(STAGE_TIP), -math.sin(STAGE_TIP)],
-        [0.0, math.sin(STAGE_TIP), math.cos(STAGE_TIP)],
-    ]
-)
 
 
-class PoinsotPicture:
-    """Poinsot's construction for the released disk (:func:`mechviz.dynamics.disk.poinsot`), drawn at
-    the centre of mass: the inertia ellipsoid turning with the body, the invariable plane fixed
-    in space (normal to L), the polhode traced on the ellipsoid and the herpolhode on the plane.
-    Lengths are 1/sqrt(kg m^2) times ``scale`` [m], chosen so the longest semi-axis is 0.6 R."""
-
-    def __init__(self, scene, root: str) -> None:
-        self.scene, self.root = scene, root
-        self.frame = scene.add_frame(f"{root}/poinsot", show_axes=False, visible=False)
-        # the names, in one label fixed in space under the ellipsoid (text turning with the
-        # body, or riding on the moving contact point, would pile up on screen)
-        self.names = [
-            scene.add_label(
-                f"{root}/poinsot_label",
-                NAMES,
-                anchor="top-right",
-                visible=False,
-            ),
-        ]
-        self.plane_frame = scene.add_frame(
-            f"{root}/invariable_plane", show_axes=False, visible=False
-        )
-        self.ellipsoid = None
-        self.polhode = geo.ChunkedTrail(scene, f"{root}/poinsot/polhode", geo.CENTRE, cap=900)
-        self.herpolhode = geo.ChunkedTrail(
-            scene, f"{root}/invariable_plane/herpolhode", geo.MOMENTUM, cap=900
-        )
-        self.scale = 1.0
-        self.radius = 1.0
-        self.plane_radius = 0.9  # [m]
-        self.half = np.full(3, 0.6)  # half the sides [m] of the box the staged picture is in
-        self.tilt = np.eye(3)  # world -> the picture's world (turned on the stage)
-        self.staged = False  # on the stage: large, beside the disk (at home: small, at the CM)
-        self._started = None  # the last start's arguments (a move to or from the stage redraws)
-
-    def beside(self, radius: float) -> np.ndarray:
-        """The staged picture's centre (relative to the exhibit origin) [m]: right of the
-        disk's box, its back level with the box's back (nearer the hall, so larger), its
-        lowest point half a radius above the disk's lowest (its names hang there, inside the
-        exhibit's box)."""
-        hx, hy, hz = self.half
-        x = 1.4 * radius + STAGE_GAP * radius + hx
-        return np.array([x, 1.4 * radius - hy, LIFT[2] + 0.5 * radius + hz])
-
-    def stage(self, staged: bool) -> None:
-        """Large beside the disk on its stage, small at the centre of mass elsewhere (the
-        curves start afresh at the new size)."""
-        if staged != self.staged:
-            self.staged = staged
-            if self._started is not None:
-                self.start(*self._started)
-
-    def start(self, moments: np.ndarray, radius: float, shown: bool, state=None) -> None:
-        """A new run: ``moments`` [kg m^2] the principal ones, ``state`` the free body's (the
-        plane's distance sizes the staged picture; ``None`` while driven)."""
-        self._started = (moments, radius, shown, state)
-        semi = 1.0 / np.sqrt(moments)
-        # at home: inside the disk, the longest semi-axis 0.6 R
-        self.scale = 0.6 * radius / float(semi.max())
-        self.plane_radius = 0.9 * radius
-        if self.staged and state is not None:
-            # on stage: the picture's height is the plane's distance from the centre, twice
-            # (the ellipsoid touches the plane, and is symmetric about its centre): that sets
-            # its size, as tall as a third of the page beside the disk
-            pc = dk.poinsot(moments, state)
-            self.scale = STAGE_DISTANCE * radius / pc["distance"]
-            a, d = float(semi.max()) * self.scale, STAGE_DISTANCE * radius
-            # the herpolhode stays within sqrt(a^2 - d^2) of the foot of L
-            self.plane_radius = max(1.05 * math.sqrt(max(a * a - d * d, 0.0)), 0.6 * a)
-            n = np.abs(STAGE_TILT @ to_world(pc["normal"]))
-            across = np.sqrt(np.maximum(1.0 - n * n, 0.0))
-            # along each axis: the plane's rim, and the ellipsoid (d along n, a across it)
-            rim = d * n + self.plane_radius * across
-            self.half = np.maximum(rim, np.sqrt((d * n) ** 2 + (a * across) ** 2))
-            self.tilt = STAGE_TILT
-        else:
-            self.half = np.full(3, 0.6 * radius)
-            self.tilt = np.eye(3)
-        if self.ellipsoid is not None:
-            self.ellipsoid.remove()
-        mesh = geo.sphere_mesh(1.0, 3)
-        mesh.apply_scale(semi * self.scale)
-        self._shape = np.asarray(mesh.vertices, float)  # the ellipsoid's own points [m]
-        self.ellipsoid = self.scene.add_mesh_simple(
-            f"{self.root}/poinsot/ellipsoid",
-            mesh.vertices,
-            mesh.faces,
-            color=geo.CENTRE,
-            opacity=0.35,
-        )
-        plane = geo.disk_mesh(self.plane_radius, 0.004 * radius)
-        self.scene.add_mesh_simple(
-            f"{self.root}/invariable_plane/plane",
-            plane.vertices,
-            plane.faces,
-            color=geo.MOMENTUM,
-            opacity=0.25,
-        )
-        self.polhode.clear()
-        self.herpolhode.clear()
-        self.frame.visible = self.plane_frame.visible = shown
-        self.radius = radius
-        for h in self.names:
-            h.visible = shown
-            h.text = STAGE_NAMES if self.staged else NAMES
-            h.anchor = "top-center" if self.staged else "top-right"
-
-    def draw(self, pc: dict, cm_world: np.ndarray) -> None:
-        """``pc`` from :func:`mechviz.dynamics.disk.poinsot`; ``cm_world`` the centre of mass (world,
-        relative to the exhibit origin): the picture's centre, except on stage (beside)."""
-        if self.staged:
-            cm_world = self.beside(self.radius)
-        self.frame.position = cm_world
-        tilt = self.tilt
-        self.frame.wxyz = geo.quat_from_matrix(tilt @ P @ pc["rotation"])
-        n = tilt @ to_world(pc["normal"])
-        turn = _z_onto(n)  # the plane's own z along n; the plane sits at its distance along n
-        offset = n * pc["distance"] * self.scale
-        self.plane_frame.wxyz = geo.quat_from_matrix(turn)
-        self.plane_frame.position = cm_world + offset
-        # under the ellipsoid, reaching left (the hoop's labels stand to the right)
-        self.names[0].position = cm_world + (
-            (0.0, -self.half[1], -self.half[2])  # the box's near lower edge: under it all
-            if self.staged
-            else (0.3 * self.radius, 0.0, -0.65 * self.radius)
-        )
-        self.polhode.push(pc["contact_body"] * self.scale)
-        self.polhode.draw()
-        # the herpolhode in the plane's own coordinates (the plane is fixed while L is)
-        self.herpolhode.push(turn.T @ (tilt @ to_world(pc["contact_space"]) * self.scale - offset))
-        self.herpolhode.draw()
-
-    def picture_points(self) -> np.ndarray:
-        """Points [m] of the picture as drawn, relative to the exhibit origin: the ellipsoid's
-        surface and the plane's rim (what a test projects to measure it on the page)."""
-        turn = geo.matrix_from_quat(self.frame.wxyz)
-        body = self._shape @ turn.T + np.asarray(self.frame.position, float)
-        phi = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
-        rim = self.plane_radius * np.column_stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)])
-        plane = geo.matrix_from_quat(self.plane_frame.wxyz)
-        rim = rim @ plane.T + np.asarray(self.plane_frame.position, float)
-        return np.concatenate([body, rim])
-
-
-def _z_onto(n: np.ndarray) -> np.ndarray:
-    """A rotation matrix taking +z onto the unit vector ``n`` (Rodrigues' formula)."""
-    z = np.array([0.0, 0.0, 1.0])
-    v, c = np.cross(z, n), float(z @ n)
-    if c < -1.0 + 1e-12:
-        return np.diag([1.0, -1.0, -1.0])
-    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    return np.eye(3) + vx + vx @ vx / (1.0 + c)
-
-
-def to_world(v) -> np.ndarray:
-    """Disk/space-frame vector(s) (..., 3) -> world vector(s), relative to the exhibit origin."""
-    return np.asarray(v, float) @ P.T
-
-
-class DiskExhibit(DiskModel, Exhibit):
+class DiskExhibit(Exhibit):
     """The disk drawn: the body with its bead, the axle and bearings, omega, L and the forces
     while driven, the Poinsot construction once released."""
 
+    model_type = DiskModel
+    listens: ClassVar[dict[Event, str]] = {"started": "_started", "rewound": "_rewound"}
     icon = "DISC"
     caption = "L is not along ω: held, the bearings push; free, it tumbles"
 
@@ -257,8 +85,7 @@ class DiskExhibit(DiskModel, Exhibit):
             s.add_label(f"{r}/vector_label_ω", "ω", anchor="bottom-center"),
             s.add_label(f"{r}/vector_label_L", "L", anchor="top-center"),
         ]
-        self._built_radius = None
-        self._built_masses = None
+        self._built_radius = self._built_masses = None
 
     def _build_body(self, p: dk.DiskParams) -> None:
         s, r, R = self.scene, self.root, p.radius
@@ -311,7 +138,7 @@ class DiskExhibit(DiskModel, Exhibit):
         # Of the vectors fixed in the turning body only L is labelled (the red arrows at the
         # bearings are the forces, said in the readout): more moving text would overlap.
         self.body_labels = [s.add_label(f"{body}/label_L", "L", anchor="top-center")]
-        self._build_axes(p, self.config.mode)
+        self._build_axes(p, self.model.config.mode)
 
     def _build_axes(self, p: dk.DiskParams, mode: str) -> None:
         """The principal axes and their moments: about A while the axle holds the disk, about the
@@ -340,7 +167,8 @@ class DiskExhibit(DiskModel, Exhibit):
         self._built_masses = (p.disk_mass, p.bead_mass, R, mode)
 
     def _started(self) -> None:
-        c, p = self.config, self.params
+        c, p = self.model.config, self.model.params
+        L_body = self.model.body_L  # L fixed in the driven body (at t = 0, in space)
         if self._built_radius != p.radius:
             self._build_body(p)
         elif self._built_masses != (p.disk_mass, p.bead_mass, p.radius, c.mode):
@@ -354,7 +182,7 @@ class DiskExhibit(DiskModel, Exhibit):
         for h in self.body_labels:
             h.visible = driven
         self.force_scale = (
-            0.8 * p.radius / self.force_amplitude if self.force_amplitude > 0 else 0.0
+            0.8 * p.radius / self.model.force_amplitude if self.model.force_amplitude > 0 else 0.0
         )
         L0 = np.linalg.norm(dk.angular_momentum(p, 0.0))
         self.omega_scale = 1.2 * p.radius / abs(p.omega)
@@ -371,7 +199,7 @@ class DiskExhibit(DiskModel, Exhibit):
         self._driven_omega_tip = LIFT + to_world(p.omega * dk.AXLE * self.omega_scale)
         self._body_arrows = np.stack(
             [
-                self._body_L * self.momentum_scale,
+                L_body * self.momentum_scale,
                 self._body_fa * self.force_scale,
                 self._body_fb * self.force_scale,
             ],
@@ -380,11 +208,9 @@ class DiskExhibit(DiskModel, Exhibit):
         self._vector_points = np.zeros((3, 2, 3), np.float32)  # reused by every frame
         # dL/dt = omega x L, fixed in the body too: drawn at L's tip, at the length L's tip moves
         # in one radian of turn (so it is tangent to the cone's rim and as long as its radius)
-        self._body_dL = (
-            np.cross(p.omega * dk.AXLE, self._body_L) / abs(p.omega) * self.momentum_scale
-        )
+        self._body_dL = np.cross(p.omega * dk.AXLE, L_body) / abs(p.omega) * self.momentum_scale
         phi = np.linspace(0.0, 2 * np.pi, 97)
-        rim = LIFT + to_world(np.einsum("kij,j->ki", dk.rotation_about_axle(phi), self._body_L))
+        rim = LIFT + to_world(np.einsum("kij,j->ki", dk.rotation_about_axle(phi), L_body))
         rim = LIFT + (rim - LIFT) * self.momentum_scale
         self.cone_rim.points = np.stack([rim[:-1], rim[1:]], axis=1).astype(np.float32)
         self.cone_rim.visible = driven
@@ -398,30 +224,29 @@ class DiskExhibit(DiskModel, Exhibit):
             dk.free_kernel_params(p),
             p.radius,
             shown=not driven,
-            state=None if driven else self.state,
+            state=None if driven else self.model.state,
         )
         self.body.position = LIFT  # A stays put while driven
 
     def _rewound(self) -> None:
-        super()._rewound()
         # gone back in the run: the next points start new pieces of the Poinsot curves
         self.poinsot.polhode.lift()
         self.poinsot.herpolhode.lift()
 
     def body_pose_world(self):
         """``(wxyz, position)`` of the body node relative to the exhibit origin."""
-        rot, a = self.pose()
+        rot, a = self.model.pose()
         return geo.quat_from_matrix(P @ rot), LIFT + to_world(a)
 
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
-        if self.config.mode == "driven":
+        if self.model.config.mode == "driven":
             self._draw_driven()
             return
         wxyz, pos = self.body_pose_world()
         self.body.wxyz = wxyz
         self.body.position = pos
-        omega, L, base = self.vectors_space()
+        omega, L, base = self.model.vectors_space()
         b0 = LIFT + to_world(base)
         # a run whose energy grows (explicit Euler) lengthens them: drawn up to the exhibit's
         # edge, not across a neighbour
@@ -437,12 +262,12 @@ class DiskExhibit(DiskModel, Exhibit):
         self.vectors.points = pts
         for h, tip in zip(self.vector_labels, tips, strict=True):  # both move with the tumble
             h.position = tip
-        self.poinsot.draw(dk.poinsot(self.sim.system.kernel_params(), self.state), b0)
+        self.poinsot.draw(dk.poinsot(self.model.sim.system.kernel_params(), self.model.state), b0)
 
     def _draw_driven(self) -> None:
         """The uniform rotation about the axle: A stays put and omega is fixed; L and the
         bearing forces are fixed in the body and turn with it (one matrix product)."""
-        rot, _ = self.pose()
+        rot, _ = self.model.pose()
         turn = P @ rot  # disk frame -> world
         self.body.wxyz = geo.quat_from_matrix(turn)
         L, fa, fb = (turn @ self._body_arrows).T
@@ -460,27 +285,27 @@ class DiskExhibit(DiskModel, Exhibit):
         self.forces.points = f
 
     def _extent(self):
-        R = self.params.radius
+        R = self.model.params.radius
         return (-1.4 * R, -1.4 * R, 0.0), (1.4 * R, 1.4 * R, LIFT[2] + 2.3 * R)
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The disk's box, and on its stage once released, Poinsot's picture beside it."""
         lo, hi = super().bounds
-        if self.poinsot.staged and self.config.mode == "released":
+        if self.poinsot.staged and self.model.config.mode == "released":
             lo2, hi2 = self.poinsot_bounds()
             lo, hi = np.minimum(lo, lo2), np.maximum(hi, hi2)
         return lo, hi
 
     def poinsot_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World box [m] of Poinsot's picture on the stage (with room for its names below)."""
-        R = self.params.radius
+        R = self.model.params.radius
         c, h = self.world(self.poinsot.beside(R)), self.poinsot.half
         return c - h, c + h
 
     def on_stage(self, shown: bool) -> None:
         self.poinsot.stage(shown)
-        self.changed()  # drawn again where it now stands
+        self.to_draw = True  # drawn again where it now stands (the model did not change)
 
     @property
     def camera(self):
@@ -488,33 +313,35 @@ class DiskExhibit(DiskModel, Exhibit):
         return (tuple(o + (0.8, -5.0, 2.8)), tuple(o + (0.0, 0.0, 1.4)))
 
     def stage_plot(self):
-        if self.config.mode == "driven":  # L's tip circles the axle: what the bearings turn
+        if self.model.config.mode == "driven":  # L's tip circles the axle: what the bearings turn
             return "L_x [kg m²/s]", (("Lx", geo.MOMENTUM),)
         # in the principal axes' colours: the intermediate one's (green) flips in a tumble
         return "ω₁,₂,₃ [rad/s]", tuple((f"w{k + 1}", geo.AXES_RGB[k]) for k in range(3))
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:
-        if self.config.mode == "driven":
-            meas = self.measured()["bearing_force"]
-            force = against_theory(meas, "N", self.force_amplitude)
-            return [("|F_B|", force), ("t", f"{self.t:.1f} s")]
-        meas = self.measured()
+        m = self.model
+        if m.config.mode == "driven":
+            meas = m.measured()["bearing_force"]
+            force = against_theory(meas, "N", m.force_amplitude)
+            return [("|F_B|", force), ("t", f"{m.t:.1f} s")]
+        meas = m.measured()
         return [
             (
                 "polhode period",
-                against_theory(meas["polhode_period"], "s", self.polhode_period()),
+                against_theory(meas["polhode_period"], "s", m.polhode_period()),
             ),
             *super().key_figures(),
         ]
 
     def readout(self) -> str:
-        p, smp = self.params, self.sample
-        about = "A" if self.config.mode == "driven" else "the centre of mass"
-        lines = [f"**t = {self.t:.2f} s** · {self.config.mode}"]
+        m = self.model
+        p, smp = m.params, m.sample
+        about = "A" if m.config.mode == "driven" else "the centre of mass"
+        lines = [f"**t = {m.t:.2f} s** · {m.config.mode}"]
         lines.append(
-            f"· {self.method_line(self.sim)}"
-            if self.config.mode == "released"
+            f"· {m.method_line(m.sim)}"
+            if m.config.mode == "released"
             else "· exact uniform rotation"
         )
         lines += [
@@ -523,11 +350,11 @@ class DiskExhibit(DiskModel, Exhibit):
             "|---|---|---|",
             f"| principal moments about {about} [MR²] | {self.axes_text} | — |",
         ]
-        if self.config.mode == "driven":
-            meas = self.measured()["bearing_force"]
+        if m.config.mode == "driven":
+            meas = m.measured()["bearing_force"]
             net = float(np.linalg.norm(dk.net_bearing_force(p, smp.t)))
             lines += [
-                f"| bearing force amplitude \\|F_B\\| = m R ω²/2 [N] | {fmt(self.force_amplitude)} "
+                f"| bearing force amplitude \\|F_B\\| = m R ω²/2 [N] | {fmt(m.force_amplitude)} "
                 f"| {fmt(meas)} |",
             ]
             if math.isclose(p.bead_mass, 1.25 * p.disk_mass):  # the seed's bead
@@ -539,34 +366,34 @@ class DiskExhibit(DiskModel, Exhibit):
                 "divided by their known factor sin θ/θ (θ half the turn between the two samples)."
             )
         else:
-            _, L, _ = self.vectors_space()
-            rot, _ = self.pose()
+            _, L, _ = m.vectors_space()
+            rot, _ = m.pose()
             axle = rot @ dk.AXLE
             cos_axle = float(axle @ L / max(np.linalg.norm(L), 1e-300))
-            meas = self.measured()
+            meas = m.measured()
             lines += [
                 f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
                 f"| error vs DOP853 reference | 0 | {error_text(smp)} |",
                 f"| \\|L\\| about CM [kg m²/s] | conserved | {fmt(float(np.linalg.norm(L)), 8)} |",
                 f"| axle · L̂ (tumble: ±1 flips) | — | {cos_axle:+.3f} |",
-                f"| wobble growth rate [1/s] | {fmt(self.growth_rate_theory())} "
+                f"| wobble growth rate [1/s] | {fmt(m.growth_rate_theory())} "
                 f"| {fmt(meas['growth_rate'])} |",
-                f"| polhode period 4K(k)/λ [s] | {fmt(self.polhode_period())} "
+                f"| polhode period 4K(k)/λ [s] | {fmt(m.polhode_period())} "
                 f"| {fmt(meas['polhode_period'])} |",
             ]
             lines.append(
                 "\nSpin about the intermediate principal axis is unstable: "
                 "the small extra spin grows into a tumble."
             )
-        lines.append(self.work_line())
+        lines.append(m.work_line())
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ GUI
     def sync_panel(self, panel) -> None:
-        panel.show("spin", float(self.config.extra_spin[2]))
+        panel.show("spin", float(self.model.config.extra_spin[2]))
 
     def build_panel(self, panel) -> None:
-        gui, c = panel.gui, self.config
+        gui, c = panel.gui, self.model.config
         panel.readout_and_chart(compare=False)
         with gui.add_folder("Motion"):
             mode = panel.put(
@@ -580,7 +407,7 @@ class DiskExhibit(DiskModel, Exhibit):
                 0.01,
                 float(c.extra_spin[2]),
                 lambda v: panel.change(extra_spin=(0.0, 0.0, float(v))),
-                current=lambda: float(self.config.extra_spin[2]),
+                current=lambda: float(self.model.config.extra_spin[2]),
                 hint="Spin about the disk normal added at release: seeds the tumble",
             )
             follow = panel.put(

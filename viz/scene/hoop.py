@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from mechviz.dynamics.results import EXACT_FLOW
 from .. import geometry as geo
 from ..model.hoop import MODES, HoopConfig, HoopModel  # noqa: F401  (re-exported)
 from .atlas_map import MAP_SIZE, add_maps
-from .base import Exhibit, against_theory, error_text, fmt
+from .base import Event, Exhibit, against_theory, error_text, fmt
 
 
 @functools.lru_cache(maxsize=64)
@@ -120,10 +121,16 @@ class ConfigurationSpace:
             self.ghost.draw()
 
 
-class HoopExhibit(HoopModel, Exhibit):
+class HoopExhibit(Exhibit):
     """The hoop drawn: the hoop and its bead, the linear-theory ghost, the comparison run and
     the configuration-space square."""
 
+    model_type = HoopModel
+    listens: ClassVar[dict[Event, str]] = {
+        "started": "_started",
+        "rewound": "_rewound",
+        "jumped": "_jumped",
+    }
     icon = "CIRCLE"
     caption = "(θ1, θ2) left, chaos map above it (click)"
 
@@ -177,7 +184,7 @@ class HoopExhibit(HoopModel, Exhibit):
         if hasattr(self, "trail"):
             self.trail.clear()
             self.cmp_trail.clear()
-        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.config.trail_cap)
+        self.trail = geo.ChunkedTrail(s, f"{r}/trail", geo.BEAD, cap=self.model.config.trail_cap)
         if not hasattr(self, "config_space"):
             self.config_space = ConfigurationSpace(
                 s,
@@ -187,11 +194,11 @@ class HoopExhibit(HoopModel, Exhibit):
                 bounded=self.bounded,
             )
         self.cmp_trail = geo.ChunkedTrail(
-            s, f"{r}/compare_trail", geo.COMPARE, cap=self.config.trail_cap
+            s, f"{r}/compare_trail", geo.COMPARE, cap=self.model.config.trail_cap
         )
 
     def _started(self) -> None:
-        c, p, cmp_ = self.config, self.params, self.compare
+        c, p, cmp_ = self.model.config, self.model.params, self.model.compare
         if self._built_radius != p.radius:
             self._build_body(p)
         self.trail.clear()
@@ -202,7 +209,7 @@ class HoopExhibit(HoopModel, Exhibit):
         self.beads.batched_scales = scales
         if cmp_ is not None:
             self.cmp_label.text = f"{c.compare_method} (blue)"
-        self.config_space.start(self.shapes, self.sim.state0[0, :2], c.ghost)
+        self.config_space.start(self.model.shapes, self.model.sim.state0[0, :2], c.ghost)
 
     def _rewound(self) -> None:
         # gone back in the run: the next points start new pieces (no line back across the
@@ -211,7 +218,9 @@ class HoopExhibit(HoopModel, Exhibit):
             trail.lift()
 
     def _jumped(self) -> None:
-        self.config_space.start(self.shapes, self.sim.state0[0, :2], self.config.ghost)
+        self.config_space.start(
+            self.model.shapes, self.model.sim.state0[0, :2], self.model.config.ghost
+        )
         self.trail.lift()
         self.cmp_trail.lift()
 
@@ -229,7 +238,7 @@ class HoopExhibit(HoopModel, Exhibit):
         """``(hoop wxyz, hoop centre, bead)`` relative to the exhibit origin for one state (4,),
         or for a stack of states (..., 4): shapes (..., 4), (..., 3), (..., 3)."""
         st = np.asarray(state, float)
-        centre, bead = hp.positions(self.params, st)
+        centre, bead = hp.positions(self.model.params, st)
         # an anticlockwise plane rotation (towards +x from straight down) is a turn about world -y
         half = 0.5 * st[..., 0]
         q = np.zeros(st.shape[:-1] + (4,))
@@ -239,9 +248,9 @@ class HoopExhibit(HoopModel, Exhibit):
 
     def refresh_panel(self, panel) -> None:
         chart = panel.w.get("hoop.modes_chart")
-        if chart is None or len(self.motion) < 2:
+        if chart is None or len(self.model.motion) < 2:
             return
-        data = self.modal_history()
+        data = self.model.modal_history()
         # the window the chart selector shows (as far back as the motion's samples reach)
         window = float(getattr(panel.app, "chart_window", 10.0))
         first = int(np.searchsorted(data[0], data[0][-1] - window))
@@ -254,10 +263,10 @@ class HoopExhibit(HoopModel, Exhibit):
     # ------------------------------------------------------------------ drawing
     def draw(self) -> None:
         # instance 0 the run, 1 the linear-theory ghost, 2 the comparison (or the run again)
-        c = self.compare_state
+        c = self.model.compare_state
         states = np.empty((3, 4))
-        states[0] = self.state
-        states[1] = self.ghost_state()
+        states[0] = self.model.state
+        states[1] = self.model.ghost_state()
         states[2] = c if c is not None else states[0]
         q, centre, bead = self.poses(states)  # one vectorised call for the three instances
         if c is not None:
@@ -284,14 +293,14 @@ class HoopExhibit(HoopModel, Exhibit):
 
     @property
     def home_bounds(self):
-        a = self.params.radius  # the hoop, its gallows and a comparison run beside it
-        right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
+        a = self.model.params.radius  # the hoop, its gallows and a comparison run beside it
+        right = COMPARE_OFFSET[0] if self.model.compare is not None else 0.0
         lo, hi = (-1.1 * a, -0.3, 0.0), (1.1 * a + right, 0.3, self.pivot_local[2] + 0.1)
         return self.origin + np.asarray(lo, float), self.origin + np.asarray(hi, float)
 
     def _extent(self):
-        a = self.params.radius
-        right = COMPARE_OFFSET[0] if self.compare is not None else 0.0
+        a = self.model.params.radius
+        right = COMPARE_OFFSET[0] if self.model.compare is not None else 0.0
         left = CONFIG_CENTRE[0] * a - 0.5 * CONFIG_SIZE
         top = self.pivot_local[2] + 0.1
         if hasattr(self, "maps_view"):  # the chaos map stands above the configuration square
@@ -300,8 +309,8 @@ class HoopExhibit(HoopModel, Exhibit):
 
     @property
     def camera(self):
-        o = self.origin + (0.5 * COMPARE_OFFSET if self.compare is not None else 0.0)
-        dist = 6.0 if self.compare is None else 8.0
+        o = self.origin + (0.5 * COMPARE_OFFSET if self.model.compare is not None else 0.0)
+        dist = 6.0 if self.model.compare is None else 8.0
         return (tuple(o + (0.0, -dist, 1.6)), tuple(o + (0.0, 0.0, 1.3)))
 
     def stage_labels(self) -> list:
@@ -310,18 +319,18 @@ class HoopExhibit(HoopModel, Exhibit):
 
     # ------------------------------------------------------------------ readout
     def key_figures(self) -> list[tuple[str, str]]:
-        freqs, meas = self.mode_frequencies, self.measured()["mode_frequencies"]
+        freqs, meas = self.model.mode_frequencies, self.model.measured()["mode_frequencies"]
         return [
             *((f"ω{k + 1}", against_theory(meas[k], "rad/s", freqs[k])) for k in (0, 1)),
             *super().key_figures(),
         ]
 
     def readout(self) -> str:
-        p, smp, c = self.params, self.sample, self.config
-        freqs = self.mode_frequencies
-        meas = self.measured()["mode_frequencies"]
+        p, smp, c = self.model.params, self.model.sample, self.model.config
+        freqs = self.model.mode_frequencies
+        meas = self.model.measured()["mode_frequencies"]
         lines = [
-            f"**t = {self.t:.2f} s** · {self.method_line(self.sim)} · {c.mode}",
+            f"**t = {self.model.t:.2f} s** · {self.model.method_line(self.model.sim)} · {c.mode}",
             "",
             "| normal mode | ω linear theory [rad/s] | ω measured [rad/s] |",
             "|---|---|---|",
@@ -338,7 +347,7 @@ class HoopExhibit(HoopModel, Exhibit):
                 "stable" if lam < 1 + 1e-4 else f"unstable: a departure grows {lam:.3g}x a period"
             )
             lines.append(f"| mode 1's largest Floquet multiplier at this amplitude | {verdict} | |")
-        kind = self.sim.reference_kind or "—"
+        kind = self.model.sim.reference_kind or "—"
         lines += [
             f"| relative energy error | 0 | {float(np.max(np.abs(smp.energy_error))):.2e} |",
             f"| error vs {'exact (mode 1)' if kind == EXACT_FLOW else 'DOP853 reference'} | 0 "
@@ -346,18 +355,19 @@ class HoopExhibit(HoopModel, Exhibit):
             "",
             "Grey ghost: linear theory from the same start." if c.ghost else "",
         ]
-        cs = self.compare_sample
+        cs = self.model.compare_sample
         if cs is not None:
             lines.append(
-                f"\nComparison {self.method_line(self.compare)} (blue, right): relative energy error "
+                f"\nComparison {self.model.method_line(self.model.compare)} (blue, right): "
+                "relative energy error "
                 f"{float(np.max(np.abs(cs.energy_error))):.2e}"
             )
-        lines.append(self.work_line())
+        lines.append(self.model.work_line())
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ GUI
     def build_panel(self, panel) -> None:
-        gui, c = panel.gui, self.config
+        gui, c = panel.gui, self.model.config
         # at the top of the tab: the way to the chaos map (its pictures are further down)
         look = gui.add_button("Look at the map", icon=panel.viser.Icon.MAP)
         look.on_click(lambda event: self.maps_view.look_clicked(event))
@@ -376,7 +386,7 @@ class HoopExhibit(HoopModel, Exhibit):
 
             def angle(k):
                 def apply(x):
-                    angles = list(self.config.angles)  # read in the loop thread when applied
+                    angles = list(self.model.config.angles)  # read in the loop thread when applied
                     angles[k] = x
                     panel.change(mode="custom", angles=tuple(angles))
 
@@ -388,7 +398,7 @@ class HoopExhibit(HoopModel, Exhibit):
                     f"θ{k + 1} (custom) [rad]",
                     c.angles[k],
                     angle(k),
-                    current=lambda k=k: self.config.angles[k],
+                    current=lambda k=k: self.model.config.angles[k],
                     lo=-3.14,
                     hi=3.14,
                 )
@@ -427,5 +437,5 @@ class HoopExhibit(HoopModel, Exhibit):
         self.maps_view = add_maps(panel, self)  # the chaos and stability maps
 
     def sync_panel(self, panel) -> None:
-        for k, x in enumerate(self.config.angles):  # never into a box the person is typing in
+        for k, x in enumerate(self.model.config.angles):  # never into a box the person is typing in
             panel.show(f"th{k + 1}", x)

@@ -91,7 +91,9 @@ class Panel:
         self.labels: dict[str, str] = {}  # setting name (as in messages) -> the field's label
         self.fields: dict[str, NumberField] = {}  # the number fields, by their name in ``w``
         self._time_axes: dict[str, tuple[float, float, float]] = {}  # chart -> (t0, t1, window)
-        self.plot_choice = exhibit.default_plot(exhibit.config)  # (x, y) of the panel's plot
+        self.plot_choice = exhibit.model.default_plot(
+            exhibit.model.config
+        )  # (x, y) of the panel's plot
         self._plot_image: PlotImage | None = None
         self._plot_names: tuple[str, ...] | None = None  # the quantities of the motion shown
         self._plot_drawn: tuple | None = (
@@ -116,7 +118,7 @@ class Panel:
 
     def refuse(self, message: str) -> None:
         """Tell the user why a value was not taken, and put the widgets back to what is in force."""
-        self.app.notify(f"Invalid value ({self.exhibit.title})", message)
+        self.app.notify(f"Invalid value ({self.exhibit.model.title})", message)
         self.app.enqueue("call", lambda app: app._sync_widgets(self.key))
 
     def number(
@@ -150,7 +152,7 @@ class Panel:
                 return
             apply(x)
             if warning:
-                self.app.notify(f"Warning ({self.exhibit.title})", warning, color="orange")
+                self.app.notify(f"Warning ({self.exhibit.model.title})", warning, color="orange")
 
         field = NumberField(
             self.gui,
@@ -177,7 +179,7 @@ class Panel:
     def slider(self, name: str, label: str, lo: float, hi: float, step: float, value, apply, **kw):
         """A number field over a slider track; typed values obey the same range as the track.
         The value in force is ``current()``, by default the exhibit's config field ``name``."""
-        current = kw.pop("current", lambda: getattr(self.exhibit.config, name))
+        current = kw.pop("current", lambda: getattr(self.exhibit.model.config, name))
         return self.number(
             name,
             label,
@@ -271,9 +273,9 @@ class Panel:
         stability limit (the run will blow up: worth showing, not worth hiding)."""
         from mechviz.dynamics import stability
 
-        sim = self.exhibit.sim
+        sim = self.exhibit.model.sim
         label = self.labels.get("dt", "dt")
-        omega = stability.fastest_frequency(sim.system, self.exhibit.state)
+        omega = stability.fastest_frequency(sim.system, self.exhibit.model.state)
         if omega > 0 and dt > 2 * math.pi / omega:
             raise dynamics.SettingError(
                 "dt",
@@ -283,7 +285,7 @@ class Panel:
         m = sim.method
         if m.adaptive or m.closed_form:
             return None
-        limit = stability.stability_limit(m.name, sim.system, self.exhibit.state)
+        limit = stability.stability_limit(m.name, sim.system, self.exhibit.model.state)
         if limit is not None and dt > limit:
             where = "at every step size" if limit == 0.0 else f"above dt = {limit:.3g} s"
             return f"{label} = {dt:g} s: {m.name} is unstable {where}; expect the run to blow up"
@@ -293,16 +295,16 @@ class Panel:
         """A number field for each physical parameter of the exhibit's system, labelled as its
         description says (:attr:`mechviz.dynamics.spec.SystemSpec.params`)."""
         with self.gui.add_folder("Physical parameters"):
-            for setting in self.exhibit.Config.spec.params:
+            for setting in self.exhibit.model.Config.spec.params:
                 name, label = setting.name, setting.panel_label
-                value = self.exhibit.config.params[name]
+                value = self.exhibit.model.config.params[name]
                 lo, hi = setting.span or (None, None)
                 self.number(
                     f"params.{name}",
                     label,
                     value,
                     lambda x, n=name: self.send(Set(params={n: x})),
-                    current=lambda n=name: self.exhibit.config.params[n],
+                    current=lambda n=name: self.exhibit.model.config.params[n],
                     lo=lo,
                     hi=hi,
                     hint=setting.help or None,
@@ -311,29 +313,30 @@ class Panel:
 
     def integrator_inputs(self, *, compare: bool) -> None:
         gui, ex = self.gui, self.exhibit
-        system_name = ex.Config.system_name
+        system_name = ex.model.Config.system_name
         names = [m.name for m in dynamics.methods_for(dynamics.SYSTEMS[system_name])]
         with gui.add_folder("Integrator"):
             method = self.put(
-                "method", gui.add_dropdown("Method", options=names, initial_value=ex.config.method)
+                "method",
+                gui.add_dropdown("Method", options=names, initial_value=ex.model.config.method),
             )
-            self.put("about", gui.add_markdown(method_text(ex.config.method)))
+            self.put("about", gui.add_markdown(method_text(ex.model.config.method)))
             self.number(
                 "dt",
                 "Step dt [s]",
-                ex.config.dt,
+                ex.model.config.dt,
                 lambda x: self.change(dt=x),
-                current=lambda: self.exhibit.config.dt,
+                current=lambda: self.exhibit.model.config.dt,
                 check=self.check_step,
             )
-            self.put("limit", gui.add_markdown(ex.stability_text()))
+            self.put("limit", gui.add_markdown(ex.model.stability_text()))
             # a dropdown of decades: a number input shows 1e-9 as 0.0000000
             rtol = self.put(
                 "rtol",
                 gui.add_dropdown(
                     "Tolerance rtol",
-                    options=rtol_options(ex.config.rtol),
-                    initial_value=rtol_label(ex.config.rtol),
+                    options=rtol_options(ex.model.config.rtol),
+                    initial_value=rtol_label(ex.model.config.rtol),
                     hint="Tolerance of the adaptive methods, relative and absolute alike (atol = "
                     "rtol): a swing of A rad is held to rtol/A of itself, so errors relative to a "
                     "small motion are larger than rtol",
@@ -354,7 +357,7 @@ class Panel:
                     gui.add_dropdown(
                         "Compare with",
                         options=["none", *names],
-                        initial_value=ex.config.compare_method or "none",
+                        initial_value=ex.model.config.compare_method or "none",
                     ),
                 )
 
@@ -364,7 +367,7 @@ class Panel:
                     self.change(compare_method=None if v == "none" else v)
 
                 self.on(cmp_, choose_cmp)
-            reset = gui.add_button(f"Reset {ex.title.lower()}", icon=self.viser.Icon.REFRESH)
+            reset = gui.add_button(f"Reset {ex.model.title.lower()}", icon=self.viser.Icon.REFRESH)
             reset.on_click(lambda _: self.send(Reset()))
         self.show_step_controls()
 
@@ -375,7 +378,7 @@ class Panel:
         their axes do, and the image (:mod:`mechviz.viz.model.plot`), over the chart window; ``note``
         says what the exhibit's first pair shows."""
         ex = self.exhibit
-        variables = ex.plot_variables(ex.config)
+        variables = ex.model.plot_variables(ex.model.config)
         labels = tuple(v.label for v in variables.values())
         x, y = self.plot_choice
         with self.gui.add_folder("Plot any two variables"):
@@ -399,7 +402,7 @@ class Panel:
             )
 
         def choose(axis: int, label: str) -> None:
-            variables = ex.plot_variables(ex.config)
+            variables = ex.model.plot_variables(ex.model.config)
             name = next((n for n, v in variables.items() if v.label == label), None)
             if name is None:
                 self.refuse(f"{'xy'[axis]}: {label!r} is not a quantity of this exhibit")
@@ -422,28 +425,28 @@ class Panel:
         if not force and now - self._plot_time < self.PLOT_INTERVAL:
             return
         ex = self.exhibit
-        variables = ex.plot_variables(ex.config)
+        variables = ex.model.plot_variables(ex.model.config)
         if tuple(variables) != self._plot_names:  # another motion, other quantities: its own first
             if self._plot_names is not None or not set(self.plot_choice) <= set(variables):
-                self.plot_choice = ex.default_plot(ex.config)
+                self.plot_choice = ex.model.default_plot(ex.model.config)
             self._plot_names = tuple(variables)
         dark = getattr(self.app, "theme", "light") == "dark"
-        drawn = (self.plot_choice, ex.trace.version, ex.config, dark)
+        drawn = (self.plot_choice, ex.model.trace.version, ex.model.config, dark)
         if drawn == self._plot_drawn:
             return
         self.sync_plot(variables)
         if self._plot_image is None:
             self._plot_image = PlotImage()
         x, y = self.plot_choice
-        samples = ex.plot_samples()
+        samples = ex.model.plot_samples()
         image.image = self._plot_image.render(
             dark,
             variables=variables,
             x=x,
             y=y,
             samples=samples,
-            curves=ex.plot_curves(ex.config, x, y, samples),
-            path_label=ex.sim.method.name,
+            curves=ex.model.plot_curves(ex.model.config, x, y, samples),
+            path_label=ex.model.sim.method.name,
         )
         self._plot_drawn, self._plot_time = drawn, now
 
@@ -464,7 +467,7 @@ class Panel:
     # ------------------------------------------------------------------ keeping widgets true
     def sync(self) -> None:
         """Make the widgets show the exhibit's actual config (after a change or a refusal)."""
-        c = self.exhibit.config
+        c = self.exhibit.model.config
         w, key = self.w, self.key
         for name, value in c.params.items():
             if f"params.{name}" in self.fields and value is not None:
@@ -485,12 +488,12 @@ class Panel:
         if h is not None:
             h.value = c.compare_method or "none"
         w[f"{key}.about"].content = method_text(c.method)
-        w[f"{key}.limit"].content = self.exhibit.stability_text()
+        w[f"{key}.limit"].content = self.exhibit.model.stability_text()
         self.exhibit.sync_panel(self)
 
     def show_step_controls(self) -> None:
         """Show the step box for fixed-step methods and the tolerance for adaptive ones only."""
-        m = self.exhibit.sim.method
+        m = self.exhibit.model.sim.method
         dt, rtol = self.fields.get("dt"), self.w.get(f"{self.key}.rtol")
         if dt is not None:
             dt.visible = not m.adaptive and not m.closed_form

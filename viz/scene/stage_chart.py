@@ -203,10 +203,10 @@ class StageChart:
         """``(label, names, colours)`` of the exhibit's stage plot and its variables, kept
         while the config is the same object (a new setting is a new config)."""
         ex = self.exhibit
-        if self._series is None or self._series[0] is not ex.config:
+        if self._series is None or self._series[0] is not ex.model.config:
             label, series = ex.stage_plot()
-            variables = ex.plot_variables(ex.config)
-            self._series = (ex.config, variables, label, tuple(n for n, _ in series),
+            variables = ex.model.plot_variables(ex.model.config)
+            self._series = (ex.model.config, variables, label, tuple(n for n, _ in series),
                             tuple(c for _, c in series))  # fmt: skip
         _, variables, label, names, colours = self._series
         return label, names, colours
@@ -216,25 +216,29 @@ class StageChart:
         moment shown); nothing is sent when nothing new is to be shown."""
         ex = self.exhibit
         scrubbed = getattr(ex, "scrubbed", None)
-        key = (ex.trace.version, scrubbed, None if playing and scrubbed is None else ex.t,
-               window, ex.config)  # fmt: skip
+        key = (ex.model.trace.version, scrubbed, None if playing and scrubbed is None else ex.model.t,
+               window, ex.model.config)  # fmt: skip
         if key == self.drawn:
             return
         self.drawn = key
         _, names, colours = self.series()
         variables = self._series[1]
-        d = ex.sim.state.shape[1]
-        rows = ex.trace.array()
+        d = ex.model.sim.state.shape[1]
+        rows = ex.model.trace.array()
         smp = Samples.from_rows(rows, d)
-        keep = smp.t < ex.t - 1e-9  # scrubbed back: what came after the moment shown is not shown
+        keep = (
+            smp.t < ex.model.t - 1e-9
+        )  # scrubbed back: what came after the moment shown is not shown
         nan = np.array([math.nan])
-        now = Samples(np.array([ex.t]), np.asarray(ex.state, float)[None, :d], nan, nan, nan)
-        t = np.append(smp.t[keep], ex.t)
+        now = Samples(
+            np.array([ex.model.t]), np.asarray(ex.model.state, float)[None, :d], nan, nan, nan
+        )
+        t = np.append(smp.t[keep], ex.model.t)
         with np.errstate(all="ignore"):
             ys = [
                 np.append(variables[n].values(smp)[keep], variables[n].values(now)) for n in names
             ]
-        t1 = max(ex.t, window)
+        t1 = max(ex.model.t, window)
         t0 = t1 - window
         inside = t >= t0 - 1e-9
         t, ys = t[inside], [y[inside] for y in ys]
@@ -243,7 +247,7 @@ class StageChart:
         ax0, ay0, ax1, ay1 = self.area
         lo, hi, _ = self.y_range
         x = ax0 + (t - t0) / (t1 - t0) * (ax1 - ax0)
-        n = max(ex.trace.maxlen + 1, len(t))
+        n = max(ex.model.trace.maxlen + 1, len(t))
         if self.data is None or self._capacity != n or self._colours != colours:
             self._make_data(n, colours)
         pts = np.empty((len(names), n - 1, 2, 3), np.float32)
