@@ -88,9 +88,11 @@ def _choose(app, key: str, x: str, y: str) -> None:
 
 #: Hides (``true``) or shows the panel around the Leave button (a still of the scene alone).
 PANEL_HIDDEN = """hidden => {
-    const leave = [...document.querySelectorAll('button')].find(b => b.textContent.includes('Leave'));
-    const panel = leave && leave.closest('.mantine-Paper-root');
-    if (panel) panel.style.visibility = hidden ? 'hidden' : '';
+    // the floating panel: the first ancestor of the Leave button placed on its own
+    let e = [...document.querySelectorAll('button')].find(b => b.textContent.includes('Leave'));
+    while (e && getComputedStyle(e).position !== 'absolute') e = e.parentElement;
+    if (e) e.style.visibility = hidden ? 'hidden' : '';
+    return Boolean(e);
 }"""
 
 KICK = Kick(dv=0.4)
@@ -143,9 +145,9 @@ def test_poinsot_s_construction_presented_alone(viewer, tmp_path):
             a.charts["disk"].visible = False
 
         app.enqueue("call", construction_only)
-        # nor the page's panel (its Leave button) over the still's corner
-        page.evaluate(PANEL_HIDDEN, True)
         frames_later(app, 60)  # the camera's move to the disk is a second of frames
+        # nor the page's panel (its Leave button, once the page has it) over the still's corner
+        wait_until(lambda: page.evaluate(PANEL_HIDDEN, True), 30, "the panel's Leave button")
         img = browser.wait_for_pixels(page, lambda im: _drawn(im).mean() > 0.02, 60)
         # the README's still: the disk's box as the browser's camera sees it (the body, its
         # construction and the construction's names under it), not the floor
