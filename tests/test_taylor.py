@@ -115,12 +115,12 @@ def test_order_and_step_minimise_the_modelled_work():
     saved = taylor.STEP_COST[HOOP]
     try:
         taylor.STEP_COST[HOOP] = (0.0, 0.0, 1.0)
-        taylor.order_for.cache_clear()
+        taylor.forget()
         p, a = taylor.order_for(1e-12, 1e-12, HOOP)
         assert abs(p - (math.log(1e12) / 2 + 1)) <= 1.5 and abs(a - 2.0) < 0.25
     finally:
         taylor.STEP_COST[HOOP] = saved
-        taylor.order_for.cache_clear()
+        taylor.forget()
     for sys_id in SYSTEMS:
         for tol in (1e-3, 1e-9, 1e-14):
             p, a = taylor.order_for(tol, tol, sys_id)

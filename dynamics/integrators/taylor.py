@@ -16,7 +16,9 @@ Step size as Jorba and Zou's (and heyoka's): ``h = rho e^-a exp(-0.7 / (p - 1))`
 the smaller of ``(s / |y^[k]|_inf)^(1/k)`` for ``k = p - 1, p`` and
 ``s = max(atol, rtol |y^[0]|_inf) / tol``, ``tol = min(rtol, atol)``. They take ``a = 2`` and
 ``p = ln(1/tol)/2 + 1``, the best choice when a step costs ``p^2``; here the order and ``a`` minimise
-the work with each system's measured cost per step (:func:`order_for`).
+the work with each system's measured cost per step, and the tolerance is rounded down to a level
+(every tolerance of a level takes the same steps; a tighter level never a worse step rule:
+:func:`order_for`).
 There is no rejected step. The series is its own dense output: a state inside a step is the
 polynomial evaluated there. The last step before ``t1`` is kept (base time, length and
 coefficients), so a run sampled at many times takes the steps an unsampled run takes, and a
@@ -45,6 +47,7 @@ from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     STEP_COST,
     TIGHT_A_MIN,
     TIGHT_TOL,
+    forget,
     order_for,
 )
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, RHS, report
