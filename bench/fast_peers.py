@@ -1,10 +1,12 @@
 """The peers in their fastest documented form, each a solver reused across problems.
 
-- **heyoka.py**: ``taylor_adaptive`` with the parameters as runtime parameters (``hy.par``), so
-  that one compiled integrator serves every case of a system and tolerance, as heyoka's
-  documentation advises for problems solved many times; built with and without
-  ``fast_math=True`` (its documented option for speed). A solve sets time, state and
-  parameters and calls ``propagate_until``.
+- **heyoka.py**: ``taylor_adaptive`` in two forms, each built with and without
+  ``fast_math=True`` (its documented option for speed): the parameters as runtime parameters
+  (``hy.par``), so that one compiled integrator serves every case of a system and tolerance, as
+  heyoka's documentation advises for problems solved many times (:class:`HeyokaSolver`); and one
+  parameter set's constants built into the expressions, an integrator compiled per case
+  (:class:`HeyokaBuiltinSolver`, whose construction is timed). A solve sets time, state (and
+  parameters) and calls ``propagate_until``.
 - **CyRK**: ``nbsolve2_ivp`` called inside a numba ``njit`` function (the form CyRK's
   documentation shows for speed: no Python between the caller and the C++ solver), with a
   numba ``cfunc`` right-hand side that reads the parameters from its ``args`` pointer;
@@ -20,6 +22,7 @@ the same references as ours (:mod:`mechviz.bench.fastest`).
 
 from __future__ import annotations
 
+import time
 from functools import cache
 
 import numpy as np
@@ -60,6 +63,42 @@ class HeyokaSolver:
 @cache
 def heyoka_solver(sys_id: int, dim: int, n_pars: int, tol: float, fast_math: bool):
     return HeyokaSolver(sys_id, dim, n_pars, tol, fast_math)
+
+
+def _empty_heyoka_cache(hy) -> None:
+    """Empty heyoka's in-memory cache of compiled code, so that building an integrator again
+    compiles it again, as a new parameter set would (a rebuild of the same one is a cache hit)."""
+    clear = getattr(getattr(hy, "llvm_state", None), "clear_memcache", None)
+    if clear is not None:
+        clear()
+
+
+class HeyokaBuiltinSolver:
+    """One compiled ``taylor_adaptive`` per parameter set, tolerance and ``fast_math``, the
+    constants of :func:`~.peer_equations.heyoka_pars` built into its expressions; reset per
+    solve. ``construction_s``: the wall seconds ``taylor_adaptive`` took to build it (Taylor
+    decomposition and LLVM compilation, heyoka's cache of compiled code emptied first); the
+    expressions are made before the clock starts (a user writes them once, as a function of the
+    constants)."""
+
+    def __init__(self, sys_id: int, constants: np.ndarray, dim: int, tol: float, fast_math: bool):
+        import heyoka as hy
+
+        self.sys_id = sys_id
+        eqs = heyoka_equations(sys_id, constants)
+        _empty_heyoka_cache(hy)
+        t0 = time.perf_counter()
+        self.ta = hy.taylor_adaptive(eqs, np.zeros(dim), tol=tol, fast_math=fast_math)
+        self.construction_s = time.perf_counter() - t0
+
+    def solve(self, y0: np.ndarray, t_end: float) -> tuple[np.ndarray, int]:
+        ta = self.ta
+        ta.time = 0.0
+        ta.state[:] = y0
+        out = ta.propagate_until(t_end)
+        if int(out[0].value) != 0 and str(out[0]) != "taylor_outcome.time_limit":
+            raise RuntimeError(f"heyoka: {out[0]}")
+        return ta.state.copy(), int(out[3])
 
 
 # --------------------------------------------------------------------------- CyRK
