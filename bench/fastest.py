@@ -21,8 +21,9 @@ Contenders, by family (a family's time is its fastest member's):
   integrator per system and tolerance, its construction not timed) and with the case's
   constants built in (one per case and tolerance: against ours kept its solve is timed,
   against ours fresh its construction is added, as ours fresh pays its own); CyRK:
-  ``nbsolve2_ivp`` from an ``njit`` caller, DOP853, Vern8 and Vern7; scipy: ``odeint`` with a
-  compiled right-hand side (:mod:`.fast_peers`).
+  ``nbsolve2_ivp`` from an ``njit`` caller, DOP853, Vern8 and Vern7; scipy: ``odeint`` calling
+  the compiled right-hand side through an ``njit`` function and through a Python one
+  (:mod:`.fast_peers`).
 
 The built-in-constants form solves the same equations as its runtime-parameter twin with the
 same steps, to round-off, and each of its builds costs a compilation, so it is not swept: it is
@@ -189,11 +190,12 @@ def _cyrk(pb: Problem, method: str):
     return make
 
 
-def _odeint(pb: Problem):
-    p = pb.system.kernel_params()
+def _odeint(pb: Problem, closure: bool):
+    sid, p = pb.system.sys_id, pb.system.kernel_params()
+    fun = fp.odeint_closure(sid, p) if closure else None
 
     def make(tol: float):
-        return lambda: fp.odeint_solve(pb.system.sys_id, pb.y0, p, pb.t_end, tol)[0]
+        return lambda: fp.odeint_solve(sid, pb.y0, p, pb.t_end, tol, fun)[0]
 
     return make
 
@@ -214,7 +216,8 @@ def contenders(pb: Problem, peers: dict[str, str | None]) -> list[Contender]:
             out.append(built)
     if peers.get("CyRK") is None:
         out += [Contender(f"cyrk {m}", "cyrk", _cyrk(pb, m)) for m in fp.CYRK_METHODS]
-    out.append(Contender("odeint", "odeint", _odeint(pb)))
+    out.append(Contender("odeint", "odeint", _odeint(pb, False)))
+    out.append(Contender("odeint closure", "odeint", _odeint(pb, True)))
     return out
 
 
@@ -238,7 +241,9 @@ def _point(c: Contender, pb: Problem, ref: Reference, tol: float, first: bool) -
     y, secs = _once(solve)
     if y is not None and (first or secs < CAP_S):
         y, secs = _once(solve)
-    err = math.inf if y is None or not np.all(np.isfinite(y)) else pb.error(y, ref.state)
+    if y is None:  # no answer (the solver refused the tolerance or failed): no error to judge
+        return {"tol": tol, "error": math.inf, "seconds": secs, "failed": True}
+    err = math.inf if not np.all(np.isfinite(y)) else pb.error(y, ref.state)
     return {"tol": tol, "error": err, "seconds": secs}
 
 

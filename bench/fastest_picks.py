@@ -16,7 +16,10 @@ The rules, over a contender's swept points (``{"tol", "error", "seconds"}``):
   tolerance at or below it gets the accuracy, where the loosest rule may have found a lucky
   point above tolerances that miss.
 
-A failed solve (no answer, or a non-finite one) has an infinite error: it meets no target.
+A solve that gives no answer (the solver refuses the tolerance, as ``odeint`` does below about
+1e-13, or fails: ``"failed"`` in its point) or a non-finite one has an infinite error: it meets
+no target. The every-tighter rule leaves out the tolerances without an answer (it judges the
+answers a user gets, and a refusal is not a wrong answer); a non-finite answer counts as a miss.
 """
 
 from __future__ import annotations
@@ -51,10 +54,12 @@ def loosest(points: list[dict], target: float) -> dict | None:
 
 
 def every_tighter(points: list[dict], target: float) -> dict | None:
-    """The loosest point whose error and every tighter point's meet ``target`` (``None``: the
-    tightest swept point misses it)."""
+    """The loosest point whose error and every tighter answered point's meet ``target``
+    (``None``: the tightest answered point misses it)."""
     best = None
     for p in reversed(ordered(points)):
+        if p.get("failed"):
+            continue
         if not p["error"] <= target:
             break
         best = p

@@ -36,7 +36,7 @@ def _dop853_reference(pb: Problem) -> np.ndarray:
     return sim.state[0].copy()
 
 
-SOLVERS = ["odeint"]
+SOLVERS = ["odeint", "odeint closure"]
 if HAVE["heyoka"] is None:
     SOLVERS += ["heyoka", "heyoka fast_math", "heyoka builtin", "heyoka builtin fast_math"]
 if HAVE["CyRK"] is None:
@@ -55,7 +55,8 @@ def _solve(name: str, pb: Problem, tol: float) -> np.ndarray:
         return s.solve(pb.y0, pars, pb.t_end)[0]
     if name.startswith("cyrk"):
         return fp.CyrkSolver(sid, name.split()[1]).solve(pb.y0, p, pb.t_end, tol)[0]
-    return fp.odeint_solve(sid, pb.y0, p, pb.t_end, tol)[0]
+    fun = fp.odeint_closure(sid, p) if name == "odeint closure" else None
+    return fp.odeint_solve(sid, pb.y0, p, pb.t_end, tol, fun)[0]
 
 
 @pytest.mark.parametrize("name", SOLVERS)
@@ -144,7 +145,8 @@ def test_every_pick_meets_its_target_and_the_ratios_are_peer_over_ours():
                 y = cs[e["who"]].make(e["tol"])()
                 assert pb.error(np.asarray(y), ref.state) <= float(target)
                 if rule == "every-tighter" and not e["who"].startswith("heyoka builtin"):
-                    tighter = [q for q in out["sweeps"][e["who"]] if q["tol"] <= e["tol"]]
+                    sweep = out["sweeps"][e["who"]]
+                    tighter = [q for q in sweep if q["tol"] <= e["tol"] and not q.get("failed")]
                     assert all(q["error"] <= float(target) for q in tighter)
             f = row["fastest"]
             for name, r in row["ratios"].items():
@@ -254,10 +256,14 @@ def test_the_two_rules_pick_differently_on_a_constructed_sweep():
     assert fastest_picks.loosest(pts, 1e-5)["tol"] == fastest_picks.every_tighter(pts, 1e-5)["tol"]
     # the order the points were swept in does not matter
     assert fastest_picks.every_tighter(pts[::-1], 1e-4)["tol"] == 1e-5
-    # a failed solve at the sweep's end (infinite error) leaves the every-tighter rule no pick
-    failed = [*pts, {"tol": 1e-8, "error": math.inf, "seconds": 1e-3}]
-    assert fastest_picks.every_tighter(failed, 1e-4) is None
-    assert fastest_picks.loosest(failed, 1e-4)["tol"] == 1e-3
+    # a non-finite answer at the sweep's end (infinite error) leaves the every-tighter rule no
+    # pick; a tolerance the solver refused (no answer) is left out of it
+    blown = [*pts, {"tol": 1e-8, "error": math.inf, "seconds": 1e-3}]
+    assert fastest_picks.every_tighter(blown, 1e-4) is None
+    assert fastest_picks.loosest(blown, 1e-4)["tol"] == 1e-3
+    refused = [*pts, {"tol": 1e-8, "error": math.inf, "seconds": 1e-3, "failed": True}]
+    assert fastest_picks.every_tighter(refused, 1e-4)["tol"] == 1e-5
+    assert fastest_picks.loosest(refused, 1e-4)["tol"] == 1e-3
     assert (
         fastest_picks.loosest(pts, 1e-9) is None and fastest_picks.every_tighter(pts, 1e-9) is None
     )

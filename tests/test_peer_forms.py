@@ -2,7 +2,7 @@
 
 Each peer's right-hand side (heyoka's expressions, with runtime parameters or with one
 parameter set's constants built in, CyRK's C callback, odeint's callback, the compiled
-function scipy's solvers call, the C steps) is generated from
+functions scipy's solvers call, the C steps) is generated from
 :data:`mechviz.dynamics.codegen.equations.EQUATIONS`; here each one, on random states and
 parameters of every system, agrees with the product's generated right-hand side
 (:data:`mechviz.dynamics.integrators.kernels.RHS`) to round-off. A peer writing a different
@@ -23,7 +23,7 @@ from mechviz.bench import c_form, experiments, fast_peers, peer_equations, peers
 from mechviz.dynamics.codegen.equations import EQUATIONS
 from mechviz.dynamics.ids import CYCLOTRON, FREE_BODY, HOOP
 from mechviz.dynamics.integrators.kernels import RHS, RK4
-from mechviz.dynamics.integrators.scipy_ivp import compiled_fun
+from mechviz.dynamics.integrators.scipy_ivp import _make_fun
 
 SYSTEMS = [CYCLOTRON, HOOP, FREE_BODY]
 ROUND_OFF = 1e-13  # relative to the rates' size; a wrong equation is off by O(1)
@@ -58,16 +58,15 @@ def test_odeint_callback_is_our_right_hand_side(sys_id):
 
 
 @pytest.mark.parametrize("sys_id", SYSTEMS)
-def test_scipy_solvers_call_our_right_hand_side_compiled(sys_id):
-    """The function every scipy method the bench times calls (``solve_ivp``'s methods and
-    ``odeint``, through ``Simulation``): an ``njit`` function, ``fun(t, y, p)``, giving ours."""
+def test_scipy_solvers_call_our_compiled_right_hand_side(sys_id):
+    """The functions scipy's methods call: the one every method the bench sweeps calls through
+    ``Simulation`` (``solve_ivp``'s methods and ``odeint``) and odeint's other form in the
+    fastest-form comparison each call the compiled right-hand side and give ours."""
     d = EQUATIONS[sys_id]().dim
     for y, p in _cases(sys_id):
-        f = compiled_fun(sys_id, p, d)
-        assert hasattr(f, "py_func")  # compiled, not a Python function
-        got = f(0.0, y, p)
-        assert got.shape == y.shape
-        assert _close(got, _ours(sys_id, y, p))
+        want = _ours(sys_id, y, p)
+        assert _close(_make_fun(sys_id, p, d)(0.0, y), want)
+        assert _close(fast_peers.odeint_closure(sys_id, p)(y, 0.0), want)
 
 
 @pytest.mark.parametrize("sys_id", SYSTEMS)

@@ -2,45 +2,29 @@
 
 Each call integrates every ensemble member from ``t0`` to ``t1`` with ``solve_ivp`` (RK45,
 DOP853, Radau, LSODA) or ``odeint``. The right-hand side handed to scipy is our compiled one, so
-the comparison measures the solvers, not two implementations of the physics; it is called
-through a compiled wrapper (:func:`compiled_fun`), so that no Python runs between scipy and the
-right-hand side.
+the comparison measures the solvers, not two implementations of the physics.
 """
 
 from __future__ import annotations
 
-from functools import cache
-
 import numpy as np
 
-from .._jit import njit
 from ..forms import SystemForms
 from .kernels import rhs_of
 
 
-@cache
-def _wrapper(rhs):
-    """``fun(t, y, p) -> y'`` compiled around the compiled right-hand side ``rhs(y, p, out)``
-    (one per right-hand side and process; not cached on disk, a closure)."""
+def _make_fun(sys_id: int | SystemForms, p: np.ndarray, d: int):
+    rhs = rhs_of(sys_id)
+    rhs(np.zeros(d), p, np.empty(d))  # compile (or load) before scipy's first call
 
-    # rhs is a free variable, typed once at compilation: a wrapper taking rhs as an argument
-    # would make numba type it on every call, several times the right-hand side's own cost.
-    @njit
-    def fun(t, y, p):
-        out = np.empty_like(y)
-        rhs(y, p, out)
+    def fun(t, y):
+        # Call the compiled right-hand side's dispatcher directly: a jitted wrapper that takes
+        # rhs as an argument makes numba type it on every call, several times the cost of the
+        # right-hand side itself, which the benchmark would then charge to scipy.
+        out = np.empty(d)
+        rhs(np.ascontiguousarray(y, dtype=np.float64), p, out)
         return out
 
-    return fun
-
-
-def compiled_fun(sys_id: int | SystemForms, p: np.ndarray, d: int):
-    """The right-hand side as scipy calls it, ``fun(t, y, p) -> y'`` (``p``, the kernel
-    parameters, passed through scipy's ``args``; ``tfirst`` for odeint), compiled for a state of
-    ``d`` components before scipy's first call. Against a Python function calling the compiled
-    right-hand side, one call costs about 0.3 us less, measured on the hoop (PLACEHOLDER)."""
-    fun = _wrapper(rhs_of(sys_id))
-    fun(0.0, np.zeros(d), p)  # compile (for these argument types) before scipy's first call
     return fun
 
 
@@ -60,8 +44,7 @@ def advance_scipy(
     from scipy.integrate import odeint, solve_ivp
 
     n, d = Y.shape
-    p = np.ascontiguousarray(p, dtype=np.float64)
-    fun = compiled_fun(sys_id, p, d)
+    fun = _make_fun(sys_id, p, d)
     nfev = steps = 0
     for i in range(n):
         if name == "odeint":
@@ -69,7 +52,6 @@ def advance_scipy(
                 fun,
                 Y[i],
                 [t0, t1],
-                args=(p,),
                 rtol=rtol,
                 atol=atol,
                 tfirst=True,
@@ -87,7 +69,6 @@ def advance_scipy(
                 (t0, t1),
                 Y[i],
                 method=name,
-                args=(p,),
                 rtol=rtol,
                 atol=atol,
                 t_eval=None,
