@@ -252,6 +252,44 @@ def step_table(result: dict) -> str:
     return _table([*header, "C, earlier run"], rows)
 
 
+def _goal(r: float, goal: float = 1.05) -> str:
+    text = _near(r, goal, 3)
+    return f"**{text}**" if r > goal else text
+
+
+def form_cost_table(result: dict) -> str:
+    """Per step, each form generated from the equations against the hand-written one it
+    replaced (:mod:`.generated_cost`), and the generic Runge-Kutta runner given DOP853's tableau
+    against DOP853's own loop (:mod:`.tableau_cost`): CPU time of the thread, paired rounds."""
+    rows = []
+    for name, r in (result.get("generated_cost") or {}).items():
+        for form, f in r.items():
+            if isinstance(f, dict):
+                rows.append(
+                    [
+                        name,
+                        f"generated {form}",
+                        f"{f['ns_per_step_generated']:.1f}",
+                        f"{f['ns_per_step_hand']:.1f}",
+                        _goal(f["ratio"]),
+                        f"{f['max_state_difference']:.1e}",
+                    ]
+                )
+    for name, r in (result.get("tableau_cost") or {}).items():
+        rows.append(
+            [
+                name,
+                "generic runner, DOP853's tableau",
+                f"{r['ns_per_step_generic']:.1f}",
+                f"{r['ns_per_step_before']:.1f}",
+                _goal(r["ratio"]),
+                f"{r['max_state_difference']:.1e}",
+            ]
+        )
+    header = ["problem", "form", "ns/step", "hand-written ns/step", "ratio", "state difference"]
+    return _table(header, rows)
+
+
 def exhibit_table(result: dict) -> str:
     rows = []
     for name, ex in result["exhibits"].items():
@@ -415,6 +453,16 @@ def markdown(result: dict) -> str:
     ]
     if result.get("per_step"):
         parts += ["## Cost of one compiled step", step_table(result)]
+    if result.get("generated_cost") or result.get("tableau_cost"):
+        parts += [
+            "## Generated and generic code against the hand-written code, per step",
+            "Each form generated from the equations (the right-hand side inside DOP853, RK4's "
+            "step, Taylor's series) and the generic Runge-Kutta runner given DOP853's tableau, "
+            "timed beside the hand-written code they replaced in paired rounds (CPU time of the "
+            "thread); *ratio* is the median of the rounds' ratios, at most 1.05 the goal (in "
+            "bold above it); *state difference* the largest between the final states.",
+            form_cost_table(result),
+        ]
     if result.get("ensembles"):
         parts += ["## Ensembles: cost per member-step against N", ensemble_table(result)]
     if result.get("long_run"):

@@ -24,6 +24,7 @@ from mechviz.dynamics.simulation import Simulation
 from mechviz.viz.progress import progress_bar
 
 from . import exhibits, experiments
+from . import generated_cost as gen
 from .first_answer import construction_costs as _construction_costs
 from .first_answer import first_answer as _first_answer
 from .peer_sweeps import flag_outliers, peer_table, sweep_peer
@@ -195,6 +196,7 @@ def run_bench(
                 result["first_answer"],
                 result["fastest_peers"],
                 tableau=result.get("tableau_cost"),
+                generated=result.get("generated_cost"),
             )
     from mechviz.dynamics.files import write_files_atomically
 
@@ -292,7 +294,7 @@ def _measure(
         peer_ratios = peer_table(points, ratios, peer_names, every, settings)
     progress()
 
-    long_run = stab = per_step = exhibit = ensembles = tableau = None
+    long_run = stab = per_step = exhibit = ensembles = tableau = generated = None
     if extra:
         progress.set("long runs (10^4 periods)")
         with timer("long runs"):
@@ -306,6 +308,9 @@ def _measure(
         progress.set("generic Runge-Kutta runner against DOP853's own loop")
         with timer("generic runner cost"):
             tableau = tableau_cost(quick=quick)
+        progress.set("generated forms against the hand-written ones")
+        with timer("generated forms cost"):
+            generated = gen.generated_cost(quick=quick)
         progress.set("ensembles (serial and parallel)")
         with timer("ensembles"):
             ensembles = experiments.ensemble_costs(quick, progress)
@@ -393,11 +398,14 @@ def _measure(
         "peer_head_to_head": peer_ratios,
         "construction_us": construction,
         "first_answer": first_answer,
-        "targets": _targets(ratios, per_step, peer_ratios, first_answer, tableau=tableau),
+        "targets": _targets(
+            ratios, per_step, peer_ratios, first_answer, tableau=tableau, generated=generated
+        ),
         "long_run": long_run,
         "stability": stab,
         "per_step": per_step,
         "tableau_cost": tableau,
+        "generated_cost": generated,
         "ensembles": ensembles,
         "exhibits": exhibit,
     }
@@ -444,6 +452,7 @@ def _targets(
     first_answer: dict | None = None,
     fastest: dict | None = None,
     tableau: dict | None = None,
+    generated: dict | None = None,
 ) -> dict:
     """Each speed target, met (True), missed (False) or not measurable (None), and the lists of
     what was missed with the figure that missed. With ``fastest`` (:mod:`.fastest`'s results)
@@ -499,6 +508,11 @@ def _targets(
         lost = tableau_missed(tableau)
         generic = not lost
         missed += lost
+    written_once = None
+    if generated is not None:
+        lost = gen.missed(generated)
+        written_once = not lost
+        missed += lost
     cost = (
         {}
         if per_step is None
@@ -512,6 +526,7 @@ def _targets(
         "step_within_2x_of_c": cost,
         "first_answer_at_least_as_fast_as_odeint": first,
         f"generic_runner_within_{round(100 * (TABLEAU_GOAL - 1))}pct_of_dop853_loop": generic,
+        f"generated_forms_within_{round(100 * (gen.GOAL - 1))}pct_of_hand_written": written_once,
         "missed": missed,
     }
 

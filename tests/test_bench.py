@@ -154,6 +154,18 @@ def test_targets_name_each_miss_with_its_figure():
     assert t["missed"][-1] == "first answer: ours / odeint = 0.6 s / 0.4 s = 1.50 > 1"
     first["dop853"]["median_s"] = 0.35
     assert _targets(ratios, None, peers, first)["first_answer_at_least_as_fast_as_odeint"]
+    # a form generated from the equations that costs more than 5 % over the hand-written one
+    form = {"ratio": 1.08, "ns_per_step_generated": 108.0, "ns_per_step_hand": 100.0}
+    generated = {"hoop": {"taylor series": form, "rhs": {**form, "ratio": 1.01}, "rk4 step": form}}
+    generated["hoop"]["rk4 step"] = {**form, "ratio": 0.97}
+    t = _targets(ratios, None, peers, generated=generated)
+    assert t["generated_forms_within_5pct_of_hand_written"] is False
+    assert t["missed"][-1] == (
+        "generated taylor series on hoop: 1.080x the hand-written per step (goal <= 1.05)"
+    )
+    generated["hoop"]["taylor series"] = {**form, "ratio": 1.04}
+    t = _targets(ratios, None, peers, generated=generated)
+    assert t["generated_forms_within_5pct_of_hand_written"] is True
 
 
 ROOT = Path(__file__).resolve().parents[1]
