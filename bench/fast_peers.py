@@ -1,17 +1,20 @@
 """The peers in their fastest documented form, each a solver reused across problems.
 
-- **heyoka.py**: ``taylor_adaptive`` with the parameters as runtime parameters (``hy.par``), so
-  that one compiled integrator serves every case of a system and tolerance, as heyoka's
-  documentation advises for problems solved many times; built with and without
-  ``fast_math=True`` (its documented option for speed). A solve sets time, state and
-  parameters and calls ``propagate_until``.
+- **heyoka.py**: ``taylor_adaptive`` in two forms, each built with and without
+  ``fast_math=True`` (its documented option for speed): the parameters as runtime parameters
+  (``hy.par``), so that one compiled integrator serves every case of a system and tolerance, as
+  heyoka's documentation advises for problems solved many times (:class:`HeyokaSolver`); and one
+  parameter set's constants built into the expressions, an integrator compiled per case
+  (:class:`HeyokaBuiltinSolver`, whose construction is timed). A solve sets time, state (and
+  parameters) and calls ``propagate_until``.
 - **CyRK**: ``nbsolve2_ivp`` called inside a numba ``njit`` function (the form CyRK's
   documentation shows for speed: no Python between the caller and the C++ solver), with a
   numba ``cfunc`` right-hand side that reads the parameters from its ``args`` pointer;
   methods DOP853, Vern8 and Vern7.
 - **scipy**: ``odeint`` (LSODA in Fortran; the loop stays in Fortran and only the right-hand
   side calls back into Python, which makes it scipy's fastest here), the right-hand side the
-  product's generated one inside an ``njit`` function (:func:`odeint_rhs`).
+  product's generated one inside an ``njit`` function (:func:`odeint_rhs`) or called from a
+  Python function as the product calls it (:func:`odeint_closure`, the faster of the two).
 
 Every solver answers ``solve(y0, params, t_end, tol) -> (final state, steps)`` with
 ``rtol = atol = tol``; a failed solve raises. The benchmark measures each one's error against
@@ -20,12 +23,13 @@ the same references as ours (:mod:`mechviz.bench.fastest`).
 
 from __future__ import annotations
 
+import time
 from functools import cache
 
 import numpy as np
 
 from .peer_equations import heyoka_equations
-from .peers import _cyrk_rhs, not_importable
+from .peers import _cyrk_rhs, _sizes, not_importable
 
 CYRK_METHODS = ("DOP853", "Vern8", "Vern7")
 
@@ -60,6 +64,42 @@ class HeyokaSolver:
 @cache
 def heyoka_solver(sys_id: int, dim: int, n_pars: int, tol: float, fast_math: bool):
     return HeyokaSolver(sys_id, dim, n_pars, tol, fast_math)
+
+
+def _empty_heyoka_cache(hy) -> None:
+    """Empty heyoka's in-memory cache of compiled code, so that building an integrator again
+    compiles it again, as a new parameter set would (a rebuild of the same one is a cache hit)."""
+    clear = getattr(getattr(hy, "llvm_state", None), "clear_memcache", None)
+    if clear is not None:
+        clear()
+
+
+class HeyokaBuiltinSolver:
+    """One compiled ``taylor_adaptive`` per parameter set, tolerance and ``fast_math``, the
+    constants of :func:`~.peer_equations.heyoka_pars` built into its expressions; reset per
+    solve. ``construction_s``: the wall seconds ``taylor_adaptive`` took to build it (Taylor
+    decomposition and LLVM compilation, heyoka's cache of compiled code emptied first); the
+    expressions are made before the clock starts (a user writes them once, as a function of the
+    constants)."""
+
+    def __init__(self, sys_id: int, constants: np.ndarray, dim: int, tol: float, fast_math: bool):
+        import heyoka as hy
+
+        self.sys_id = sys_id
+        eqs = heyoka_equations(sys_id, constants)
+        _empty_heyoka_cache(hy)
+        t0 = time.perf_counter()
+        self.ta = hy.taylor_adaptive(eqs, np.zeros(dim), tol=tol, fast_math=fast_math)
+        self.construction_s = time.perf_counter() - t0
+
+    def solve(self, y0: np.ndarray, t_end: float) -> tuple[np.ndarray, int]:
+        ta = self.ta
+        ta.time = 0.0
+        ta.state[:] = y0
+        out = ta.propagate_until(t_end)
+        if int(out[0].value) != 0 and str(out[0]) != "taylor_outcome.time_limit":
+            raise RuntimeError(f"heyoka: {out[0]}")
+        return ta.state.copy(), int(out[3])
 
 
 # --------------------------------------------------------------------------- CyRK
@@ -125,16 +165,48 @@ def odeint_rhs(sys_id: int):
     return f
 
 
+def odeint_closure(sys_id: int, params: np.ndarray):
+    """The right-hand side as the product hands it to scipy (``Simulation``'s scipy methods):
+    a Python function ``f(y, t)`` calling the compiled right-hand side, the parameters bound.
+    Measured against :func:`odeint_rhs` on the hoop and the disk at 1e-9 (``odeint``, and
+    ``solve_ivp``'s DOP853 and LSODA), it is the faster by 4-10 %: a call from Python into an
+    ``njit`` function that returns a new array costs about 0.15 us more (boxing the array) than
+    a Python call into one that fills an array given to it."""
+    from mechviz.dynamics.integrators.kernels import RHS
+
+    rhs = RHS[sys_id]
+    p = np.ascontiguousarray(params, dtype=np.float64)
+    d = _sizes(sys_id)[0]
+
+    def f(y, t):
+        out = np.empty(d)
+        rhs(y, p, out)
+        return out
+
+    return f
+
+
 def odeint_solve(
-    sys_id: int, y0: np.ndarray, params: np.ndarray, t_end: float, tol: float
+    sys_id: int,
+    y0: np.ndarray,
+    params: np.ndarray,
+    t_end: float,
+    tol: float,
+    fun=None,
 ) -> tuple[np.ndarray, int]:
+    """``odeint`` from ``y0`` to ``t_end``, its right-hand side :func:`odeint_rhs` (the
+    parameters passed as its ``args``) or ``fun(y, t)`` (:func:`odeint_closure`)."""
     from scipy.integrate import odeint
 
+    if fun is None:
+        fun, args = odeint_rhs(sys_id), (np.ascontiguousarray(params, dtype=np.float64),)
+    else:
+        args = ()
     y, info = odeint(
-        odeint_rhs(sys_id),
+        fun,
         y0,
         [0.0, t_end],
-        args=(np.ascontiguousarray(params, dtype=np.float64),),
+        args=args,
         rtol=tol,
         atol=tol,
         mxstep=10**7,

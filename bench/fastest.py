@@ -1,12 +1,14 @@
 """Ours against the peers in their fastest form, on the benchmark problems and on random cases.
 
 For every case (the three benchmark problems and :func:`mechviz.bench.untuned.draw`'s random
-cases) and every contender, the tolerance ``rtol = atol = tol`` is swept down a grid of
-half-decades (:data:`GRID`) and each solve's error is measured against the case's reference
-(the same for every contender). At each accuracy target a contender's pick is its loosest
-tolerance whose error meets the target. The picks of all contenders are then timed in
-interleaved rounds in this one process (every round times every pick once, in rotating order;
-each pick's fastest round is kept), and the ratios are peer / ours: below 1 the peer is faster.
+cases) and every contender, the tolerance ``rtol = atol = tol`` is swept down a grid in eighths
+of a decade (the half-decades first, then the eighths around each pick: :mod:`.fastest_picks`)
+and each solve's error is measured against the case's reference (the same for every
+contender). At each accuracy target a contender's pick follows each of two rules: its loosest
+tolerance meeting the target, and its loosest tolerance from which every tighter swept one
+meets it too. The picks of all contenders under both rules are then timed in interleaved rounds
+in this one process (every round times every pick once, in rotating order; each pick's fastest
+round is kept), and the ratios are peer / ours, per rule: below 1 the peer is faster.
 
 Contenders, by family (a family's time is its fastest member's):
 
@@ -15,8 +17,18 @@ Contenders, by family (a family's time is its fastest member's):
   system kind and tolerance and handed each case's start and parameters; ours, **fresh**: a new
   ``Simulation`` (or ``Solver``) per solve (the cost of a user who builds one for every
   problem);
-- heyoka: ``taylor_adaptive`` with and without ``fast_math``; CyRK: ``nbsolve2_ivp`` from an
-  ``njit`` caller, DOP853, Vern8 and Vern7; scipy: ``odeint`` (:mod:`.fast_peers`).
+- heyoka: ``taylor_adaptive`` with and without ``fast_math``, each with runtime parameters (one
+  integrator per system and tolerance, its construction not timed) and with the case's
+  constants built in (one per case and tolerance: against ours kept its solve is timed,
+  against ours fresh its construction is added, as ours fresh pays its own); CyRK:
+  ``nbsolve2_ivp`` from an ``njit`` caller, DOP853, Vern8 and Vern7; scipy: ``odeint`` calling
+  the compiled right-hand side through an ``njit`` function and through a Python one
+  (:mod:`.fast_peers`).
+
+The built-in-constants form solves the same equations as its runtime-parameter twin with the
+same steps, to round-off, and each of its builds costs a compilation, so it is not swept: it is
+solved at its twin's picks, each moved to the next tighter tolerance its twin swept while its
+own error misses.
 
 Where our fastest and a peer's are within 2x of each other, every pick is timed in as many
 rounds again and keeps its fastest of all. A target below what the case's reference resolves is
@@ -28,7 +40,7 @@ from __future__ import annotations
 
 import gc
 import math
-import statistics
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,27 +50,47 @@ import numpy as np
 from mechviz.dynamics.simulation import Simulation
 
 from . import fast_peers as fp
+from .fastest_picks import (  # (GRID, TARGETS, PEERS, losses, distribution: also re-exported)
+    COARSE_EVERY,
+    GRID,
+    PEERS,
+    PICKS,
+    RULES,
+    TARGETS,
+    distribution,
+    losses,
+    ordered,
+    ratios,
+    result_key,
+    to_refine,
+)
 from .peer_equations import heyoka_pars
 from .problems import PROBLEMS, Problem, listed, reference_state
 from .untuned import Reference, draw, reference
 
-TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
-GRID = tuple(10.0 ** (-k / 2) for k in range(4, 31))  # 1e-2 ... 1e-15 in half-decades
 OURS = listed("fastest")
 FAMILIES = ("ours-kept", "ours-fresh", "heyoka", "cyrk", "odeint")
-PEERS = ("heyoka", "cyrk", "odeint")
 CAP_S = 2.0  # a contender's sweep stops after a solve slower than this
 BUDGET_S = 8.0  # ... or after this long
+__all__ = ["GRID", "PEERS", "TARGETS", "distribution", "losses"]
 
 
 @dataclass
 class Contender:
-    """One way to solve a case: ``make(tol)`` returns the solve (a call giving the final state)."""
+    """One way to solve a case: ``make(tol)`` returns the solve (a call giving the final state).
+
+    ``per_case``: built for each parameter set, its construction (``construction[tol]``, wall
+    seconds) counted against ours fresh. ``twin``: the name of the contender whose picks this
+    one follows instead of sweeping (its ``picks``, by rule and target)."""
 
     name: str
     family: str
     make: Callable[[float], Callable[[], np.ndarray]]
     points: list[dict] = field(default_factory=list)  # the sweep: tol, error, seconds
+    per_case: bool = False
+    twin: str | None = None
+    construction: dict[float, float] = field(default_factory=dict)
+    picks: dict[tuple[str, float], dict | None] = field(default_factory=dict)
 
 
 def _ours_kept(pb: Problem, method: str):
@@ -131,6 +163,23 @@ def _heyoka(pb: Problem, fast_math: bool):
     return make
 
 
+def _heyoka_builtin(pb: Problem, fast_math: bool, construction: dict[float, float]):
+    """heyoka with this case's constants built in: one integrator per tolerance, built on first
+    use and kept for the case; its construction seconds go into ``construction``."""
+    sid, y0 = pb.system.sys_id, pb.y0
+    constants = heyoka_pars(sid, pb.system.kernel_params())
+    built: dict[float, fp.HeyokaBuiltinSolver] = {}
+
+    def make(tol: float):
+        solver = built.get(tol)
+        if solver is None:
+            solver = built[tol] = fp.HeyokaBuiltinSolver(sid, constants, len(y0), tol, fast_math)
+            construction[tol] = solver.construction_s
+        return lambda: solver.solve(y0, pb.t_end)[0]
+
+    return make
+
+
 def _cyrk(pb: Problem, method: str):
     solver = fp.CyrkSolver(pb.system.sys_id, method)
     p = np.ascontiguousarray(pb.system.kernel_params(), dtype=np.float64)
@@ -141,11 +190,12 @@ def _cyrk(pb: Problem, method: str):
     return make
 
 
-def _odeint(pb: Problem):
-    p = pb.system.kernel_params()
+def _odeint(pb: Problem, closure: bool):
+    sid, p = pb.system.sys_id, pb.system.kernel_params()
+    fun = fp.odeint_closure(sid, p) if closure else None
 
     def make(tol: float):
-        return lambda: fp.odeint_solve(pb.system.sys_id, pb.y0, p, pb.t_end, tol)[0]
+        return lambda: fp.odeint_solve(sid, pb.y0, p, pb.t_end, tol, fun)[0]
 
     return make
 
@@ -157,13 +207,17 @@ def contenders(pb: Problem, peers: dict[str, str | None]) -> list[Contender]:
     out.append(Contender("taylor solver kept", "ours-kept", _solver_kept(pb)))
     out.append(Contender("taylor solver fresh", "ours-fresh", _solver_fresh(pb)))
     if peers.get("heyoka") is None:
-        out += [
-            Contender(f"heyoka{' fast_math' if fm else ''}", "heyoka", _heyoka(pb, fm))
-            for fm in (False, True)
-        ]
+        for fm in (False, True):
+            name = f"heyoka{' fast_math' if fm else ''}"
+            out.append(Contender(name, "heyoka", _heyoka(pb, fm)))
+            built = Contender(f"heyoka builtin{' fast_math' if fm else ''}", "heyoka", None)
+            built.make = _heyoka_builtin(pb, fm, built.construction)
+            built.per_case, built.twin = True, name
+            out.append(built)
     if peers.get("CyRK") is None:
         out += [Contender(f"cyrk {m}", "cyrk", _cyrk(pb, m)) for m in fp.CYRK_METHODS]
-    out.append(Contender("odeint", "odeint", _odeint(pb)))
+    out.append(Contender("odeint", "odeint", _odeint(pb, False)))
+    out.append(Contender("odeint closure", "odeint", _odeint(pb, True)))
     return out
 
 
@@ -176,31 +230,84 @@ def _once(solve) -> tuple[np.ndarray | None, float]:
     return y, time.perf_counter() - t0
 
 
+def _point(c: Contender, pb: Problem, ref: Reference, tol: float, first: bool) -> dict | None:
+    """``c`` solved at ``tol``: ``{"tol", "error", "seconds"}`` (``None``: it could not be built
+    there). Solved twice (the first call may have compiled) unless the first is slower than
+    :data:`CAP_S` and not the ``first`` of its sweep."""
+    try:
+        solve = c.make(tol)
+    except Exception:
+        return None
+    y, secs = _once(solve)
+    if y is not None and (first or secs < CAP_S):
+        y, secs = _once(solve)
+    if y is None:  # no answer (the solver refused the tolerance or failed): no error to judge
+        return {"tol": tol, "error": math.inf, "seconds": secs, "failed": True}
+    err = math.inf if not np.all(np.isfinite(y)) else pb.error(y, ref.state)
+    return {"tol": tol, "error": err, "seconds": secs}
+
+
 def sweep(
-    c: Contender, pb: Problem, ref: Reference, tightest: float, grid: tuple[float, ...] = GRID
+    c: Contender,
+    pb: Problem,
+    ref: Reference,
+    targets: tuple[float, ...],
+    grid: tuple[float, ...] = GRID,
+    every: int = COARSE_EVERY,
 ) -> None:
-    """``c``'s points down :data:`GRID` until its error meets ``tightest``, a solve takes longer
-    than :data:`CAP_S`, or the sweep has taken :data:`BUDGET_S`. (No stop on an error that stops
+    """``c``'s points: down every ``every``-th tolerance of ``grid`` until its error meets the
+    tightest of ``targets``, a solve takes longer than :data:`CAP_S`, or the sweep has taken
+    :data:`BUDGET_S`; then the rest of ``grid`` wherever a pick could still move
+    (:func:`.fastest_picks.to_refine`), until no pick does. (No stop on an error that stops
     falling: on a sensitive trajectory the error stays near 1 for decades of tolerance, then
     falls.)"""
     start = time.perf_counter()
-    for tol in grid:
-        try:
-            solve = c.make(tol)
-        except Exception:
+    tightest = min(targets)
+    for tol in grid[::every]:
+        p = _point(c, pb, ref, tol, first=not c.points)
+        if p is None:
             continue
-        y, secs = _once(solve)
-        if y is not None and (not c.points or secs < CAP_S):
-            y, secs = _once(solve)  # the first call may have compiled
-        err = math.inf if y is None or not np.all(np.isfinite(y)) else pb.error(y, ref.state)
-        c.points.append({"tol": tol, "error": err, "seconds": secs})
-        if err <= tightest or secs > CAP_S or time.perf_counter() - start > BUDGET_S:
+        c.points.append(p)
+        if p["error"] <= tightest or p["seconds"] > CAP_S:
             break
+        if time.perf_counter() - start > BUDGET_S:
+            break
+    while todo := to_refine(c.points, targets, grid):
+        c.points += [p for tol in todo if (p := _point(c, pb, ref, tol, False)) is not None]
+        c.points[:] = ordered(c.points)
+        if not any(p["tol"] in todo for p in c.points):
+            break  # none of them could be built: nothing new to pick from
 
 
-def pick(c: Contender, target: float) -> dict | None:
-    """The loosest swept tolerance whose error meets ``target`` (``None``: none did)."""
-    return next((p for p in c.points if p["error"] <= target), None)
+def follow(c: Contender, twin: Contender, pb: Problem, ref: Reference, targets) -> None:
+    """``c``'s picks from its ``twin``'s: per rule and target, the twin's pick, moved to the
+    twin's next tighter swept tolerance while ``c``'s own error there misses the target (at
+    most two moves); no pick where the twin has none or ``c`` still misses."""
+    done: dict[float, dict | None] = {}
+    swept = [p["tol"] for p in ordered(twin.points)]
+    for target in targets:
+        for rule, pick_of in PICKS.items():
+            c.picks[(rule, target)] = None
+            p = pick_of(twin.points, target)
+            if p is None:
+                continue
+            i = swept.index(p["tol"])
+            for tol in swept[i : i + 3]:
+                if tol not in done:
+                    done[tol] = _point(c, pb, ref, tol, first=not done)
+                mine = done[tol]
+                if mine is not None and mine["error"] <= target:
+                    c.picks[(rule, target)] = mine
+                    break
+    c.points = ordered(p for p in done.values() if p is not None)
+
+
+def pick(c: Contender, target: float, rule: str = "loosest") -> dict | None:
+    """``c``'s pick at ``target`` under ``rule`` (:mod:`.fastest_picks`; ``None``: none met
+    it)."""
+    if c.twin is not None:
+        return c.picks.get((rule, target))
+    return PICKS[rule](c.points, target)
 
 
 def interleaved(solves: list[Callable[[], object]], rounds: int, min_sample: float) -> list[float]:
@@ -240,6 +347,31 @@ def _close(chosen: list, secs: list[float], within: float = 2.0) -> bool:
     return any(1.0 / within < t / o < within for o in ours for t in theirs)
 
 
+def _entry(c: Contender, p: dict, seconds: float, construction: bool) -> dict:
+    e = {"who": c.name, "tol": p["tol"], "error": p["error"], "seconds": seconds}
+    if construction:
+        e["construction_s"] = c.construction[p["tol"]]
+        e["seconds"] = seconds + e["construction_s"]
+    return e
+
+
+def family_times(timed: list[tuple[Contender, dict, float]]) -> dict[str, dict]:
+    """Each family's fastest timed pick (``timed``: contender, pick, seconds per solve). A
+    peer's is given twice: ``<peer>`` for the ratio over ours kept, ``<peer>-fresh`` for the
+    ratio over ours fresh, where a form built per case adds its construction."""
+    times: dict[str, dict] = {}
+
+    def keep(key: str, e: dict) -> None:
+        if key not in times or e["seconds"] < times[key]["seconds"]:
+            times[key] = e
+
+    for c, p, s in timed:
+        keep(c.family, _entry(c, p, s, False))
+        if c.family in PEERS:
+            keep(f"{c.family}-fresh", _entry(c, p, s, c.per_case))
+    return times
+
+
 def measure_case(
     pb: Problem,
     ref: Reference,
@@ -248,56 +380,57 @@ def measure_case(
     min_sample: float = 2e-3,
     targets: tuple[float, ...] = TARGETS,
     grid: tuple[float, ...] = GRID,
+    every: int = COARSE_EVERY,
 ) -> dict:
-    """One case: every contender's sweep (down ``grid``), then per target the picks timed head
-    to head."""
+    """One case: every contender's sweep (down ``grid``, every ``every``-th tolerance first),
+    then per target the picks of both rules timed head to head (a pick both rules make, once)."""
     cs = contenders(pb, peers)
-    resolved = [t for t in targets if t >= ref.resolves]
-    tightest = min(resolved) if resolved else min(targets)
+    resolved = tuple(t for t in targets if t >= ref.resolves) or targets
+    by_name = {c.name: c for c in cs}
     for c in cs:
-        sweep(c, pb, ref, tightest, grid)
+        if c.twin is None:
+            sweep(c, pb, ref, resolved, grid, every)
+    for c in cs:
+        if c.twin is not None:
+            follow(c, by_name[c.twin], pb, ref, resolved)
     out: dict = {"title": pb.title, "t_end": pb.t_end, "state0": list(pb.state0)}
     out["reference"] = ref.kind
     out["sweeps"] = {c.name: c.points for c in cs}
+    families = {c.family for c in cs}
     rows = {}
     for target in targets:
         key = f"{target:.0e}"
         if target < ref.resolves:
             rows[key] = {"unresolved": f"the reference resolves {ref.resolves:.1e}"}
             continue
-        chosen = [(c, p) for c in cs if (p := pick(c, target)) is not None]
+        picks = {
+            rule: [(c, p) for c in cs if (p := pick(c, target, rule)) is not None] for rule in RULES
+        }
+        chosen = list({(c.name, p["tol"]): (c, p) for v in picks.values() for c, p in v}.values())
         solves = [c.make(p["tol"]) for c, p in chosen]
         secs = interleaved(solves, rounds, min_sample) if chosen else []
         if _close(chosen, secs):  # a near tie: as many rounds again, for every contender alike
             again = interleaved(solves, rounds, min_sample)
             secs = [min(a, b) for a, b in zip(secs, again, strict=True)]
-        times: dict[str, dict] = {}
-        for (c, p), s in zip(chosen, secs, strict=True):
-            e = times.get(c.family)
-            if e is None or s < e["seconds"]:
-                times[c.family] = {
-                    "who": c.name,
-                    "tol": p["tol"],
-                    "error": p["error"],
-                    "seconds": s,
-                }
-        ratios = {}
-        for peer in PEERS:
-            if peer not in {c.family for c in cs}:
-                continue
-            for form in ("kept", "fresh"):
-                ours = times.get(f"ours-{form}")
-                theirs = times.get(peer)
-                if theirs is None:
-                    r = None  # the peer did not reach the target: no ratio (ours wins)
-                elif ours is None:
-                    r = 0.0  # we did not reach it, the peer did
-                else:
-                    r = theirs["seconds"] / ours["seconds"]
-                ratios[f"{peer}/{form}"] = r
-        rows[key] = {"fastest": times, "ratios": ratios}
+        timed = {(c.name, p["tol"]): s for (c, p), s in zip(chosen, secs, strict=True)}
+        row: dict = {}
+        for rule, field_ in RULES.items():
+            times = family_times([(c, p, timed[(c.name, p["tol"])]) for c, p in picks[rule]])
+            figures = {"fastest": times, "ratios": ratios(times, families)}
+            if field_:
+                row[field_] = figures
+            else:
+                row.update(figures)
+        rows[key] = row
     out["targets"] = rows
     return out
+
+
+def how() -> str:
+    """How the comparison is made, for the report: this module's description (its paragraphs
+    unwrapped, list items kept one a line)."""
+    paragraphs = __doc__.split("\n\n")[1:5]
+    return "\n\n".join(re.sub(r"\n(?!- )\s*", " ", p) for p in paragraphs)
 
 
 def run(
@@ -309,7 +442,8 @@ def run(
     fixed: bool = True,
 ) -> dict:
     """The whole comparison: the benchmark problems (``fixed``) and ``n_random`` cases from
-    ``seed``. Returns the results (JSON-ready), with :func:`summarise`'s distributions."""
+    ``seed``. Returns the results (JSON-ready), with the distributions and losses under each
+    rule (:mod:`.fastest_picks`)."""
     peers = fp.available()
     cases: dict[str, tuple[Problem, Reference]] = {}
     if fixed:
@@ -327,83 +461,25 @@ def run(
     out = {
         "about": (
             "Ours against each peer's fastest form: per case and accuracy, each contender's "
-            "loosest tolerance (rtol = atol, half-decades) meeting the accuracy against the "
-            "case's reference, timed in interleaved rounds in one process (fastest round kept). "
-            "Ratios: peer time / our time, below 1 the peer is faster; 'kept' our Simulation "
-            "restarted per solve, 'fresh' a new Simulation per solve."
+            "pick (rtol = atol, in eighths of a decade) under two rules: the loosest tolerance "
+            "meeting the accuracy against the case's reference, and the loosest from which "
+            "every tighter swept tolerance meets it too (figures under 'every_tighter'); the "
+            "picks timed in interleaved rounds in one process (fastest round kept). Ratios: "
+            "peer time / our time, below 1 the peer is faster; 'kept' our Simulation restarted "
+            "per solve, 'fresh' a new Simulation per solve (against it, a peer form built per "
+            "case, heyoka with built-in constants, adds its construction: '<peer>-fresh')."
         ),
+        "how": how(),
         "seed": seed,
         "n_random": n_random,
         "rounds": rounds,
         "min_sample_s": min_sample,
+        "grid": {"from": GRID[0], "to": GRID[-1], "per_decade": 8, "first_sweep_every": 4},
         "peers_missing": {k: v for k, v in peers.items() if v is not None},
         "reference_seconds": round(ref_s, 1),
         "cases": results,
     }
-    out["distribution"] = distribution(out)
-    out["losses"] = losses(out)
-    return out
-
-
-def losses(result: dict) -> list[dict]:
-    """Every case, accuracy, peer and form where the peer is faster than ours (ratio < 1)."""
-    out = []
-    for key, case in result["cases"].items():
-        for target, row in case["targets"].items():
-            for name, r in (row.get("ratios") or {}).items():
-                if r is not None and r < 1.0:
-                    peer, form = name.split("/")
-                    f = row["fastest"]
-                    ours = f.get(f"ours-{form}")
-                    out.append(
-                        {
-                            "case": key,
-                            "target": target,
-                            "peer": peer,
-                            "form": form,
-                            "ratio": r,
-                            "peer_who": f[peer]["who"],
-                            "peer_seconds": f[peer]["seconds"],
-                            "ours_who": None if ours is None else ours["who"],
-                            "ours_seconds": None if ours is None else ours["seconds"],
-                        }
-                    )
-    return out
-
-
-def distribution(result: dict) -> dict:
-    """Per accuracy, peer and form, over the random cases: how many ratios, how many below 1,
-    and the minimum, quartiles and maximum of the ratios (a peer that did not reach the target
-    counts as a win and is counted apart)."""
-    out: dict = {}
-    for target in (f"{t:.0e}" for t in TARGETS):
-        out[target] = {}
-        for peer in PEERS:
-            for form in ("kept", "fresh"):
-                rs, not_reached = [], 0
-                for key, case in result["cases"].items():
-                    if not key.startswith("random-"):
-                        continue
-                    row = case["targets"].get(target) or {}
-                    ratios = row.get("ratios") or {}
-                    if f"{peer}/{form}" not in ratios:
-                        continue
-                    r = ratios[f"{peer}/{form}"]
-                    if r is None:
-                        not_reached += 1
-                    else:
-                        rs.append(r)
-                if not rs and not not_reached:
-                    continue
-                q = statistics.quantiles(rs, n=4, method="inclusive") if len(rs) >= 2 else rs * 3
-                out[target][f"{peer}/{form}"] = {
-                    "n": len(rs),
-                    "below_1": sum(r < 1.0 for r in rs),
-                    "peer_not_reached": not_reached,
-                    "min": min(rs) if rs else None,
-                    "q1": q[0] if rs else None,
-                    "median": q[1] if rs else None,
-                    "q3": q[2] if rs else None,
-                    "max": max(rs) if rs else None,
-                }
+    for rule in RULES:
+        out[result_key("distribution", rule)] = distribution(out, rule)
+        out[result_key("losses", rule)] = losses(out, rule)
     return out

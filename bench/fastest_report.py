@@ -1,11 +1,16 @@
 """Markdown and terminal text for :mod:`mechviz.bench.fastest`'s results: the ratios per case,
-their distribution over the random cases, and every case where a peer is faster; and the
-comparison alone from the command line (``python -m mechviz.bench.fastest_report``: exit
-status 1 when a peer is faster in any case)."""
+their distribution over the random cases, and every case where a peer is faster, under each
+rule for picking a tolerance (:mod:`.fastest_picks`); and the comparison alone from the command
+line (``python -m mechviz.bench.fastest_report``: exit status 1 when a peer is faster in any
+case under either rule).
+
+Results from before the every-tighter rule render as they always did (the loosest rule's
+figures alone)."""
 
 from __future__ import annotations
 
 from .fastest import PEERS, run
+from .fastest_picks import RULE_TITLES, RULES, has_rule, result_key, rule_row
 
 
 def _r(r) -> str:
@@ -21,9 +26,20 @@ def _us(e: dict | None) -> str:
     return "n/a" if e is None else f"{e['who']} {1e6 * e['seconds']:.0f} us"
 
 
-def case_table(result: dict, random: bool = False) -> str:
-    """Per case and accuracy: our time (kept, fresh) and each peer's ratio over it
-    (``kept / fresh``: over our kept Simulation, over a fresh one)."""
+def _peer_cell(f: dict, p: str) -> str:
+    """The peer's timed pick, and its pick against ours fresh where that differs (a form built
+    per case counts its construction there)."""
+    kept, fresh = f.get(p), f.get(f"{p}-fresh")
+    if not kept:
+        return ""
+    if fresh is None or (fresh["who"], fresh["seconds"]) == (kept["who"], kept["seconds"]):
+        return f" ({_us(kept)})"
+    return f" ({_us(kept)}; against fresh: {_us(fresh)})"
+
+
+def case_table(result: dict, random: bool = False, rule: str = "loosest") -> str:
+    """Per case and accuracy, under ``rule``: our time (kept, fresh) and each peer's ratio over
+    it (``kept / fresh``: over our kept Simulation, over a fresh one)."""
     peers = [p for p in PEERS if p not in {"heyoka", "cyrk"} or p not in _missing(result)]
     lines = [
         "| case | accuracy | ours, kept | ours, fresh | "
@@ -34,16 +50,16 @@ def case_table(result: dict, random: bool = False) -> str:
     for key, case in result["cases"].items():
         if key.startswith("random-") != random:
             continue
-        for target, row in case["targets"].items():
-            if "unresolved" in row:
+        for target, full in case["targets"].items():
+            if "unresolved" in full:
                 lines.append(
-                    f"| {key} | {target} | {row['unresolved']} |" + " |" * (len(peers) + 1)
+                    f"| {key} | {target} | {full['unresolved']} |" + " |" * (len(peers) + 1)
                 )
                 continue
+            row = rule_row(full, rule)
             f, r = row["fastest"], row["ratios"]
             cells = [
-                f"{_r(r.get(f'{p}/kept'))}, {_r(r.get(f'{p}/fresh'))}"
-                + (f" ({_us(f.get(p))})" if f.get(p) else "")
+                f"{_r(r.get(f'{p}/kept'))}, {_r(r.get(f'{p}/fresh'))}" + _peer_cell(f, p)
                 for p in peers
             ]
             lines.append(
@@ -58,14 +74,14 @@ def _missing(result: dict) -> set[str]:
     return {k.lower() for k in (result.get("peers_missing") or {})}
 
 
-def distribution_table(result: dict) -> str:
-    """Over the random cases, per accuracy, peer and form: the ratios' spread and how many are
-    below 1."""
+def distribution_table(result: dict, rule: str = "loosest") -> str:
+    """Over the random cases, per accuracy, peer and form, under ``rule``: the ratios' spread
+    and how many are below 1."""
     lines = [
         "| accuracy | peer / ours | cases | below 1 | min | q1 | median | q3 | max | peer n/a |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for target, row in result["distribution"].items():
+    for target, row in result[result_key("distribution", rule)].items():
         for name, d in row.items():
             vals = [
                 "n/a" if d[k] is None else f"{d[k]:.2f}"
@@ -79,10 +95,10 @@ def distribution_table(result: dict) -> str:
     return "\n".join(lines)
 
 
-def loss_lines(result: dict) -> list[str]:
-    """One line per case where a peer is faster than ours, with its figure."""
+def loss_lines(result: dict, rule: str = "loosest") -> list[str]:
+    """One line per case where a peer is faster than ours under ``rule``, with its figure."""
     out = []
-    for e in result["losses"]:
+    for e in result[result_key("losses", rule)]:
         ours = (
             "ours did not reach it"
             if e["ours_who"] is None
@@ -95,38 +111,56 @@ def loss_lines(result: dict) -> list[str]:
     return out
 
 
+def _rule_sections(result: dict, rule: str) -> list[str]:
+    n_loss = len(result[result_key("losses", rule)])
+    return [
+        case_table(result, random=False, rule=rule),
+        "Random cases, the distribution of peer / ours:",
+        distribution_table(result, rule),
+        f"Every case where a peer is faster ({n_loss}):" + ("" if n_loss else " none."),
+        "\n".join(f"- {line}" for line in loss_lines(result, rule)),
+        "Every random case:",
+        case_table(result, random=True, rule=rule),
+    ]
+
+
 def markdown(result: dict) -> str:
-    n_loss = len(result["losses"])
-    return "\n\n".join(
-        [
-            f"Seed {result['seed']}, {result['n_random']} random cases, {result['rounds']} "
-            f"interleaved rounds; load average {result.get('load_average')}.",
-            case_table(result, random=False),
-            "Random cases, the distribution of peer / ours:",
-            distribution_table(result),
-            f"Every case where a peer is faster ({n_loss}):" + ("" if n_loss else " none."),
-            "\n".join(f"- {line}" for line in loss_lines(result)),
-            "Every random case:",
-            case_table(result, random=True),
-        ]
-    )
+    parts = [
+        f"Seed {result['seed']}, {result['n_random']} random cases, {result['rounds']} "
+        f"interleaved rounds; load average {result.get('load_average')}."
+    ]
+    if not has_rule(result, "every-tighter"):  # a run from before the second rule
+        return "\n\n".join(parts + _rule_sections(result, "loosest"))
+    for rule in RULES:
+        parts += [f"### Each contender's pick: {RULE_TITLES[rule]}", *_rule_sections(result, rule)]
+    return "\n\n".join(parts)
 
 
-def verdict_line(result: dict) -> str:
-    """The peers' target in one line: comparisons met; each loss on the three problems with its
+def verdict_lines(result: dict) -> list[str]:
+    """:func:`verdict_line` under each rule the results have."""
+    if not has_rule(result, "every-tighter"):
+        return [verdict_line(result)]
+    return [verdict_line(result, rule) for rule in RULES]
+
+
+def verdict_line(result: dict, rule: str | None = None) -> str:
+    """The peers' target in one line, under ``rule`` (``None``: the loosest, unnamed, as results
+    from before the second rule read): comparisons met; each loss on the three problems with its
     figure, the random cases' losses by peer (how many, their range, the worst with its figure);
     every one is listed by :func:`loss_lines` (``tables.md``)."""
     rows = [
         r
         for case in result["cases"].values()
-        for row in case["targets"].values()
-        for r in (row.get("ratios") or {}).values()
+        for full in case["targets"].values()
+        for r in ((rule_row(full, rule or "loosest") or {}).get("ratios") or {}).values()
     ]
     met = sum(r is None or r >= 1.0 for r in rows)
-    losses = list(zip(result["losses"], loss_lines(result), strict=True))
+    found = result[result_key("losses", rule or "loosest")]
+    losses = list(zip(found, loss_lines(result, rule or "loosest"), strict=True))
+    named = "" if rule is None else f", each pick {RULE_TITLES[rule]}"
     head = (
-        f"- **Peers in their fastest form (seed {result['seed']}, {result['n_random']} random "
-        f"cases and the three problems): ours at least as fast in {met} of {len(rows)} "
+        f"- **Peers in their fastest form{named} (seed {result['seed']}, {result['n_random']} "
+        f"random cases and the three problems): ours at least as fast in {met} of {len(rows)} "
         "comparisons"
     )
     if not losses:
@@ -185,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.out:
         write_json_atomically(args.out, result, indent=1)
     print(markdown(result))
-    losses_ = loss_lines(result)
+    losses_ = [f"{rule}: {line}" for rule in RULES for line in loss_lines(result, rule)]
     if losses_:
         print(f"\ntargets missed ({len(losses_)}):")
         print("\n".join(f"  {line}" for line in losses_))

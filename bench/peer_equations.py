@@ -5,9 +5,11 @@ the product's RK4 steps are printed from (:func:`mechviz.dynamics.codegen.steps.
 constant of the parameters (the hoop's ``2M + m``, ``-(g/a)``, ``-(M + m) g/a``; the free body's
 ``(I2 - I3)/I1``) is one of heyoka's runtime parameters ``hy.par[i]``, so one compiled integrator
 serves every case of a system and heyoka's Taylor decomposition has no expression of parameters
-to expand at every step. :func:`heyoka_pars` forms those constants from our kernel parameters in
-double precision, with the very expressions our RK4 steps form them with, so that a run in
-extended precision (the references) solves the equations our methods solve.
+to expand at every step. The same expressions can instead carry one parameter set's constants
+as numbers (``heyoka_equations(sys_id, constants)``): an integrator compiled per parameter set,
+its numbers built into the code. :func:`heyoka_pars` forms those constants from our kernel
+parameters in double precision, with the very expressions our RK4 steps form them with, so that
+a run in extended precision (the references) solves the equations our methods solve.
 
 The translation walks sympy's tree: sums (terms with a minus sign subtracted), products (a
 factor with a negative integer power becomes a division, which heyoka's decomposition takes as
@@ -97,9 +99,11 @@ def to_heyoka(e, names: dict):
     raise NotImplementedError(f"no heyoka form of {type(e).__name__}: {e}")
 
 
-def heyoka_equations(sys_id: int) -> list:
+def heyoka_equations(sys_id: int, constants: np.ndarray | None = None) -> list:
     """Our right-hand sides in heyoka's expressions, ``[(variable, rate), ...]`` in the state's
-    order, the constants of :func:`heyoka_pars` as ``hy.par[i]``."""
+    order: the constants of :func:`heyoka_pars` as runtime parameters ``hy.par[i]``, or, given
+    ``constants`` (:func:`heyoka_pars`' values for one parameter set), those numbers built into
+    the expressions (an integrator per parameter set, compiled with its numbers)."""
     import heyoka as hy
     import sympy as sp
 
@@ -107,7 +111,13 @@ def heyoka_equations(sys_id: int) -> list:
     ys = hy.make_vars(*map(str, form.ys))
     ys = ys if isinstance(ys, list) else [ys]
     names = dict(zip(form.ys, ys, strict=True))
-    names |= {k: hy.par[i] for i, k in enumerate(form.ks)}
+    if constants is None:
+        names |= {k: hy.par[i] for i, k in enumerate(form.ks)}
+    else:
+        values = [float(c) for c in np.asarray(constants, dtype=float)]
+        if len(values) != len(form.ks):
+            raise ValueError(f"{len(form.ks)} constants expected, got {len(values)}")
+        names |= {k: hy.expression(c) for k, c in zip(form.ks, values, strict=True)}
     # the rates whole, common factors out of sums (the free body's 1/2 once per rate), then
     # their common subexpressions again (the hoop's reciprocal of the determinant once): of the
     # arrangements measured, the one heyoka solved fastest, as fast as the hand-written one

@@ -120,9 +120,9 @@ def targets_summary(result: dict) -> str:
     lines = []
     h2h = result.get("peer_head_to_head") or {}
     if result.get("fastest_peers"):
-        from .fastest_report import verdict_line
+        from .fastest_report import verdict_lines
 
-        lines.append(verdict_line(result["fastest_peers"]))
+        lines += verdict_lines(result["fastest_peers"])
     elif h2h:
         met, missed, unmeasured = _tally(t["ours_at_least_as_fast_as_every_peer"])
         figures = []
@@ -359,16 +359,28 @@ def peers_block(result: dict) -> str:
     """The speed page's peers block: the peers in their fastest form when the run has them, else
     the sweeps' head-to-head table."""
     if result.get("fastest_peers"):
+        from .fastest_picks import RULE_TITLES, RULES, has_rule
         from .fastest_report import case_table, distribution_table
 
         fast = result["fastest_peers"]
-        return "\n\n".join(
-            [
-                case_table(fast),
-                f"Random untuned cases (seed {fast['seed']}), peer / ours:",
-                distribution_table(fast),
+        if not has_rule(fast, "every-tighter"):  # a run from before the second rule
+            return "\n\n".join(
+                [
+                    case_table(fast),
+                    f"Random untuned cases (seed {fast['seed']}), peer / ours:",
+                    distribution_table(fast),
+                ]
+            )
+        parts = []
+        for rule in RULES:
+            parts += [
+                f"Each contender's pick {RULE_TITLES[rule]}:",
+                case_table(fast, rule=rule),
+                f"Random untuned cases (seed {fast['seed']}), peer / ours, each pick "
+                f"{RULE_TITLES[rule]}:",
+                distribution_table(fast, rule),
             ]
-        )
+        return "\n\n".join(parts)
     return peer_table(result)
 
 
@@ -393,14 +405,27 @@ def _peer_sections(result: dict) -> list[str]:
     ]
 
 
+#: How :mod:`.fastest` measured before its results said so themselves (``"how"``), for the
+#: runs made then.
+_FASTEST_HOW_BEFORE = (
+    "For every case (the three benchmark problems and :func:`mechviz.bench.untuned.draw`'s "
+    "random cases) and every contender, the tolerance ``rtol = atol = tol`` is swept down a grid "
+    "of half-decades (:data:`GRID`) and each solve's error is measured against the case's "
+    "reference (the same for every contender). At each accuracy target a contender's pick is its "
+    "loosest tolerance whose error meets the target. The picks of all contenders are then timed "
+    "in interleaved rounds in this one process (every round times every pick once, in rotating "
+    "order; each pick's fastest round is kept), and the ratios are peer / ours: below 1 the peer "
+    "is faster."
+)
+
+
 def fastest_section(result: dict) -> str:
-    """The peers in their fastest form (:mod:`.fastest`)."""
-    from .fastest import __doc__ as how
+    """The peers in their fastest form (:mod:`.fastest`): how they were measured, as the run
+    says, and its figures."""
     from .fastest_report import markdown as fastest_markdown
 
-    return (
-        how.split("\n\n")[1].replace("\n", " ") + "\n\n" + fastest_markdown(result["fastest_peers"])
-    )
+    fast = result["fastest_peers"]
+    return fast.get("how", _FASTEST_HOW_BEFORE) + "\n\n" + fastest_markdown(fast)
 
 
 def markdown(result: dict) -> str:

@@ -457,7 +457,8 @@ def _targets(
     """Each speed target, met (True), missed (False) or not measurable (None), and the lists of
     what was missed with the figure that missed. With ``fastest`` (:mod:`.fastest`'s results)
     the peers' verdict is its own: every case where a peer in its fastest form is faster than
-    ours, kept or fresh (the sweeps' peer figures, ``peer_ratios``, are then not judged)."""
+    ours, kept or fresh, under either rule for picking a tolerance (the sweeps' peer figures,
+    ``peer_ratios``, are then not judged)."""
     speed = {}
     missed = []
     for key, row in ratios.items():
@@ -476,15 +477,19 @@ def _targets(
                 if ok is False:
                     missed.append(f"{peer} {key} {target}: {peer} / ours = {e['ratio']:.2f} < 1")
     if fastest is not None:
+        from .fastest_picks import RULES, has_rule, rule_row
         from .fastest_report import loss_lines
 
-        for key, case in fastest["cases"].items():
-            for target, row in case["targets"].items():
-                for name, r in (row.get("ratios") or {}).items():
-                    peers[f"{name.replace('/', ' ')} {key} {target}"] = (
-                        None if r is None else r >= 1.0
-                    )
-        missed += [f"fastest form: {line}" for line in loss_lines(fastest)]
+        # each rule for picking a tolerance is judged: a loss under either is a miss
+        for rule in (r for r in RULES if has_rule(fastest, r)):
+            said = "" if rule == "loosest" else f" ({rule})"
+            for key, case in fastest["cases"].items():
+                for target, full in case["targets"].items():
+                    for name, r in ((rule_row(full, rule) or {}).get("ratios") or {}).items():
+                        peers[f"{name.replace('/', ' ')} {key} {target}{said}"] = (
+                            None if r is None else r >= 1.0
+                        )
+            missed += [f"fastest form{said}: {line}" for line in loss_lines(fastest, rule)]
     first = None
     if first_answer:
         ours = min(
@@ -589,5 +594,6 @@ def summary(result: dict) -> dict:
             "seed": result["fastest_peers"]["seed"],
             "distribution": result["fastest_peers"]["distribution"],
             "losses": len(result["fastest_peers"]["losses"]),
+            "losses_every_tighter": len(result["fastest_peers"].get("losses_every_tighter", [])),
         },
     }

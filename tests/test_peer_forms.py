@@ -1,12 +1,13 @@
 """The benchmark's peer forms, generated from the equations written once, are our equations.
 
-Each peer's right-hand side (heyoka's expressions, CyRK's C callback, odeint's callback, the C
-steps) is generated from :data:`mechviz.dynamics.codegen.equations.EQUATIONS`; here each one,
-on random states and parameters of every system, agrees with the product's generated
-right-hand side (:data:`mechviz.dynamics.integrators.kernels.RHS`) to round-off. A peer
-writing a different equation (a sign, a parameter in the wrong slot) would be off by O(1).
-The C and odeint forms need no optional package (a C compiler for the C one); heyoka's is
-skipped without heyoka.
+Each peer's right-hand side (heyoka's expressions, with runtime parameters or with one
+parameter set's constants built in, CyRK's C callback, odeint's callback, the compiled
+functions scipy's solvers call, the C steps) is generated from
+:data:`mechviz.dynamics.codegen.equations.EQUATIONS`; here each one, on random states and
+parameters of every system, agrees with the product's generated right-hand side
+(:data:`mechviz.dynamics.integrators.kernels.RHS`) to round-off. A peer writing a different
+equation (a sign, a parameter in the wrong slot) would be off by O(1). The C and odeint forms
+need no optional package (a C compiler for the C one); heyoka's are skipped without heyoka.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from mechviz.bench import c_form, experiments, fast_peers, peer_equations, peers
 from mechviz.dynamics.codegen.equations import EQUATIONS
 from mechviz.dynamics.ids import CYCLOTRON, FREE_BODY, HOOP
 from mechviz.dynamics.integrators.kernels import RHS, RK4
+from mechviz.dynamics.integrators.scipy_ivp import _make_fun
 
 SYSTEMS = [CYCLOTRON, HOOP, FREE_BODY]
 ROUND_OFF = 1e-13  # relative to the rates' size; a wrong equation is off by O(1)
@@ -53,6 +55,18 @@ def test_odeint_callback_is_our_right_hand_side(sys_id):
         got = f(y, 0.0, p)
         assert got.shape == y.shape
         assert _close(got, _ours(sys_id, y, p))
+
+
+@pytest.mark.parametrize("sys_id", SYSTEMS)
+def test_scipy_solvers_call_our_compiled_right_hand_side(sys_id):
+    """The functions scipy's methods call: the one every method the bench sweeps calls through
+    ``Simulation`` (``solve_ivp``'s methods and ``odeint``) and odeint's other form in the
+    fastest-form comparison each call the compiled right-hand side and give ours."""
+    d = EQUATIONS[sys_id]().dim
+    for y, p in _cases(sys_id):
+        want = _ours(sys_id, y, p)
+        assert _close(_make_fun(sys_id, p, d)(0.0, y), want)
+        assert _close(fast_peers.odeint_closure(sys_id, p)(y, 0.0), want)
 
 
 @pytest.mark.parametrize("sys_id", SYSTEMS)
@@ -133,6 +147,18 @@ def test_heyoka_equations_are_ours(sys_id):
     for y, p in _cases(sys_id):
         got = np.asarray(cf(y, pars=peer_equations.heyoka_pars(sys_id, p)))
         assert _close(got, _ours(sys_id, y, p))
+
+
+@pytest.mark.parametrize("sys_id", SYSTEMS)
+def test_heyoka_equations_with_built_in_constants_are_ours(sys_id):
+    """The same expressions with one parameter set's constants as numbers (no runtime
+    parameters left) evaluate to our right-hand side for that parameter set."""
+    hy = pytest.importorskip("heyoka")
+    for y, p in _cases(sys_id, n=5):
+        eqs = peer_equations.heyoka_equations(sys_id, peer_equations.heyoka_pars(sys_id, p))
+        cf = hy.cfunc([rate for _, rate in eqs], vars=[v for v, _ in eqs])
+        assert not any("par[" in str(rate) for _, rate in eqs)
+        assert _close(np.asarray(cf(y)), _ours(sys_id, y, p))
 
 
 def test_heyoka_parameters_are_the_rk4_steps_constants():

@@ -242,12 +242,17 @@ def _run(args: argparse.Namespace) -> int:
                 )
                 print(f"  {peer:14s} {key:7s} {cells}")
     if result.get("fastest_peers"):
+        from mechviz.bench.fastest_picks import RULE_TITLES, RULES, has_rule
         from mechviz.bench.fastest_report import case_table, distribution_table
 
         fast = result["fastest_peers"]
-        print(f"peers in their fastest form (seed {fast['seed']}; peer / ours, kept, fresh):")
-        print(case_table(fast))
-        print(distribution_table(fast))
+        for rule in (r for r in RULES if has_rule(fast, r)):
+            print(
+                f"peers in their fastest form (seed {fast['seed']}; peer / ours, kept, fresh), "
+                f"each pick {RULE_TITLES[rule]}:"
+            )
+            print(case_table(fast, rule=rule))
+            print(distribution_table(fast, rule))
     fa = s.get("first_answer")
     if fa:
         print(
