@@ -388,6 +388,13 @@ def markdown(result: dict) -> str:
         "## Time per method to reach each accuracy",
         method_table(result),
     ]
+    if result.get("batch"):
+        from .batch import markdown as batch_table
+
+        parts += [
+            "## Many short problems: batch mode against heyoka's",
+            batch_table(result["batch"]),
+        ]
     if result.get("per_step"):
         parts += ["## Cost of one compiled step", step_table(result)]
     if result.get("ensembles"):

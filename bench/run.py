@@ -196,6 +196,13 @@ def run_bench(
                 result["fastest_peers"],
                 tableau=result.get("tableau_cost"),
             )
+            # many short problems at once against heyoka's batch mode (mechviz bench --batch)
+            from . import batch
+
+            t0 = time.perf_counter()
+            result["batch"] = batch.run(quick)
+            result["phases_s"]["batch mode"] = round(time.perf_counter() - t0, 2)
+            result["targets"]["missed"] += batch.missed(result["batch"])
     from mechviz.dynamics.files import write_files_atomically
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
