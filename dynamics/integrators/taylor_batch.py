@@ -43,8 +43,9 @@ from .kernels import FREE_BODY, HOOP
 from .taylor import controls
 from .taylor_linear import two_sum
 
-#: Members per batch: one AVX-512 vector of doubles (two AVX2 vectors). Eight measured faster
-#: per problem than four on the hoop (``mechviz bench --batch``).
+#: Members per batch: one AVX-512 vector of doubles (two AVX2 vectors). On the 1,000 two-second
+#: hoops of ``mechviz bench --batch`` eight took 0.49 of the one-problem compiled loop's time,
+#: four 0.53 (medians of interleaved rounds on a busy 2-core machine).
 LANES = 8
 
 
@@ -99,32 +100,45 @@ def _expand_batch(sys_id, A, P, order):
 
 
 @njit(cache=True)
-def _lane_step(A, b, d, order, ctl):
-    """:func:`.taylor._step_size` of lane ``b`` (the same operations)."""
-    y0 = 0.0
-    na = 0.0
-    nb = 0.0
+def _steps(A, d, order, ctl, member, norms, H):
+    """:func:`.taylor._step_size` of every busy lane into ``H`` (the same operations; the
+    norms of the state and the last two orders over the lanes at once, each lane's logarithms
+    and exponential then on its own; an idle lane's step is 0)."""
+    lanes = H.size
+    for b in range(lanes):
+        norms[0, b] = 0.0
+        norms[1, b] = 0.0
+        norms[2, b] = 0.0
     for j in range(d):
-        y0 = max(y0, abs(A[j, 0, b]))
-        na = max(na, abs(A[j, order - 1, b]))
-        nb = max(nb, abs(A[j, order, b]))
-    ls = math.log(max(ctl[1], ctl[0] * y0))
-    e = math.inf
-    if na > 0.0:
-        e = (ls - math.log(na)) * ctl[2]
-    if nb > 0.0:
-        e = min(e, (ls - math.log(nb)) * ctl[3])
-    return math.exp(e) * ctl[4]
+        for b in range(lanes):
+            norms[0, b] = max(norms[0, b], abs(A[j, 0, b]))
+            norms[1, b] = max(norms[1, b], abs(A[j, order - 1, b]))
+            norms[2, b] = max(norms[2, b], abs(A[j, order, b]))
+    for b in range(lanes):
+        H[b] = 0.0
+        if member[b] < 0:
+            continue
+        na, nb = norms[1, b], norms[2, b]
+        ls = math.log(max(ctl[1], ctl[0] * norms[0, b]))
+        e = math.inf
+        if na > 0.0:
+            e = (ls - math.log(na)) * ctl[2]
+        if nb > 0.0:
+            e = min(e, (ls - math.log(nb)) * ctl[3])
+        H[b] = math.exp(e) * ctl[4]
 
 
 @njit(cache=True)
-def _lane_horner(A, b, d, order, h, y):
-    """:func:`.taylor._horner` of lane ``b`` into ``y`` (the same operations)."""
+def _horner_lanes(A, d, order, H, Y):
+    """:func:`.taylor._horner` of every lane ``b`` at ``H[b]`` into ``Y[:, b]`` (the same
+    operations, the lanes side by side)."""
+    lanes = H.size
     for j in range(d):
-        v = A[j, order, b]
+        for b in range(lanes):
+            Y[j, b] = A[j, order, b]
         for k in range(order - 1, -1, -1):
-            v = v * h + A[j, k, b]
-        y[j] = v
+            for b in range(lanes):
+                Y[j, b] = Y[j, b] * H[b] + A[j, k, b]
 
 
 @njit(cache=True)
@@ -185,7 +199,10 @@ def solve_batch(sys_id, Y0, P, T, rtol, atol, order, a, out, steps):
     t = np.zeros(lanes)
     c = np.zeros(lanes)
     count = np.zeros(lanes, np.int64)
-    y = np.empty(d)
+    H = np.zeros(lanes)  # each lane's step, or the rest of its span on its last step
+    last = np.zeros(lanes, np.int64)  # 1: the lane's last step, 2: its member failed
+    norms = np.zeros((3, lanes))
+    Y = np.empty((d, lanes))
     nxt = 0
     busy = 0
     for b in range(lanes):
@@ -195,38 +212,42 @@ def solve_batch(sys_id, Y0, P, T, rtol, atol, order, a, out, steps):
     total = 0
     while busy > 0:
         _expand_batch(sys_id, A, Pl, order)
+        _steps(A, d, order, ctl, member, norms, H)
+        for b in range(lanes):
+            m = member[b]
+            last[b] = 0
+            if m < 0:
+                continue
+            h = H[b]
+            count[b] += 1
+            total += 1
+            if not (h > 0.0 and t[b] + h > t[b]):  # nan, or a step lost in round-off
+                last[b] = 2
+                H[b] = 0.0
+            else:
+                rest = (T[m] - t[b]) - c[b]
+                if h >= rest:
+                    last[b] = 1
+                    H[b] = rest
+        _horner_lanes(A, d, order, H, Y)
         for b in range(lanes):
             m = member[b]
             if m < 0:
                 continue
-            h = _lane_step(A, b, d, order, ctl)
-            count[b] += 1
-            total += 1
-            ended = True
-            if not (h > 0.0 and t[b] + h > t[b]):  # nan, or a step lost in round-off
+            if last[b] == 0:
                 for j in range(d):
-                    out[m, j] = A[j, 0, b]
-                steps[m] = -1
-            else:
-                rest = (T[m] - t[b]) - c[b]
-                if h >= rest:
-                    _lane_horner(A, b, d, order, rest, y)
-                    finite = True
-                    for j in range(d):
-                        out[m, j] = y[j]
-                        if not math.isfinite(y[j]):
-                            finite = False
-                    steps[m] = count[b] if finite else -1
-                else:
-                    _lane_horner(A, b, d, order, h, y)
-                    for j in range(d):
-                        A[j, 0, b] = y[j]
-                    t[b], e = two_sum(t[b], h)
-                    c[b] += e
-                    ended = False
-            if ended:
-                nxt = _take(b, nxt, Y0, P, T, A, Pl, member, t, c, count, steps)
-                if member[b] < 0:
-                    busy -= 1
+                    A[j, 0, b] = Y[j, b]
+                t[b], e = two_sum(t[b], H[b])
+                c[b] += e
+                continue
+            finite = last[b] == 1
+            for j in range(d):
+                out[m, j] = Y[j, b] if last[b] == 1 else A[j, 0, b]
+                if not math.isfinite(out[m, j]):
+                    finite = False
+            steps[m] = count[b] if finite else -1
+            nxt = _take(b, nxt, Y0, P, T, A, Pl, member, t, c, count, steps)
+            if member[b] < 0:
+                busy -= 1
     # members left after the last lane fell idle can only be ones not finite (marked by _take)
     return total
