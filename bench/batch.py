@@ -77,7 +77,7 @@ SYSTEMS = {
 }
 
 
-@njit(cache=True)
+@njit  # not disk-cached: the benchmark lives outside the package's hashed sources
 def _solve_all(sys_id, y0, p, t_end, rtol, atol, order, a, out):
     for m in range(y0.shape[0]):
         solve_taylor(sys_id, y0[m], p[m], t_end, rtol, atol, order, a, out[m])
