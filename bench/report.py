@@ -451,6 +451,13 @@ def markdown(result: dict) -> str:
         "## Time per method to reach each accuracy",
         method_table(result),
     ]
+    if result.get("batch"):
+        from .batch import markdown as batch_table
+
+        parts += [
+            "## Many short problems: batch mode against heyoka's",
+            batch_table(result["batch"]),
+        ]
     if result.get("per_step"):
         parts += ["## Cost of one compiled step", step_table(result)]
     if result.get("generated_cost") or result.get("tableau_cost"):
@@ -473,3 +480,71 @@ def markdown(result: dict) -> str:
             exhibit_table(result),
         ]
     return "\n\n".join(parts) + "\n"
+
+
+def summary(result: dict) -> dict:
+    """The short form ``mechviz bench --json`` prints."""
+    ratios = {
+        key: {t: (None if e.get("ratio") is None else round(e["ratio"], 1)) for t, e in row.items()}
+        for key, row in result["ratios"].items()
+    }
+    fastest = {
+        key: {
+            t: {
+                "ours": e.get("ours"),
+                "scipy": e.get("scipy"),
+                "lower_bound": e.get("ratio_is_lower_bound"),
+            }
+            for t, e in row.items()
+        }
+        for key, row in result["ratios"].items()
+    }
+    return {
+        "mode": result["mode"],
+        "date": result["date"],
+        "duration_s": result["duration_s"],
+        "load_average": result["load_average"],
+        "ratios": ratios,
+        "peer_ratios": {
+            peer: {
+                k: {t: (None if r is None else round(r, 2)) for t, r in row.items()}
+                for k, row in rows.items()
+            }
+            for peer, rows in result["peer_ratios"].items()
+        },
+        "peers_skipped": result["settings"]["peers_skipped"],
+        "fastest": fastest,
+        "targets": result["targets"],
+        "construction_us": result["construction_us"],
+        "first_answer": result["first_answer"],
+        "per_step_ns": None
+        if result["per_step"] is None
+        else {
+            k: {"numba": round(v["numba_ns"], 1), "c": v.get("c_ns")}
+            for k, v in result["per_step"]["rows"].items()
+        },
+        "ensemble_ns_per_member_step": None
+        if result.get("ensembles") is None
+        else {
+            k: {"serial": round(v["serial_ns"], 1), "parallel": round(v["parallel_ns"], 1)}
+            for k, v in result["ensembles"]["rows"].items()
+        },
+        "exhibit_defaults": None
+        if result["exhibits"] is None
+        else {
+            k: None
+            if v["chosen"] is None
+            else {"method": v["chosen"]["method"], "dt": v["chosen"]["dt"]}
+            for k, v in result["exhibits"].items()
+        },
+        "viewer": result.get("viewer"),
+        "charts": result.get("charts"),
+        "fastest_peers": None
+        if not result.get("fastest_peers")
+        else {
+            "seed": result["fastest_peers"]["seed"],
+            "distribution": result["fastest_peers"]["distribution"],
+            "losses": len(result["fastest_peers"]["losses"]),
+            "losses_every_tighter": len(result["fastest_peers"].get("losses_every_tighter", [])),
+        },
+    }

@@ -37,7 +37,7 @@ from .problems import (
     variant_reference,
     versions,
 )
-from .report import SCIPY_FACTOR, markdown
+from .report import SCIPY_FACTOR, markdown, summary  # noqa: F401  (summary: re-exported)
 from .sweeps import (
     TARGETS,
     Settings,
@@ -198,6 +198,13 @@ def run_bench(
                 tableau=result.get("tableau_cost"),
                 generated=result.get("generated_cost"),
             )
+            # many short problems at once against heyoka's batch mode (mechviz bench --batch)
+            from . import batch
+
+            t0 = time.perf_counter()
+            result["batch"] = batch.run(quick)
+            result["phases_s"]["batch mode"] = round(time.perf_counter() - t0, 2)
+            result["targets"]["missed"] += batch.missed(result["batch"])
     from mechviz.dynamics.files import write_files_atomically
 
     results = json.dumps(result, indent=1, default=_json_default) + "\n"
@@ -528,72 +535,4 @@ def _targets(
         f"generic_runner_within_{round(100 * (TABLEAU_GOAL - 1))}pct_of_dop853_loop": generic,
         f"generated_forms_within_{round(100 * (gen.GOAL - 1))}pct_of_hand_written": written_once,
         "missed": missed,
-    }
-
-
-def summary(result: dict) -> dict:
-    """The short form ``mechviz bench --json`` prints."""
-    ratios = {
-        key: {t: (None if e.get("ratio") is None else round(e["ratio"], 1)) for t, e in row.items()}
-        for key, row in result["ratios"].items()
-    }
-    fastest = {
-        key: {
-            t: {
-                "ours": e.get("ours"),
-                "scipy": e.get("scipy"),
-                "lower_bound": e.get("ratio_is_lower_bound"),
-            }
-            for t, e in row.items()
-        }
-        for key, row in result["ratios"].items()
-    }
-    return {
-        "mode": result["mode"],
-        "date": result["date"],
-        "duration_s": result["duration_s"],
-        "load_average": result["load_average"],
-        "ratios": ratios,
-        "peer_ratios": {
-            peer: {
-                k: {t: (None if r is None else round(r, 2)) for t, r in row.items()}
-                for k, row in rows.items()
-            }
-            for peer, rows in result["peer_ratios"].items()
-        },
-        "peers_skipped": result["settings"]["peers_skipped"],
-        "fastest": fastest,
-        "targets": result["targets"],
-        "construction_us": result["construction_us"],
-        "first_answer": result["first_answer"],
-        "per_step_ns": None
-        if result["per_step"] is None
-        else {
-            k: {"numba": round(v["numba_ns"], 1), "c": v.get("c_ns")}
-            for k, v in result["per_step"]["rows"].items()
-        },
-        "ensemble_ns_per_member_step": None
-        if result.get("ensembles") is None
-        else {
-            k: {"serial": round(v["serial_ns"], 1), "parallel": round(v["parallel_ns"], 1)}
-            for k, v in result["ensembles"]["rows"].items()
-        },
-        "exhibit_defaults": None
-        if result["exhibits"] is None
-        else {
-            k: None
-            if v["chosen"] is None
-            else {"method": v["chosen"]["method"], "dt": v["chosen"]["dt"]}
-            for k, v in result["exhibits"].items()
-        },
-        "viewer": result.get("viewer"),
-        "charts": result.get("charts"),
-        "fastest_peers": None
-        if not result.get("fastest_peers")
-        else {
-            "seed": result["fastest_peers"]["seed"],
-            "distribution": result["fastest_peers"]["distribution"],
-            "losses": len(result["fastest_peers"]["losses"]),
-            "losses_every_tighter": len(result["fastest_peers"].get("losses_every_tighter", [])),
-        },
     }

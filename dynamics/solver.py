@@ -137,6 +137,7 @@ class Solver:
         self._state0: np.ndarray | None = None  # the defaults, worked out when first used
         self._params: np.ndarray | None = None
         self.steps = 0
+        self.member_steps = np.zeros(0, np.int64)  # per member of the last solve_many
 
     @property
     def state0(self) -> np.ndarray:
@@ -173,3 +174,45 @@ class Solver:
             raise FloatingPointError(f"taylor at rtol {self.rtol:g}: the state is not finite")
         self.steps = int(steps)
         return self._out
+
+    def solve_many(self, t_end, states, params=None) -> np.ndarray:
+        """The states at ``t_end`` [s] of many problems: ``states`` (N, d) the starts at 0,
+        ``params`` the kernel parameters, ``(N, P)`` one row per problem or ``(P,)`` (default:
+        the system's) shared, ``t_end`` one time or ``(N,)`` one per problem. Returns a new
+        (N, d) array.
+
+        A member that fails spoils no other: its row is NaN if its start, parameters or end
+        are not finite, and the last state reached if its state stopped being finite;
+        :attr:`member_steps` (N,) holds each member's steps, ``-2`` and ``-1`` for those. Raises
+        ``ValueError`` only for arrays of the wrong shape. The hoop and the free body run
+        :data:`~mechviz.dynamics.integrators.taylor_batch.LANES` members at a time
+        (:func:`~mechviz.dynamics.integrators.taylor_batch.solve_batch`); the charge (whose
+        steps are taken in closed form) and registered systems one after another with
+        :meth:`solve`'s compiled solve."""
+        d = self._out.size
+        y0 = np.ascontiguousarray(states, dtype=np.float64)
+        if y0.ndim != 2 or y0.shape[1] != d:
+            raise ValueError(f"states must be (N, {d}); got shape {np.shape(states)}")
+        n, size = len(y0), self.params.size
+        p = self.params if params is None else np.asarray(params, dtype=np.float64)
+        if p.shape == (size,):
+            p = np.broadcast_to(p, (n, size))
+        elif p.shape != (n, size):
+            raise ValueError(f"params must be ({size},) or ({n}, {size}); got {p.shape}")
+        p = np.ascontiguousarray(p)
+        t = np.asarray(t_end, dtype=np.float64)
+        if t.shape not in ((), (n,)):
+            raise ValueError(f"t_end must be one time or ({n},); got shape {t.shape}")
+        t = np.ascontiguousarray(np.broadcast_to(t, (n,)))
+        out = np.full((n, d), np.nan)
+        steps = np.zeros(n, np.int64)
+        from .integrators import taylor_batch  # its generated expansions: loaded when first used
+
+        args = (self.rtol, self.atol, self.order, self.a)
+        if taylor_batch.batched(self.sys_id):
+            taylor_batch.solve_batch(self.sys_id, y0, p, t, *args, out, steps)
+        else:
+            for m in range(n):
+                steps[m] = self._solve(self.sys_id, y0[m], p[m], float(t[m]), *args, out[m])
+        self.member_steps = steps
+        return out

@@ -213,7 +213,19 @@ def accuracy_cells(spec: AtlasSpec, method: str, steps: np.ndarray, amps: np.nda
 
 
 def _adaptive_run(system, method: str, rtol: float, s0: np.ndarray, t: float):
-    """End states and which members reached ``t`` (an ensemble that fails runs one by one)."""
+    """End states and which members reached ``t`` (an ensemble that fails runs one by one).
+    Taylor's method on a system with a batch expansion solves the members together
+    (:meth:`~mechviz.dynamics.solver.Solver.solve_many`: each member's end the ensemble's to
+    round-off, a failing member marked on its own)."""
+    if get_method(method).series:
+        from ..integrators.taylor_batch import batched
+        from ..solver import Solver
+
+        if batched(system.sys_id):
+            solver = Solver(system, rtol=rtol)
+            end = solver.solve_many(t, s0)
+            ok = solver.member_steps >= 0
+            return np.where(ok[:, None], end, s0), ok
     try:
         sim = Simulation(system, method, rtol=rtol, state=s0, reference=None)
         sim.advance_to(t)

@@ -137,6 +137,18 @@ def _generated_cost(args: argparse.Namespace) -> int:
     return 1 if missed(result) else 0
 
 
+def _batch(args: argparse.Namespace) -> int:
+    """Many short problems: our batch mode against our one-problem solves and heyoka's batch."""
+    from mechviz.bench import batch
+
+    result = batch.run(quick=args.quick)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "batch.json").write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps(result, indent=1) if args.json else batch.report(result))
+    return 1 if batch.missed(result) else 0
+
+
 def _whole(flag: str, text: str, lo: int, hi: int) -> int:
     from .errors import CliError
 
@@ -168,6 +180,8 @@ def _run(args: argparse.Namespace) -> int:
         return _tableau_cost(args)
     if args.generated_cost:
         return _generated_cost(args)
+    if args.batch:
+        return _batch(args)
     from mechviz.bench import PROBLEMS, peers, run_bench, summary
     from mechviz.bench.report import our_first_runs
 
@@ -343,6 +357,14 @@ def add_commands(sub) -> None:
         help="run only the cost per step of the compiled forms generated from the equations "
         "(right-hand side, RK4, Taylor's recurrences) against the hand-written ones, side by side "
         "on each system; exit status 1 if one is above 1.05",
+    )
+    p.add_argument(
+        "--batch",
+        action="store_true",
+        help="run only the batch benchmark: 1000 two-second problems of the hoop and the free "
+        "body solved by our batch mode, our one-problem solves and heyoka's batch integrator "
+        "(if installed), per problem; writes batch.json; exit status 1 if ours is slower than "
+        "heyoka's fastest",
     )
     p.add_argument(
         "--clients",
