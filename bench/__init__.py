@@ -6,6 +6,13 @@ writes ``results.json`` and PNG charts to ``out`` and returns the result. ``mech
 imported only by :mod:`.charts`.
 """
 
+import os
+
+# The benchmark times numba's compiled code, as it always has, and builds nothing in the
+# background while it times: Taylor's method compiled ahead of time (mechviz.dynamics.aot) is
+# timed on its own, in the fresh processes of .first_answer, which run with a user's default.
+os.environ.setdefault("MECHVIZ_AOT", "0")
+
 from .problems import PROBLEMS, load_references, reference_state
 from .run import run_bench, summary
 

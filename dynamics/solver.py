@@ -133,10 +133,18 @@ class Solver:
         else:
             plan = _plan(system, rtol, atol)
         self.system, self.sys_id, self.rtol, self.atol, self.order, self.a, self._solve = plan
-        self._out = np.empty(len(system.state_names))
-        self._state0: np.ndarray | None = None  # the defaults, worked out when first used
-        self._params: np.ndarray | None = None
-        self.steps = 0
+
+    # What a new Solver starts with, as class attributes (set on the instance when they change),
+    # and its output array made on first use: a Solver built per problem pays for neither.
+    _state0: np.ndarray | None = None  # the defaults, worked out when first used
+    _params: np.ndarray | None = None
+    steps = 0
+
+    def __getattr__(self, name: str):
+        if name != "_out":
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self._out = np.empty(len(self.system.state_names))
+        return self._out
 
     @property
     def state0(self) -> np.ndarray:
