@@ -110,9 +110,9 @@ class Solver:
     ``ValueError``; a solve whose state stops being finite raises ``FloatingPointError``.
 
     Once a Solver of the same system object and tolerances has been built, building another
-    costs about a microsecond, half of building the first: what depends only on them is kept,
-    checked, from the first, so a Solver per problem costs little more than handing a kept one
-    a new start.
+    costs under a microsecond: what depends only on them is kept, checked, from the first, and
+    its output array is made on the first solve, so a Solver per problem costs little more than
+    handing a kept one a new start.
     """
 
     def __init__(
