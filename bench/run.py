@@ -24,9 +24,9 @@ from mechviz.dynamics.simulation import Simulation
 from mechviz.viz.progress import progress_bar
 
 from . import exhibits, experiments
+from .first_answer import JUDGED, first_answer_missed
 from .first_answer import construction_costs as _construction_costs
 from .first_answer import first_answer as _first_answer
-from .first_answer import first_answer_missed
 from .peer_sweeps import flag_outliers, peer_table, sweep_peer
 from .problems import (
     ADAPTIVE_OURS,
@@ -478,7 +478,7 @@ def _targets(
                     )
         missed += [f"fastest form: {line}" for line in loss_lines(fastest)]
     first = None
-    if first_answer and "taylor" in first_answer:  # Simulation(..., "taylor"), as a user runs it
+    if first_answer and JUDGED in first_answer:  # Simulation(..., "taylor"), as a user runs it
         lost = first_answer_missed(first_answer)
         first = not lost
         missed += lost

@@ -13,7 +13,7 @@ arithmetic (the tests compare the two) and runs as fast. It exports
 - ``run``: :func:`mechviz.dynamics.integrators.taylor.run_taylor_compiled` with its kept step
   (the carry) as five arrays: what a :class:`~mechviz.dynamics.simulation.Simulation` of a
   shipped system with ``"taylor"`` runs by default once the module is built
-  (:mod:`.integrators.taylor_carry`), so that such a run in a fresh process imports neither
+  (:func:`taylor_runner`), so that such a run in a fresh process imports neither
   numba nor scipy.
 
 How it gets built: ``python -m mechviz.dynamics.aot`` builds it (tens of seconds of one core);
@@ -42,12 +42,14 @@ import os
 import platform
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from ._cachedir import cache_dir
 from .ids import SYSTEM_IDS
+from .integrators.taylor_carry import PARALLEL_MIN
 from .taylor_order import order_for
 
 NAME = "mechviz_taylor_aot"
@@ -56,6 +58,7 @@ _LOADED: list = []
 #: run may start another.
 STALE_BUILD_S = 900.0
 _MARKER = "building"
+_TAYLOR = __name__.rsplit(".", 1)[0] + ".integrators.taylor"
 
 
 def enabled() -> bool:
@@ -191,6 +194,50 @@ def build_in_background() -> bool:
     except OSError:  # a read-only cache, a lost race: run without it
         return False
     return True
+
+
+def _ahead_of_time(module):
+    """:func:`.integrators.taylor.run_taylor`'s serial road through the module compiled ahead of
+    time."""
+    run = module.run
+
+    def advance(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry) -> int:
+        order, a = order_for(rtol, atol, sys_id)
+        return run(sys_id, Y, p, t0, t1, rtol, atol, order, a, stats, status, *carry.arrays)
+
+    return advance
+
+
+#: The runner chosen, by whether the module compiled ahead of time may serve (a shipped system,
+#: a serial run): chosen once per process, so that a run built per solve does not ask again.
+_CHOSEN: dict[bool, Callable] = {}
+
+
+def taylor_runner(sys_id, members: int) -> Callable:
+    """The function ``f(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry) -> steps`` that
+    advances a run of ``members`` members of system ``sys_id``: through this module where it
+    serves (a shipped system, fewer members than numba's threads take; built, and
+    :func:`enabled`), else through numba (and then the build is started in the background):
+    :func:`.integrators.taylor.run_taylor`'s arguments and result, whichever code runs it."""
+    taylor = sys.modules.get(_TAYLOR)  # its threshold, which the warm-up and the bench move
+    threshold = PARALLEL_MIN if taylor is None else taylor.PARALLEL_MIN
+    serial_shipped = type(sys_id) is int and members < threshold
+    run = _CHOSEN.get(serial_shipped)
+    if run is None:
+        run = _CHOSEN[serial_shipped] = _choose(serial_shipped)
+    return run
+
+
+def _choose(serial_shipped: bool) -> Callable:
+    if serial_shipped and enabled():
+        module = load()
+        if module is not None and hasattr(module, "run"):
+            return _ahead_of_time(module)
+    from .integrators.taylor import run_taylor  # numba, and the generated expansions written if new
+
+    if serial_shipped and enabled():
+        build_in_background()  # numba's start is paid now; the next process need not
+    return run_taylor
 
 
 def solve(system: str, state, t_end: float, params, rtol: float = 1e-9, atol=None) -> np.ndarray:

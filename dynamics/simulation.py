@@ -43,9 +43,10 @@ import time
 import numpy as np
 
 from . import params as _v
+from .aot import taylor_runner
 from .integrators.base import IntegrationError, Method, integration_error, step_functions
 from .integrators.codes import OK
-from .integrators.taylor_carry import TaylorCarry, taylor_runner
+from .integrators.taylor_carry import TaylorCarry
 from .run_plan import compiled as _compiled
 from .run_plan import plan as _plan
 from .spec import all_finite, checked_state
