@@ -14,6 +14,16 @@ import os
 os.environ.setdefault("MECHVIZ_AOT", "0")
 
 from .problems import PROBLEMS, load_references, reference_state
-from .run import run_bench, summary
+
+
+def __getattr__(name: str):
+    # Loaded when first used (PEP 562), so that ``python -m mechviz.bench.first_answer`` does not
+    # find its own module imported (through .run) before it runs.
+    if name in ("run_bench", "summary"):
+        from . import run
+
+        return getattr(run, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["PROBLEMS", "load_references", "reference_state", "run_bench", "summary"]

@@ -388,3 +388,16 @@ def test_a_miss_with_no_scipy_answer_is_summarised_and_the_tables_are_made():
     assert f"{key} at {acc} (>={SCIPY_FACTOR / 2:.0f}x" in text
     assert "no scipy option reaching it" in text
     assert "## Targets" in report.markdown(result)
+
+
+def test_the_first_answer_and_construction_targets_are_flagged_with_their_figures():
+    from mechviz.bench.first_answer import JUDGED, construction_missed, first_answer_missed
+
+    fa = {JUDGED: {"median_s": 0.6}, "scipy-odeint": {"median_s": 0.4}}
+    assert first_answer_missed(fa) == [
+        "first answer (taylor): ours / odeint = 0.6 s / 0.4 s = 1.50 > 1"
+    ]
+    fa[JUDGED]["median_s"] = 0.3
+    assert first_answer_missed(fa) == []
+    costs = {"hoop": {"new_simulation": 2.8, "new_solver": 0.7, "restart": 1.0}}
+    assert construction_missed(costs) == ["construction: hoop Simulation (taylor) 2.8 us > 1 us"]
