@@ -229,7 +229,15 @@ def first_answer_table(result: dict) -> str:
         tables.append(_table(header, rows))
     if cons:
         header = ["problem", "new Simulation [us]", "restart() [us]"]
-        rows = [[k, v["new_simulation"], v["restart"]] for k, v in cons.items()]
+        extra = {
+            "new_simulation_dop853": "new Simulation, dop853 [us]",
+            "new_solver": "new Solver [us]",
+        }
+        shown = [k for k in extra if all(k in v for v in cons.values())]
+        header += [extra[k] for k in shown]
+        rows = [
+            [k, v["new_simulation"], v["restart"], *(v[x] for x in shown)] for k, v in cons.items()
+        ]
         tables.append(_table(header, rows))
     return "\n\n".join(tables) or "-"
 

@@ -25,6 +25,13 @@ def source_hash(root: Path = Path(__file__).parent) -> str:
     return digest.hexdigest()[:16]
 
 
+#: The package's own sources' hash, worked out once per process (reading every source file is
+#: a few milliseconds, and a fresh process's first answer asks for the folder more than once).
+_OWN: list[str] = []
+
+
 def cache_dir() -> str:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "mechviz", f"numba-{source_hash()}")
+    if not _OWN:
+        _OWN.append(source_hash())
+    return os.path.join(base, "mechviz", f"numba-{_OWN[0]}")

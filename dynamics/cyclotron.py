@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import params as _v
-from ._jit import njit
+from ._jit import deferred_njit
 
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -198,7 +198,7 @@ def error_metric(y: np.ndarray, y_exact: np.ndarray) -> float:
 # --------------------------------------------------------------------------- compiled pieces
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def boris_step(y, p, h):
     """One synchronised Boris step (drift h/2, rotate v, drift h/2), in place; returns 1.
 
@@ -223,7 +223,7 @@ def boris_step(y, p, h):
     return 1
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def exact_step(y, p, h):
     """Advance by ``h`` with the exact flow (the closed-form rotation), in place."""
     w = p[0]

@@ -41,7 +41,7 @@ from fractions import Fraction
 import numpy as np
 
 from . import params as _v
-from ._jit import njit
+from ._jit import deferred_njit
 
 FREE_STATE_NAMES = ("w1", "w2", "w3", "q0", "q1", "q2", "q3")
 AXLE = np.array([0.0, 1.0, 0.0])
@@ -384,7 +384,7 @@ def poinsot(moments: np.ndarray, state: np.ndarray) -> dict[str, np.ndarray | fl
 # --------------------------------------------------------------------------- compiled pieces
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def _rotation(angle, lj, lk, ij, ik, q0, qi, qj, qk):
     """Exact flow of the piece ``L_i^2 / 2 I_i`` for the time giving ``angle = w_i h``.
 
@@ -409,7 +409,7 @@ def _rotation(angle, lj, lk, ij, ik, q0, qi, qj, qk):
     )
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def splitting_step(y, p, h):
     """Symmetric (Strang) splitting into exact rotations about the axes 1, 2, 3, 2, 1.
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import params as _v
-from ._jit import njit
+from ._jit import deferred_njit
 
 STATE_NAMES = ("theta1", "theta2", "omega1", "omega2")
 
@@ -210,7 +210,7 @@ def mode1_period(p: HoopParams, amplitude: float) -> float:
 # --------------------------------------------------------------------------- compiled pieces
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def _velocities(M, m, a, th1, th2, p1, p2):
     """``theta' = M(theta)^-1 p`` for canonical momenta ``p`` [kg m^2/s]."""
     c = math.cos(th1 - th2)
@@ -218,7 +218,7 @@ def _velocities(M, m, a, th1, th2, p1, p2):
     return (m * p1 - m * c * p2) / det, ((2.0 * M + m) * p2 - m * c * p1) / det
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def _force(M, m, a, g, th1, th2, w1, w2):
     """``-dH/dtheta`` at given angles and velocities (``H`` is quadratic in ``p``)."""
     k = m * a * a * math.sin(th1 - th2) * w1 * w2
@@ -229,7 +229,7 @@ VERLET_TOL = 1e-14  # relative change at which the fixed-point iterations stop
 VERLET_MAX_ITER = 100
 
 
-@njit(cache=True)
+@deferred_njit(cache=True)
 def verlet_step(y, p, h):
     """One generalised Stormer-Verlet step (Hairer, Lubich & Wanner, GNI, eq. VI.3.4), in place.
 

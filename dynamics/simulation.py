@@ -43,22 +43,15 @@ import time
 import numpy as np
 
 from . import params as _v
-from .integrators import kernels
-from .integrators.base import (
-    IntegrationError,
-    Method,
-    get_method,
-    integration_error,
-    methods_for,
-    step_functions,
-)
-from .integrators.rk import RKCarry, load_pair, run_rk
-from .integrators.scipy_ivp import advance_scipy
-from .integrators.taylor import TaylorCarry, run_taylor
-from .params import SettingError
+from .aot import taylor_runner
+from .integrators.base import IntegrationError, Method, integration_error, step_functions
+from .integrators.codes import OK
+from .integrators.taylor_carry import TaylorCarry
+from .run_plan import compiled as _compiled
+from .run_plan import plan as _plan
 from .spec import all_finite, checked_state
-from .steps import DEFAULT_RTOL, Fixed, Step, Tolerance, shared_step_control
-from .systems import System, shared_kernel_params
+from .steps import DEFAULT_RTOL, Step
+from .systems import System
 
 __all__ = [
     "DEFAULT_RTOL",
@@ -111,6 +104,23 @@ class Simulation:
 
     on_chunk = None
     _chunk_steps = 4096  # per member; adapted to CHUNK_SECONDS as the run goes
+    # What every run starts with, as class attributes: a run that never changes them (a solve
+    # to one time) does not pay for setting them. Each is replaced on the instance when it
+    # changes; all are immutable.
+    t0 = 0.0  # time at which state0 holds (moves with a jump)
+    t = 0.0  # time reached (fixed step: steps * dt)
+    clock = 0.0  # time asked for; fixed-step runs carry clock - t to the next call
+    steps = nfev = rejected = 0
+    _start_energy: tuple[np.ndarray, np.ndarray] | None = None  # see _energies
+    _exact_known: bool | None = None  # see _has_exact
+    # the compiled adaptive method's kept steps (a TaylorCarry or an RKCarry, made on its
+    # first call)
+    _carry = None
+    _taylor_h: float | None = None  # mean Taylor step of the last chunk [s]
+    _runner = None  # what takes the Taylor steps (chosen on the first call)
+    _reference: Simulation | None = None
+    #: Why the error is not measured although a reference was asked for ("" otherwise).
+    reference_note = ""
 
     def __init__(
         self,
@@ -124,45 +134,14 @@ class Simulation:
         reference: str | None = "auto",
         step: Step | None = None,
     ) -> None:
-        self.system = system
-        self.method = method if isinstance(method, Method) else get_method(method)
-        if not self.method.applies_to(system):
-            raise SettingError(
-                "method",
-                f"method {self.method.name!r} does not apply to {system.name}; "
-                f"choose one of {', '.join(m.name for m in methods_for(system))}",
-            )
-        if step is None:
-            step = shared_step_control(self.method, dt, rtol, atol)
+        plan = _plan(system, method, dt, rtol, atol, step)
+        self.system, self.method, _, step, self.dt, self.rtol, self.atol, self.p = plan
         #: The step control in force (:mod:`mechviz.dynamics.steps`).
         self.step = step
-        self.dt: float | None = step.dt if isinstance(step, Fixed) else None
-        self.rtol = step.rtol if isinstance(step, Tolerance) else None
-        self.atol = step.atol if isinstance(step, Tolerance) else None
-        s0 = self._checked_state(system.default_state() if state is None else state)
+        s0 = checked_state(system, system.default_state() if state is None else state, copy=True)
         self._single = s0.ndim == 1
-        self.state0 = np.array(s0, dtype=np.float64, ndmin=2)  # a copy: the caller keeps theirs
+        self.state0 = s0 if s0.ndim == 2 else s0[None]  # our own copy: the caller keeps theirs
         self.state = self.state0.copy()
-        self.p = shared_kernel_params(system)  # read only, as the kernels do
-        self._start_energy: tuple[np.ndarray, np.ndarray] | None = None  # see _energies
-        self.t0 = 0.0  # time at which state0 holds (moves with a jump)
-        self.t = 0.0  # time reached (fixed step: steps * dt)
-        self.clock = 0.0  # time asked for; fixed-step runs carry clock - t to the next call
-        self.steps = 0
-        self.nfev = 0
-        self.rejected = 0
-        n = len(self.state)
-        self._H = np.zeros(n)
-        self._F = np.zeros(self.state.shape)
-        self._stats = np.zeros((n, 3), dtype=np.int64)
-        self._status = np.zeros(3, dtype=np.int64)
-        self._exact_known: bool | None = None  # see _has_exact
-        # the compiled adaptive method's kept steps (made on its first call)
-        self._carry: TaylorCarry | RKCarry | None = None
-        self._taylor_h: float | None = None  # mean Taylor step of the last chunk [s]
-        self._reference: Simulation | None = None
-        #: Why the error is not measured although a reference was asked for ("" otherwise).
-        self.reference_note = ""
         if (
             reference == "auto"
             and not self._has_exact
@@ -178,6 +157,22 @@ class Simulation:
             self._reference = reference_run(system, self.state0)
         self._track_error = reference is not None and (self._has_exact or reference == "auto")
         self._reference_mode = reference
+
+    def __getattr__(self, name: str):
+        # The work arrays of the compiled loops, made when first used: a run that is built and
+        # dropped, or a Taylor run, needs only some of them.
+        if name not in ("_H", "_F", "_stats", "_status"):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        n = len(self.state)
+        if name == "_H":
+            self._H = np.zeros(n)
+        elif name == "_F":
+            self._F = np.zeros(self.state.shape)
+        elif name == "_stats":
+            self._stats = np.zeros((n, 3), dtype=np.int64)
+        else:
+            self._status = np.zeros(3, dtype=np.int64)
+        return vars(self)[name]
 
     def _checked_state(self, state) -> np.ndarray:
         return checked_state(self.system, state)
@@ -259,9 +254,12 @@ class Simulation:
         self.t = self.clock = self.t0 = 0.0
         self.steps = self.nfev = self.rejected = 0
         # fill() rather than slice assignment: a third of the cost on these small arrays, and
-        # restart() is the whole per-solve overhead of a kept Simulation
-        self._H.fill(0.0)
-        self._stats.fill(0)
+        # restart() is the whole per-solve overhead of a kept Simulation (not made: nothing to do)
+        made = vars(self)
+        if "_H" in made:
+            self._H.fill(0.0)
+        if "_stats" in made:
+            self._stats.fill(0)
         if self._carry is not None:
             self._carry.forget()
         if self._reference is not None:
@@ -288,7 +286,7 @@ class Simulation:
                 self._run_fixed(n)
         elif t_target > self.t:
             if m.backend == "scipy":
-                nfev, steps, failure = advance_scipy(
+                nfev, steps, failure = _compiled.advance_scipy(
                     m.scipy_name,
                     self.system.sys_id,
                     self.p,
@@ -372,11 +370,14 @@ class Simulation:
         """One chunk of the compiled pair, with its kept step, from ``t`` to ``t1`` (``land``:
         the last step cut to end at ``t1``)."""
         if self._carry is None:
-            self._carry = RKCarry(*self.state.shape, load_pair(self.method.pair))
+            self._carry = _compiled.RKCarry(
+                *self.state.shape, _compiled.load_pair(self.method.pair)
+            )
         pair = self._carry.pair
-        run_rk(pair, *self._leg(t1), self._H, self._F, self._stats, self._status, self._carry, land)
+        args = (self._H, self._F, self._stats, self._status, self._carry, land)
+        _compiled.run_rk(pair, *self._leg(t1), *args)
         self.nfev, self.steps, self.rejected = (int(x) for x in self._stats.sum(axis=0))
-        if self._status[0] != kernels.OK:
+        if self._status[0] != OK:
             raise integration_error(self.method.name, self.step_label(), self.t, self._status[0])
 
     def _run_taylor(self, t_target: float) -> None:
@@ -385,9 +386,10 @@ class Simulation:
         the last chunk (at first a guess from the system's time scale); where the chunks end does
         not change the steps taken (each call keeps its last step, :mod:`.integrators.taylor`).
         Kept lean: a benchmark run is ``restart()`` and one call of a few microseconds."""
+        members = len(self.state)
         if self._carry is None:
             self._carry = TaylorCarry(*self.state.shape)
-        members = len(self.state)
+            self._runner = taylor_runner(self.system.sys_id, members)
         while self.t < t_target:
             h = self._taylor_h
             if h is None:
@@ -395,11 +397,11 @@ class Simulation:
             span = self._chunk_steps * h
             t1 = t_target if not span < t_target - self.t else self.t + span
             start = time.perf_counter()
-            steps = run_taylor(*self._leg(t1), self._stats, self._status, self._carry)
+            steps = self._runner(*self._leg(t1), self._stats, self._status, self._carry)
             elapsed = time.perf_counter() - start
             self.steps += steps
             self.nfev += steps
-            if self._status[0] != kernels.OK:
+            if self._status[0] != OK:
                 raise integration_error(
                     self.method.name, self.step_label(), self.t, self._status[0]
                 )
@@ -441,13 +443,14 @@ class Simulation:
     def _run_fixed_chunk(self, n: int) -> None:
         step, inner = step_functions(self.method, self.system.sys_id)
         before = self.state.copy()
+        loops = _compiled.kernels
         if inner is None:
-            nfev = kernels.run_direct(step, self.state, self.p, self.dt, n, self._status)
+            nfev = loops.run_direct(step, self.state, self.p, self.dt, n, self._status)
         else:
-            nfev = kernels.run_composed(step, inner, self.state, self.p, self.dt, n, self._status)
+            nfev = loops.run_composed(step, inner, self.state, self.p, self.dt, n, self._status)
         self.nfev += int(nfev)
         code, k = int(self._status[0]), int(self._status[1])
-        if code != kernels.OK:
+        if code != OK:
             # Leave the run at the last state it reached before this call, not at garbage.
             self.state[:] = before
             t_fail = (self.steps + k + 1) * self.dt

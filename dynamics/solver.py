@@ -110,9 +110,9 @@ class Solver:
     ``ValueError``; a solve whose state stops being finite raises ``FloatingPointError``.
 
     Once a Solver of the same system object and tolerances has been built, building another
-    costs about a microsecond, half of building the first: what depends only on them is kept,
-    checked, from the first, so a Solver per problem costs little more than handing a kept one
-    a new start.
+    costs under a microsecond: what depends only on them is kept, checked, from the first, and
+    its output array is made on the first solve, so a Solver per problem costs little more than
+    handing a kept one a new start.
     """
 
     def __init__(
@@ -133,11 +133,20 @@ class Solver:
         else:
             plan = _plan(system, rtol, atol)
         self.system, self.sys_id, self.rtol, self.atol, self.order, self.a, self._solve = plan
-        self._out = np.empty(len(system.state_names))
-        self._state0: np.ndarray | None = None  # the defaults, worked out when first used
-        self._params: np.ndarray | None = None
-        self.steps = 0
-        self.member_steps = np.zeros(0, np.int64)  # per member of the last solve_many
+
+    # What a new Solver starts with, as class attributes (set on the instance when they change),
+    # and its output array made on first use: a Solver built per problem pays for neither.
+    _state0: np.ndarray | None = None  # the defaults, worked out when first used
+    _params: np.ndarray | None = None
+    steps = 0
+    #: Each member's steps in the last :meth:`solve_many` (replaced, never written in place).
+    member_steps = np.zeros(0, np.int64)
+
+    def __getattr__(self, name: str):
+        if name != "_out":
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self._out = np.empty(len(self.system.state_names))
+        return self._out
 
     @property
     def state0(self) -> np.ndarray:

@@ -284,12 +284,12 @@ class SystemSpec:
         return Setup(self, p, st, system, s0, m, step)
 
 
-def checked_state(system: Any, state: Any) -> np.ndarray:
+def checked_state(system: Any, state: Any, copy: bool = False) -> np.ndarray:
     """``state`` as a finite float array of shape ``(d,)`` or ``(N, d)`` for ``system``, else
-    :class:`SettingError` naming ``state``."""
+    :class:`SettingError` naming ``state``; ``copy``: always a new array (the caller's own)."""
     d = len(system.state_names)
     try:
-        s = np.asarray(state, dtype=float)
+        s = np.array(state, dtype=float) if copy else np.asarray(state, dtype=float)
     except (TypeError, ValueError):
         raise _v.SettingError("state", f"state must be numbers, got {state!r}") from None
     if s.shape[-1:] != (d,) or s.ndim not in (1, 2):

@@ -27,8 +27,7 @@ import numpy as np
 
 from . import cyclotron, disk, hoop, measure
 from .forms import is_given
-from .ids import DRIVEN_DISK, NAMES
-from .integrators import kernels
+from .ids import CYCLOTRON, DRIVEN_DISK, FREE_BODY, HOOP, NAMES
 
 #: The default starts, shared by the adapters and the descriptions below: the cyclotron's
 #: (speed [m/s], centre (x, y) [m], vz [m/s]), the hoop's mode amplitudes [rad], the disk's
@@ -137,7 +136,7 @@ class Cyclotron(_Adapter):
     def canonical_maps(self):
         return cyclotron.canonical_maps(self.params)
 
-    sys_id = kernels.CYCLOTRON
+    sys_id = CYCLOTRON
     state_names = cyclotron.STATE_NAMES
     state_labels: ClassVar[dict[str, str]] = {
         n: f"{n} [{'m' if n[0] != 'v' else 'm/s'}]" for n in cyclotron.STATE_NAMES
@@ -223,7 +222,7 @@ class Hoop(_Adapter):
         return hoop.canonical_maps(self.params)
 
     params: hoop.HoopParams = hoop.HoopParams()
-    sys_id = kernels.HOOP
+    sys_id = HOOP
     state_names = hoop.STATE_NAMES
     state_labels: ClassVar[dict[str, str]] = {
         "theta1": "hoop angle θ1 [rad]",
@@ -314,7 +313,7 @@ class ReleasedDisk(_Adapter):
 
     params: disk.DiskParams = disk.DiskParams()
     extra_spin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # disk frame [rad/s], at release
-    sys_id = kernels.FREE_BODY
+    sys_id = FREE_BODY
     state_names = disk.FREE_STATE_NAMES
     # 1, 2, 3: the principal axes about the centre of mass, smallest moment first
     state_labels: ClassVar[dict[str, str]] = {
@@ -350,8 +349,10 @@ class ReleasedDisk(_Adapter):
         (default: the start at release), by central differences: the tumble has no single
         frequency, and the linearisation is what a step has to resolve."""
         y0 = np.asarray(self.default_state() if state is None else state, dtype=float)
+        from .integrators.kernels import RHS  # numba: not needed to run the disk
+
         p = self.kernel_params()
-        rhs = kernels.RHS[self.sys_id]
+        rhs = RHS[self.sys_id]
         d = y0.size
         jac = np.empty((d, d))
         fp, fm = np.empty(d), np.empty(d)

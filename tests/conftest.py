@@ -18,6 +18,10 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# Taylor runs go through numba here, and nothing is compiled ahead of time in the background
+# behind the tests' backs: the tests of mechviz.dynamics.aot turn it on in their own processes.
+os.environ.setdefault("MECHVIZ_AOT", "0")
+
 
 @pytest.fixture(scope="session")
 def warm_viewer():

@@ -9,7 +9,16 @@ import math
 import numpy as np
 import pytest
 
-from mechviz.dynamics import Hoop, ReleasedDisk, Simulation, params, solver, steps, systems
+from mechviz.dynamics import (
+    Hoop,
+    ReleasedDisk,
+    Simulation,
+    params,
+    run_plan,
+    solver,
+    steps,
+    systems,
+)
 from mechviz.dynamics.disk import DiskParams
 from mechviz.dynamics.params import SettingError
 from mechviz.dynamics.solver import Solver
@@ -19,6 +28,7 @@ SYSTEMS = [Hoop(), ReleasedDisk(DiskParams(omega=1.0), (0.3, 0.0, 0.2))]
 
 def _forget_everything_kept() -> None:
     solver._PLANS.clear()
+    run_plan._PLANS.clear()
     steps._STEPS.clear()
     systems._KERNEL_PARAMS.clear()
 

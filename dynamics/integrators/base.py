@@ -26,7 +26,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from ..forms import SystemForms, forms_needed
-from . import kernels as _k
+from ..taylor_order import STEP_COST, order_for
+from . import codes as _c
 from . import limits as _lim
 
 Structure = Literal["symplectic", "symmetric", "volume-preserving", "norm-preserving"]
@@ -42,9 +43,9 @@ class IntegrationError(RuntimeError):
 
 #: What each failure code of the compiled loops (``status[0]``) means, in words.
 REASONS = {
-    _k.NONFINITE: "state became non-finite (the method blew up)",
-    _k.NO_CONVERGENCE: "implicit solve did not converge",
-    _k.TOO_SMALL_STEP: "step size fell below round-off",
+    _c.NONFINITE: "state became non-finite (the method blew up)",
+    _c.NO_CONVERGENCE: "implicit solve did not converge",
+    _c.TOO_SMALL_STEP: "step size fell below round-off",
 }
 
 
@@ -159,7 +160,6 @@ class Method:
         """The order in words: ``"order 4"``; for Taylor's method the orders its rule
         (:func:`mechviz.dynamics.integrators.taylor.order_for`) picks, from the rule itself."""
         if self.kernel == "taylor":
-            from .taylor import STEP_COST, order_for  # deferred: the compiled series are not needed
 
             def picked(tol: float) -> str:
                 ps = sorted({order_for(tol, tol, s)[0] for s in STEP_COST})
@@ -179,8 +179,6 @@ class Method:
         """The order a run at these tolerances uses: Taylor's from its rule (for the system
         ``sys_id``, or over all), ``None`` for a variable order (LSODA's), else ``order``."""
         if self.kernel == "taylor":
-            from .taylor import order_for  # deferred: the compiled series are not needed
-
             return (
                 order_for(rtol, atol, sys_id)[0] if sys_id is not None else order_for(rtol, atol)[0]
             )
@@ -509,6 +507,8 @@ def step_functions(method: Method, sys_id: int | SystemForms):
     (``kernels.run_direct``) and the right-hand side or base step for a composed one. ``sys_id``
     is a compiled id (the kernels' tables) or a registered system's own
     :class:`~mechviz.dynamics.forms.SystemForms`."""
+    from . import kernels as _k  # numba: only a fixed-step run needs it
+
     if type(sys_id) is SystemForms:
         return _given_step_functions(method, sys_id)
     kind = method.kernel
@@ -528,6 +528,8 @@ def step_functions(method: Method, sys_id: int | SystemForms):
 
 def _given_step_functions(method: Method, forms: SystemForms):
     """:func:`step_functions` from a system's own compiled forms."""
+    from . import kernels as _k
+
     kind = method.kernel
     if kind == "rk4":
         return forms.rk4, None

@@ -34,20 +34,18 @@ from .._jit import njit
 from ..codegen.product import product_module
 from ..forms import SystemForms
 from ..ids import CYCLOTRON, FREE_BODY, HOOP  # (also re-exported)
+from .codes import (  # noqa: F401  (re-exported: the status codes and the methods' constants)
+    MIDPOINT_MAX_ITER,
+    MIDPOINT_TOL,
+    NO_CONVERGENCE,
+    NONFINITE,
+    OK,
+    TOO_SMALL_STEP,
+    YOSHIDA_W0,
+    YOSHIDA_W1,
+)
 
 # System ids (:mod:`mechviz.dynamics.ids`): index into the tables at the bottom.
-
-# Status codes written to ``status[0]`` (``status = [code, step index, member index]``);
-# :func:`mechviz.dynamics.integrators.base.integration_error` words them.
-OK, NONFINITE, NO_CONVERGENCE, TOO_SMALL_STEP = 0, 1, 2, 3
-
-MIDPOINT_TOL = 1e-14
-MIDPOINT_MAX_ITER = 100
-
-# Yoshida's triple jump: w1 + w0 + w1 = 1 and 2 w1^3 + w0^3 = 0 cancel the third-order error.
-_CBRT2 = 2.0 ** (1.0 / 3.0)
-YOSHIDA_W1 = 1.0 / (2.0 - _CBRT2)
-YOSHIDA_W0 = -_CBRT2 / (2.0 - _CBRT2)
 
 
 @njit  # takes a compiled function: never disk-cached (see the module docstring)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .kernels import MIDPOINT_MAX_ITER, MIDPOINT_TOL, YOSHIDA_W0, YOSHIDA_W1
+from .codes import MIDPOINT_MAX_ITER, MIDPOINT_TOL, YOSHIDA_W0, YOSHIDA_W1
 
 SQRT8 = 2.0 * math.sqrt(2.0)
 

@@ -32,7 +32,6 @@ right-hand-side evaluation to count).
 from __future__ import annotations
 
 import math
-import os
 
 import numba
 import numpy as np
@@ -51,6 +50,7 @@ from ..taylor_order import (  # noqa: F401  (the rule's names, re-exported)
     order_for,
 )
 from .kernels import CYCLOTRON, FREE_BODY, HOOP, NONFINITE, OK, RHS, report
+from .taylor_carry import PARALLEL_MIN, TaylorCarry  # (also re-exported)
 from .taylor_linear import charge_eval, charge_steps, two_sum
 
 # The series' sums may be contracted to fused multiply-adds (FUSED) and, for the hoop, also
@@ -59,13 +59,7 @@ from .taylor_linear import charge_eval, charge_steps, two_sum
 FUSED = {"contract"}
 SUMS = {"reassoc", "contract"}
 N_ROWS = 15  # series per member: the state and the hoop's 11 auxiliary functions
-# Ensembles of at least PARALLEL_MIN members run their members on numba's threads
-# (:func:`run_taylor_parallel`, bitwise the serial result). On idle cores that pays from small
-# ensembles on, but on cores busy with other jobs a thread that loses its core holds the whole
-# loop up, and in short calls the threads wait on each other (``mechviz bench``, "Ensembles",
-# has the figures). Hence a threshold at calls long enough for the waiting not to matter;
-# ``MECHVIZ_PARALLEL_MIN`` sets it, 0 turns it off.
-PARALLEL_MIN = int(os.environ.get("MECHVIZ_PARALLEL_MIN") or 1000) or 1 << 62
+# Ensembles of at least PARALLEL_MIN members run on numba's threads (:mod:`.taylor_carry`).
 _THREADS = numba.config.NUMBA_NUM_THREADS
 
 
@@ -448,26 +442,6 @@ EXPANDS = {
     CYCLOTRON: (charge_expand, RHS[CYCLOTRON]),
     FREE_BODY: (free_body_expand, RHS[FREE_BODY]),
 }
-
-
-class TaylorCarry:
-    """What one run keeps between calls: each member's last step (see :func:`_run`)."""
-
-    def __init__(self, n: int, d: int) -> None:
-        self.kept = np.zeros((n, d, MAX_ORDER + 1))  # the state's series only: 1 kB a hoop
-        self.base = np.zeros(n)
-        self.comp = np.zeros(n)  # the base time's compensation: it is base + comp
-        self.span = np.zeros(n)
-        self.last = np.zeros((n, d))
-
-    @property
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        """``(kept, base, comp, span, last)``, as the compiled loops take them."""
-        return self.kept, self.base, self.comp, self.span, self.last
-
-    def forget(self) -> None:
-        """Keep no step: the next call starts a fresh one."""
-        self.span.fill(0.0)
 
 
 def run_taylor(sys_id, Y, p, t0, t1, rtol, atol, stats, status, carry: TaylorCarry) -> int:
